@@ -1,0 +1,66 @@
+#pragma once
+// YAML configuration -> plain config structs. One file describes a whole system run
+// (config/paper.yaml); each process reads the sections it needs. Unknown keys, wrong types and
+// out-of-range values raise ConfigError naming the file, the key path and the reason.
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+#include "lcmloc/core/filter.hpp"
+#include "lcmloc/models/scenario_config.hpp"
+
+namespace lcmloc::common {
+
+class ConfigError : public std::runtime_error {
+ public:
+  ConfigError(const std::string& file, const std::string& key, const std::string& reason);
+};
+
+/// Channel names (defaults follow docs/ and the design guide).
+struct ChannelConfig {
+  std::string ground_truth = "GROUND_TRUTH";
+  std::string odometry = "ODOMETRY";
+  std::vector<std::string> magruler{"MAGRULER", "MAGRULER_FAULT"};  ///< fusion subscribes to all
+  std::string magruler_fault = "MAGRULER_FAULT";  ///< where the injector publishes
+  std::string fault_events = "FAULT_EVENTS";
+  std::string pose = "POSE";
+  std::string gate = "GATE";
+  std::string control = "FUSION_CONTROL";
+  std::string status = "FUSION_STATUS";
+  std::string heartbeat = "HEARTBEAT";
+};
+
+struct FusionConfig {
+  core::FilterConfig filter;          ///< the active filter (type + parameters)
+  std::vector<std::string> shadow;    ///< extra filter types run side by side (POSE_<TYPE>)
+  double reorder_window = 0.05;       ///< canonical-order window of message time [s]
+  double status_period = 1.0;         ///< FUSION_STATUS period of message time [s]
+};
+
+struct LoggerConfig {
+  std::string output = "out/run.lcmlog";
+  std::vector<std::string> channels;  ///< regexes; empty = everything
+  int queue_capacity = 100000;        ///< messages held for the writer thread
+};
+
+struct SystemConfig {
+  std::string file;                   ///< where it was read from
+  models::ScenarioConfig scenario;
+  ChannelConfig channels;
+  FusionConfig fusion;
+  LoggerConfig logger;
+};
+
+/// Reads a system config file. Missing sections take defaults; throws ConfigError.
+SystemConfig loadSystemConfig(const std::string& path);
+/// Same from YAML text (file names the source in errors).
+SystemConfig parseSystemConfig(const std::string& yaml_text, const std::string& file);
+
+/// Filter parameters from a YAML map (used for `fusion.filter` and for FUSION_CONTROL's
+/// parameters string), applied on top of base. Throws ConfigError.
+core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterConfig& base,
+                                     const std::string& file, const std::string& key_prefix);
+
+}  // namespace lcmloc::common

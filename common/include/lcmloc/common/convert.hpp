@@ -1,0 +1,31 @@
+#pragma once
+// The one place where lcmtypes and core structs meet.
+#include <optional>
+#include <string>
+
+#include "lcmloc/core/types.hpp"
+#include "lcmloc/models/world.hpp"
+#include "lcmloc/fault_event_t.hpp"
+#include "lcmloc/gate_decision_t.hpp"
+#include "lcmloc/ground_truth_t.hpp"
+#include "lcmloc/magruler_t.hpp"
+#include "lcmloc/odometry_t.hpp"
+#include "lcmloc/pose_t.hpp"
+
+namespace lcmloc::common {
+
+/// Returns nullopt and sets why when a field is NaN/Inf or out of range.
+std::optional<core::OdometryInput> toCore(const lcmloc::odometry_t& m, std::string* why = nullptr);
+/// Only detections (detected == true) convert; a non-detection returns nullopt with why = "".
+std::optional<core::RulerDetection> toCore(const lcmloc::magruler_t& m, const std::string& channel,
+                                           std::string* why = nullptr);
+models::TruthState toCore(const lcmloc::ground_truth_t& m);
+
+lcmloc::ground_truth_t toLcm(const models::TruthState& s, int64_t seq);
+lcmloc::odometry_t toLcm(const models::OdometrySample& s, int64_t seq);
+lcmloc::magruler_t toLcm(const models::RulerReading& r, int64_t seq);
+lcmloc::pose_t toLcm(const core::FilterState& s, const std::string& filter, int64_t seq);
+lcmloc::gate_decision_t toLcm(const core::GateDecision& d, const std::string& filter, int64_t seq);
+core::FilterState toCore(const lcmloc::pose_t& m);
+
+}  // namespace lcmloc::common

@@ -1,0 +1,64 @@
+#pragma once
+// The fusion engine: canonical ordering + the active filter (+ shadow filters) + control
+// commands. Middleware-free; the daemon feeds it from LCM, the offline replay from a log file,
+// and both therefore compute the same outputs for the same input messages in the same order.
+#include <functional>
+#include <memory>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "lcmloc/core/filter.hpp"
+#include "lcmloc/core/reorder.hpp"
+
+namespace lcmloc::core {
+
+/// Control commands (fusion_control_t).
+struct SwitchFilter { FilterConfig config; };           ///< switch active filter (type + params)
+struct ResetFilter {};                                   ///< back to the configured initial state
+struct SetPose { Pose pose; Vec3 stddev; };              ///< re-initialise x, y, theta
+using ControlCommand = std::variant<SwitchFilter, ResetFilter, SetPose>;
+
+/// One input message, already converted and validated.
+struct EngineInput {
+  std::string channel;
+  int64_t seq = 0;
+  int64_t utime = 0;
+  std::variant<OdometryInput, RulerDetection, ControlCommand> payload;
+};
+
+/// Outputs are delivered through callbacks, in processing order.
+struct EngineOutputs {
+  /// (filter name, state) after every processed odometry or ruler input, for the active filter
+  /// (is_active = true) and each shadow filter.
+  std::function<void(const std::string& filter, bool is_active, const FilterState&)> on_state;
+  std::function<void(const std::string& filter, bool is_active, const GateDecision&)> on_decision;
+  /// Events worth a human's attention: ("ack"|"refused"|"lockout"|"recovered"|"too_old", detail).
+  std::function<void(const std::string& event, const std::string& detail, int64_t utime)> on_event;
+};
+
+struct EngineConfig {
+  FilterConfig filter;                 ///< initial active filter
+  std::vector<std::string> shadow;     ///< shadow filter types (same parameters otherwise)
+  int64_t reorder_window_us = 50000;
+  /// Canonical tie-break rank at equal utime: control < odometry < ruler; unknown channels last.
+};
+
+class FusionEngine {
+ public:
+  FusionEngine(EngineConfig cfg, MarkerMap map, EngineOutputs out);
+  /// Queues an input; processes whatever the reorder window releases. Returns false (and emits
+  /// "too_old") when the input is older than what was already processed.
+  bool push(EngineInput in);
+  /// Processes everything still queued (end of log / shutdown).
+  void flush();
+  std::string activeFilter() const;
+  FilterState activeState() const;
+  struct Counters { int64_t processed = 0, too_old = 0, accepted = 0, rejected = 0; };
+  Counters counters() const;
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace lcmloc::core

@@ -1,0 +1,71 @@
+#pragma once
+// Plain data types of the fusion core. No middleware: these are what the LCM adapter
+// converts lcmtypes to and from (common/include/lcmloc/common/convert.hpp).
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace lcmloc::core {
+
+using Vec2 = Eigen::Vector2d;
+using Vec3 = Eigen::Vector3d;
+using Mat2 = Eigen::Matrix2d;
+using Mat3 = Eigen::Matrix3d;
+
+/// Vehicle pose of the rear-axle centre M in the world frame: x [m], y [m], theta [rad].
+using Pose = Eigen::Vector3d;
+
+/// One odometry increment over (previous utime, utime].
+struct OdometryInput {
+  int64_t utime = 0;
+  double delta_s = 0.0;       ///< distance increment of M [m]
+  double steering = 0.0;      ///< measured steering angle psi [rad] (valid if has_steering)
+  bool has_steering = false;  ///< car-like source: delta_theta follows eq. 2 from steering
+  double delta_theta = 0.0;   ///< heading increment [rad] (used as is when !has_steering)
+};
+
+/// A magnetic-ruler marker detection.
+struct RulerDetection {
+  int64_t utime = 0;
+  double lateral_offset = 0.0;  ///< d_m, body y (left) positive [m]
+  double quality = 1.0;         ///< [0, 1]
+  std::string sensor = "MAGRULER";  ///< input channel (for gate decisions)
+  int64_t seq = 0;                  ///< seq of the measurement on its channel
+};
+
+/// A magnetic marker of the map.
+struct Marker {
+  int id = 0;
+  double x = 0.0;  ///< [m]
+  double y = 0.0;  ///< [m]
+};
+using MarkerMap = std::vector<Marker>;
+
+/// Filter status, same numbering as pose_t.STATUS_*.
+enum class FilterStatus : int32_t { Ok = 0, DeadReckoning = 1, Lockout = 2, Uninitialized = 3 };
+
+/// State handed from one filter to the next (hot swap) and published as the pose.
+/// The first three entries of x are always (x, y, theta); further entries are named in names.
+struct FilterState {
+  int64_t utime = 0;
+  Eigen::VectorXd x;               ///< size n >= 3
+  Eigen::MatrixXd P;               ///< n x n
+  std::vector<std::string> names;  ///< size n, e.g. {"x","y","theta","odo_scale","steer_bias"}
+  FilterStatus status = FilterStatus::Ok;
+};
+
+/// Outcome of one absolute measurement in a filter.
+struct GateDecision {
+  int64_t utime = 0;
+  std::string sensor;
+  int64_t measurement_seq = 0;
+  Eigen::VectorXd innovation;  ///< z - z_hat, angles wrapped (empty when no candidate)
+  double mahalanobis = 0.0;    ///< v' S^-1 v (0 when no candidate)
+  double gate = 0.0;           ///< threshold in force (+inf when ungated)
+  bool accepted = false;
+  int marker_id = -1;
+  std::string reason;          ///< "accepted", "ungated", "gate", "no_candidate", "bad_input"
+};
+
+}  // namespace lcmloc::core
