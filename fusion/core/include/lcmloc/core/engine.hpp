@@ -33,7 +33,8 @@ struct EngineOutputs {
   /// (is_active = true) and each shadow filter.
   std::function<void(const std::string& filter, bool is_active, const FilterState&)> on_state;
   std::function<void(const std::string& filter, bool is_active, const GateDecision&)> on_decision;
-  /// Events worth a human's attention: ("ack"|"refused"|"lockout"|"recovered"|"too_old", detail).
+  /// Events worth a human's attention: ("ack"|"refused"|"lockout"|"recovered"|"too_old"|
+  /// "bad_input", detail). "bad_input": an odometry increment with a NaN/Inf field (skipped).
   std::function<void(const std::string& event, const std::string& detail, int64_t utime)> on_event;
 };
 
@@ -41,12 +42,18 @@ struct EngineConfig {
   FilterConfig filter;                 ///< initial active filter
   std::vector<std::string> shadow;     ///< shadow filter types (same parameters otherwise)
   int64_t reorder_window_us = 50000;
-  /// Canonical tie-break rank at equal utime: control < odometry < ruler; unknown channels last.
+  /// Canonical tie-break rank at equal utime: control < odometry < ruler (by payload type);
+  /// inputs of one type on different channels are ordered by a stable hash of the channel name,
+  /// then by seq.
 };
 
 class FusionEngine {
  public:
+  /// Throws std::invalid_argument when the initial or a shadow filter config is invalid.
   FusionEngine(EngineConfig cfg, MarkerMap map, EngineOutputs out);
+  ~FusionEngine();
+  FusionEngine(FusionEngine&&) noexcept;
+  FusionEngine& operator=(FusionEngine&&) noexcept;
   /// Queues an input; processes whatever the reorder window releases. Returns false (and emits
   /// "too_old") when the input is older than what was already processed.
   bool push(EngineInput in);

@@ -2,6 +2,8 @@
 // Canonical ordering of incoming measurements: by utime, then by a fixed channel rank, then by
 // seq. Items are held for a bounded window of message time so that a live run (where UDP may
 // deliver slightly out of order) and a replay process the same sequence.
+#include <algorithm>
+#include <climits>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -47,6 +49,10 @@ class ReorderBuffer {
   }
 
   std::size_t size() const { return items_.size(); }
+  bool contains(const OrderKey& key) const { return items_.count(key) > 0; }
+  /// Key of the last released item (meaningful once anything was released).
+  bool releasedAny() const { return released_any_; }
+  const OrderKey& lastReleased() const { return last_released_; }
   int64_t window() const { return window_us_; }
 
  private:

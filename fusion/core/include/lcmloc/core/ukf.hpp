@@ -3,9 +3,18 @@
 // scaled sigma points of van der Merwe: lambda = alpha^2 (n + kappa) - n). With alpha = 1,
 // beta = 0 this is exactly the paper's eq. 9-10 (weights kappa/(n+kappa), 1/(2(n+kappa))).
 // Angular state and measurement components are averaged circularly and differenced wrapped.
+//
+// Allocation-free: every matrix is fixed-size. The update is split in two so the caller can
+// gate: innovate() computes z_hat, the innovation v, S, K and the Mahalanobis distance without
+// touching the filter; correct() applies it. A rejected measurement leaves the prior untouched.
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
+#include <cstdint>
+#include <utility>
+
+#include "lcmloc/core/angles.hpp"
 
 namespace lcmloc::core {
 
@@ -27,6 +36,171 @@ struct SigmaWeights {
     w.wi = 1.0 / (2.0 * (N + w.lambda));
     return w;
   }
+};
+
+/// Which components of a vector are angles: bit i set <=> component i is an angle.
+using AngleMask = std::uint32_t;
+constexpr bool isAngle(AngleMask m, int i) { return (m >> i) & 1u; }
+
+/// Weighted mean of the columns of a sigma-point set (2N+1 columns); angle rows are averaged
+/// circularly, the result wrapped to (-pi, pi].
+template <int N, int R>
+Eigen::Matrix<double, R, 1> sigmaMean(const Eigen::Matrix<double, R, 2 * N + 1>& Y,
+                                      const SigmaWeights<N>& w, AngleMask angles) {
+  Eigen::Matrix<double, R, 1> m =
+      w.wm0 * Y.col(0) + w.wi * Y.template rightCols<2 * N>().rowwise().sum();
+  for (int r = 0; r < R; ++r) {
+    if (!isAngle(angles, r)) continue;
+    double s = w.wm0 * std::sin(Y(r, 0)), c = w.wm0 * std::cos(Y(r, 0));
+    double si = 0.0, ci = 0.0;
+    for (int k = 1; k < 2 * N + 1; ++k) {
+      si += std::sin(Y(r, k));
+      ci += std::cos(Y(r, k));
+    }
+    m[r] = wrapAngle(std::atan2(s + w.wi * si, c + w.wi * ci));
+  }
+  return m;
+}
+
+/// Deviations of the sigma points from a mean; angle rows wrapped to (-pi, pi].
+template <int N, int R>
+Eigen::Matrix<double, R, 2 * N + 1> sigmaDeviations(const Eigen::Matrix<double, R, 2 * N + 1>& Y,
+                                                   const Eigen::Matrix<double, R, 1>& mean,
+                                                   AngleMask angles) {
+  Eigen::Matrix<double, R, 2 * N + 1> D = Y.colwise() - mean;
+  for (int r = 0; r < R; ++r)
+    if (isAngle(angles, r))
+      for (int k = 0; k < 2 * N + 1; ++k) D(r, k) = wrapAngle(D(r, k));
+  return D;
+}
+
+/// Weighted cross-covariance sum_k Wc_k A_k B_k^T of two deviation sets.
+template <int N, int RA, int RB>
+Eigen::Matrix<double, RA, RB> sigmaCovariance(const Eigen::Matrix<double, RA, 2 * N + 1>& A,
+                                              const Eigen::Matrix<double, RB, 2 * N + 1>& B,
+                                              const SigmaWeights<N>& w) {
+  Eigen::Matrix<double, RA, RB> C = w.wi * (A * B.transpose());
+  C.noalias() += (w.wc0 - w.wi) * A.col(0) * B.col(0).transpose();
+  return C;
+}
+
+/// Result of a measurement prediction, before any decision.
+template <int N, int M>
+struct Innovation {
+  Eigen::Matrix<double, M, 1> z_hat;  ///< predicted measurement (eq. 14)
+  Eigen::Matrix<double, M, 1> v;      ///< z - z_hat, angle components wrapped
+  Eigen::Matrix<double, M, M> S;      ///< innovation covariance (eq. 16)
+  Eigen::Matrix<double, N, M> K;      ///< gain P_xz S^-1 (eq. 15)
+  double mahalanobis = 0.0;           ///< v' S^-1 v (eq. 19)
+};
+
+template <int N>
+class Ukf {
+ public:
+  static constexpr int kSigma = 2 * N + 1;
+  using Vector = Eigen::Matrix<double, N, 1>;
+  using Matrix = Eigen::Matrix<double, N, N>;
+  using Sigmas = Eigen::Matrix<double, N, kSigma>;
+
+  explicit Ukf(const SigmaParams& p = {}, AngleMask state_angles = 0)
+      : w_(SigmaWeights<N>::compute(p)), angles_(state_angles) {
+    x_.setZero();
+    P_.setIdentity();
+  }
+
+  void reset(const Vector& x, const Matrix& P) {
+    x_ = x;
+    wrapAngles(x_);
+    P_ = P;
+  }
+  const Vector& x() const { return x_; }
+  const Matrix& P() const { return P_; }
+  void scaleCovariance(double f) { P_ *= f; }
+  const SigmaWeights<N>& weights() const { return w_; }
+  AngleMask angleMask() const { return angles_; }
+
+  /// Sigma points of (x, P), eq. 9: columns x, x + sqrt((n+lambda)P)_i, x - sqrt((n+lambda)P)_i,
+  /// the square root being the lower Cholesky factor. False when P is not positive definite.
+  bool sigmaPoints(Sigmas& X) const {
+    Eigen::LLT<Matrix> llt((N + w_.lambda) * P_);
+    if (llt.info() != Eigen::Success) return false;
+    const Matrix L = llt.matrixL();
+    X.col(0) = x_;
+    X.template middleCols<N>(1) = L.colwise() + x_;
+    X.template rightCols<N>() = (-L).colwise() + x_;
+    return true;
+  }
+
+  /// Time update (eq. 11-13) with process model f: Vector(const Vector&) and additive noise Q.
+  /// False (filter untouched) when P is not positive definite or f returns a non-finite value.
+  template <typename F>
+  bool predict(F&& f, const Matrix& Q) {
+    Sigmas X;
+    if (!sigmaPoints(X)) return false;
+    Sigmas Y;
+    for (int k = 0; k < kSigma; ++k) Y.col(k) = f(X.col(k).eval());
+    if (!Y.allFinite()) return false;
+    const Vector m = sigmaMean<N, N>(Y, w_, angles_);
+    const Sigmas D = sigmaDeviations<N, N>(Y, m, angles_);
+    x_ = m;
+    P_ = sigmaCovariance<N, N, N>(D, D, w_) + Q;
+    return true;
+  }
+
+  /// Measurement prediction (eq. 14-17) from sigma points X of the current state with model
+  /// h: Matrix<M,1>(const Vector&), additive noise R, measurement z whose angle components are
+  /// marked in z_angles. Does not modify the filter. False when S is not positive definite or
+  /// anything is non-finite.
+  template <int M, typename H>
+  bool innovate(const Sigmas& X, H&& h, const Eigen::Matrix<double, M, M>& R,
+                const Eigen::Matrix<double, M, 1>& z, AngleMask z_angles,
+                Innovation<N, M>& out) const {
+    Eigen::Matrix<double, M, kSigma> Z;
+    for (int k = 0; k < kSigma; ++k) Z.col(k) = h(X.col(k).eval());
+    if (!Z.allFinite() || !z.allFinite()) return false;
+    out.z_hat = sigmaMean<N, M>(Z, w_, z_angles);
+    const Eigen::Matrix<double, M, kSigma> DZ = sigmaDeviations<N, M>(Z, out.z_hat, z_angles);
+    const Sigmas DX = sigmaDeviations<N, N>(X, x_, angles_);
+    out.S = sigmaCovariance<N, M, M>(DZ, DZ, w_) + R;
+    const Eigen::Matrix<double, N, M> Pxz = sigmaCovariance<N, N, M>(DX, DZ, w_);
+    Eigen::LLT<Eigen::Matrix<double, M, M>> llt(out.S);
+    if (llt.info() != Eigen::Success) return false;
+    out.v = z - out.z_hat;
+    wrapAngles(out.v, z_angles);
+    out.K = llt.solve(Pxz.transpose()).transpose();  // S symmetric: K = Pxz S^-1
+    out.mahalanobis = out.v.dot(llt.solve(out.v));
+    return std::isfinite(out.mahalanobis) && out.K.allFinite();
+  }
+
+  /// Convenience: innovate() from the sigma points of the current state.
+  template <int M, typename H>
+  bool innovate(H&& h, const Eigen::Matrix<double, M, M>& R, const Eigen::Matrix<double, M, 1>& z,
+                AngleMask z_angles, Innovation<N, M>& out) const {
+    Sigmas X;
+    return sigmaPoints(X) && innovate<M>(X, std::forward<H>(h), R, z, z_angles, out);
+  }
+
+  /// Applies an accepted innovation: eq. 15 and 18 (P - K S K').
+  template <int M>
+  void correct(const Innovation<N, M>& in) {
+    x_.noalias() += in.K * in.v;
+    wrapAngles(x_);
+    P_ -= in.K * in.S * in.K.transpose();
+    P_ = 0.5 * (P_ + P_.transpose()).eval();
+  }
+
+ private:
+  template <typename V>
+  static void wrapAngles(V& v, AngleMask m) {
+    for (int r = 0; r < v.size(); ++r)
+      if (isAngle(m, r)) v[r] = wrapAngle(v[r]);
+  }
+  void wrapAngles(Vector& v) const { wrapAngles(v, angles_); }
+
+  SigmaWeights<N> w_;
+  AngleMask angles_;
+  Vector x_;
+  Matrix P_;
 };
 
 }  // namespace lcmloc::core

@@ -1,0 +1,198 @@
+#include "lcmloc/core/engine.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <type_traits>
+
+#include "lcmloc/core/angles.hpp"
+
+namespace lcmloc::core {
+namespace {
+
+/// FNV-1a: a hash that is the same on every run and machine (std::hash is not guaranteed to be).
+uint32_t stableHash(const std::string& s) {
+  uint32_t h = 2166136261u;
+  for (unsigned char c : s) h = (h ^ c) * 16777619u;
+  return h;
+}
+
+int typeRank(const EngineInput& in) {
+  switch (in.payload.index()) {
+    case 2: return 0;  // control
+    case 0: return 1;  // odometry
+    default: return 2; // ruler
+  }
+}
+
+OrderKey orderKey(const EngineInput& in) {
+  return OrderKey{in.utime, typeRank(in) * 1024 + static_cast<int>(stableHash(in.channel) % 1024),
+                  in.seq};
+}
+
+bool isFinite(const OdometryInput& o) {
+  return std::isfinite(o.delta_s) && std::isfinite(o.steering) && std::isfinite(o.delta_theta);
+}
+
+}  // namespace
+
+struct FusionEngine::Impl {
+  EngineConfig cfg;
+  MarkerMap map;
+  EngineOutputs out;
+  ReorderBuffer<EngineInput> buffer;
+  FilterConfig active_cfg;
+  std::unique_ptr<Filter> active;
+  std::vector<std::unique_ptr<Filter>> shadows;
+  FilterStatus last_status = FilterStatus::Ok;
+  Counters counters;
+
+  Impl(EngineConfig c, MarkerMap m, EngineOutputs o)
+      : cfg(std::move(c)), map(std::move(m)), out(std::move(o)), buffer(cfg.reorder_window_us),
+        active_cfg(cfg.filter) {
+    active = makeFilter(active_cfg, map);
+    last_status = active->state().status;
+    for (const auto& type : cfg.shadow) {
+      FilterConfig sc = cfg.filter;
+      sc.type = type;
+      shadows.push_back(makeFilter(sc, map));
+    }
+  }
+
+  void event(const std::string& name, const std::string& detail, int64_t utime) const {
+    if (out.on_event) out.on_event(name, detail, utime);
+  }
+
+  template <typename F>
+  void forEachFilter(F&& f) {
+    f(*active, true);
+    for (auto& s : shadows) f(*s, false);
+  }
+
+  void process(const EngineInput& in) {
+    ++counters.processed;
+    std::visit([&](const auto& p) { handle(in, p); }, in.payload);
+    const FilterStatus now = active->state().status;
+    if (now != last_status) {
+      if (now == FilterStatus::Lockout)
+        event("lockout", active->name() + ": consecutive gate rejections, covariance inflated",
+              in.utime);
+      else if (last_status == FilterStatus::Lockout)
+        event("recovered", active->name() + ": measurement accepted again", in.utime);
+    }
+    last_status = now;
+  }
+
+  void handle(const EngineInput& in, const OdometryInput& odo) {
+    if (!isFinite(odo)) {
+      event("bad_input", in.channel + " seq " + std::to_string(in.seq) + ": non-finite odometry",
+            in.utime);
+      return;
+    }
+    forEachFilter([&](Filter& f, bool is_active) {
+      f.predict(odo);
+      if (out.on_state) out.on_state(f.name(), is_active, f.state());
+    });
+  }
+
+  void handle(const EngineInput&, const RulerDetection& det) {
+    forEachFilter([&](Filter& f, bool is_active) {
+      const GateDecision d = f.update(det);
+      if (is_active) ++(d.accepted ? counters.accepted : counters.rejected);
+      if (out.on_decision) out.on_decision(f.name(), is_active, d);
+      if (out.on_state) out.on_state(f.name(), is_active, f.state());
+    });
+  }
+
+  void handle(const EngineInput& in, const ControlCommand& cmd) {
+    std::visit([&](const auto& c) { control(in.utime, c); }, cmd);
+  }
+
+  void control(int64_t utime, const SwitchFilter& c) {
+    std::unique_ptr<Filter> next;
+    try {
+      next = makeFilter(c.config, map);
+    } catch (const std::invalid_argument& e) {
+      event("refused", std::string("switch to '") + c.config.type + "': " + e.what(), utime);
+      return;
+    }
+    FilterState from = active->state();
+    from.utime = std::max(from.utime, utime);
+    next->initialize(from);
+    const std::string old = active->name();
+    active = std::move(next);
+    active_cfg = c.config;
+    event("ack", "switched " + old + " -> " + active->name(), utime);
+  }
+
+  void control(int64_t utime, const ResetFilter&) {
+    auto fresh = [&](Filter& f, const FilterConfig& fc) {
+      auto n = makeFilter(fc, map);
+      FilterState s = n->state();
+      s.utime = utime;
+      f.initialize(s);
+    };
+    fresh(*active, active_cfg);
+    for (auto& s : shadows) {
+      FilterConfig sc = cfg.filter;
+      sc.type = s->name();
+      fresh(*s, sc);
+    }
+    event("ack", "reset " + active->name(), utime);
+  }
+
+  void control(int64_t utime, const SetPose& c) {
+    if (!c.pose.allFinite() || !c.stddev.allFinite() || !(c.stddev.array() > 0).all()) {
+      event("refused", "set_pose: pose must be finite and stddev > 0", utime);
+      return;
+    }
+    forEachFilter([&](Filter& f, bool) {
+      FilterState s = f.state();
+      s.utime = std::max(s.utime, utime);
+      s.x.head<3>() = c.pose;
+      s.x[2] = wrapAngle(s.x[2]);
+      s.P.topRows<3>().setZero();
+      s.P.leftCols<3>().setZero();
+      s.P.topLeftCorner<3, 3>() = c.stddev.array().square().matrix().asDiagonal();
+      f.initialize(s);
+    });
+    event("ack", "set_pose", utime);
+  }
+};
+
+FusionEngine::FusionEngine(EngineConfig cfg, MarkerMap map, EngineOutputs out)
+    : impl_(std::make_unique<Impl>(std::move(cfg), std::move(map), std::move(out))) {}
+
+FusionEngine::~FusionEngine() = default;
+FusionEngine::FusionEngine(FusionEngine&&) noexcept = default;
+FusionEngine& FusionEngine::operator=(FusionEngine&&) noexcept = default;
+
+bool FusionEngine::push(EngineInput in) {
+  const OrderKey key = orderKey(in);
+  const bool duplicate = impl_->buffer.contains(key);
+  const std::string channel = in.channel;
+  const int64_t seq = in.seq, utime = in.utime;
+  if (!impl_->buffer.push(key, std::move(in))) {
+    ++impl_->counters.too_old;
+    std::string detail = channel + " seq " + std::to_string(seq) + " utime " +
+                         std::to_string(utime);
+    if (duplicate)
+      detail += ": duplicate";
+    else
+      detail += ": older than already processed utime " +
+                std::to_string(impl_->buffer.lastReleased().utime);
+    impl_->event("too_old", detail, utime);
+    return false;
+  }
+  impl_->buffer.releaseReady([this](const OrderKey&, const EngineInput& e) { impl_->process(e); });
+  return true;
+}
+
+void FusionEngine::flush() {
+  impl_->buffer.flush([this](const OrderKey&, const EngineInput& e) { impl_->process(e); });
+}
+
+std::string FusionEngine::activeFilter() const { return impl_->active->name(); }
+FilterState FusionEngine::activeState() const { return impl_->active->state(); }
+FusionEngine::Counters FusionEngine::counters() const { return impl_->counters; }
+
+}  // namespace lcmloc::core

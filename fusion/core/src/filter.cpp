@@ -1,0 +1,334 @@
+#include "lcmloc/core/filter.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "lcmloc/core/angles.hpp"
+#include "lcmloc/core/chi2.hpp"
+#include "lcmloc/core/ruler_model.hpp"
+#include "lcmloc/core/vehicle_model.hpp"
+
+namespace lcmloc::core {
+
+double GateConfig::threshold(int innovation_dim) const {
+  if (value) return *value;
+  return chi2Quantile(probability, dof > 0 ? dof : innovation_dim);
+}
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr AngleMask kThetaMask = 1u << 2;    // state: x, y, theta, ...
+constexpr AngleMask kBearingMask = 1u << 1;  // measurement: range, bearing
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument("filter config: " + what);
+}
+
+void validate(const FilterConfig& c) {
+  require(std::isfinite(c.wheelbase) && c.wheelbase > 0, "wheelbase must be > 0");
+  require(std::isfinite(c.ruler_offset) && c.ruler_offset > 0, "ruler_offset must be > 0");
+  require(std::isfinite(c.ruler_half_width) && c.ruler_half_width > 0,
+          "ruler_half_width must be > 0");
+  require(c.initial_pose.allFinite(), "initial_pose must be finite");
+  require(c.p0_diag.allFinite() && (c.p0_diag.array() > 0).all(), "p0_diag must be > 0");
+  require(c.pw_diag.allFinite() && (c.pw_diag.array() >= 0).all(), "pw_diag must be >= 0");
+  require(std::isfinite(c.pw_distance) && c.pw_distance >= 0, "pw_distance must be >= 0");
+  require(c.pv_diag.allFinite() && (c.pv_diag.array() > 0).all(), "pv_diag must be > 0");
+  require(std::isfinite(c.sigma.alpha) && c.sigma.alpha > 0, "sigma.alpha must be > 0");
+  require(std::isfinite(c.sigma.beta) && std::isfinite(c.sigma.kappa), "sigma must be finite");
+  require(c.sigma.alpha * c.sigma.alpha * (3.0 + c.sigma.kappa) > 0,
+          "sigma: alpha^2 (n + kappa) must be > 0");
+  if (c.gate.value)
+    require(std::isfinite(*c.gate.value) && *c.gate.value > 0, "gate.value must be > 0");
+  require(c.gate.probability > 0 && c.gate.probability < 1, "gate.probability must be in (0, 1)");
+  require(c.gate.dof >= 0 && c.gate.dof <= 10, "gate.dof must be in 0..10");
+  require(std::isfinite(c.reach_forward) && c.reach_forward >= 0, "reach_forward must be >= 0");
+  require(std::isfinite(c.reach_lateral) && c.reach_lateral >= 0, "reach_lateral must be >= 0");
+  require(c.lockout_rejections >= 0, "lockout_rejections must be >= 0");
+  require(std::isfinite(c.lockout_inflation) && c.lockout_inflation >= 1,
+          "lockout_inflation must be >= 1");
+  require(std::isfinite(c.scale_std0) && c.scale_std0 > 0, "scale_std0 must be > 0");
+  require(std::isfinite(c.steer_bias_std0) && c.steer_bias_std0 > 0,
+          "steer_bias_std0 must be > 0");
+  require(std::isfinite(c.scale_rw) && c.scale_rw >= 0, "scale_rw must be >= 0");
+  require(std::isfinite(c.steer_bias_rw) && c.steer_bias_rw >= 0, "steer_bias_rw must be >= 0");
+}
+
+bool isFinite(const OdometryInput& o) {
+  return std::isfinite(o.delta_s) && (o.has_steering ? std::isfinite(o.steering)
+                                                     : std::isfinite(o.delta_theta));
+}
+
+/// Pose process noise of one step: Pw accumulated over pw_distance metres of travel
+/// (per step as printed when pw_distance = 0). See docs/paper_000_reading.md.
+Vec3 poseProcessNoise(const FilterConfig& c, double ds) {
+  return c.pw_distance > 0 ? Vec3(c.pw_diag * (std::abs(ds) / c.pw_distance)) : c.pw_diag;
+}
+
+/// Initial state and covariance of a filter with these state names.
+void initialState(const FilterConfig& c, const std::vector<std::string>& names,
+                  Eigen::VectorXd& x, Eigen::MatrixXd& P) {
+  const int n = static_cast<int>(names.size());
+  x = Eigen::VectorXd::Zero(n);
+  P = Eigen::MatrixXd::Zero(n, n);
+  x.head<3>() = c.initial_pose;
+  x[2] = wrapAngle(x[2]);
+  P.topLeftCorner<3, 3>() = c.p0_diag.asDiagonal();
+  for (int i = 3; i < n; ++i)
+    P(i, i) = names[i] == "odo_scale" ? c.scale_std0 * c.scale_std0
+                                      : c.steer_bias_std0 * c.steer_bias_std0;
+}
+
+/// Hot swap: starts from the filter's initial values and copies every state of `from` that has
+/// the same name (x, y, theta always: a source without names is read as x, y, theta, ...),
+/// with the covariance among copied states; cross-covariances to other states are zero.
+void copyMatching(const FilterState& from, const std::vector<std::string>& names,
+                  Eigen::VectorXd& x, Eigen::MatrixXd& P) {
+  const auto n_from = from.x.size();
+  if (n_from < 3 || from.P.rows() != n_from || from.P.cols() != n_from)
+    throw std::invalid_argument("initialize: state must have >= 3 entries and a matching P");
+  if (!from.x.allFinite() || !from.P.allFinite())
+    throw std::invalid_argument("initialize: state or covariance not finite");
+  const bool named = static_cast<Eigen::Index>(from.names.size()) == n_from;
+  std::vector<int> src(names.size(), -1);
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (i < 3) { src[i] = static_cast<int>(i); continue; }
+    for (Eigen::Index j = 3; named && j < n_from; ++j)
+      if (from.names[j] == names[i]) src[i] = static_cast<int>(j);
+  }
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (src[i] < 0) continue;
+    x[i] = from.x[src[i]];
+    for (size_t j = 0; j < names.size(); ++j) {
+      if (src[j] < 0) continue;
+      P(i, j) = from.P(src[i], src[j]);
+    }
+    for (size_t j = 0; j < names.size(); ++j)
+      if (src[j] < 0) P(i, j) = P(j, i) = 0.0;
+  }
+  x[2] = wrapAngle(x[2]);
+}
+
+GateDecision makeDecision(const RulerDetection& det) {
+  GateDecision d;
+  d.utime = det.utime;
+  d.sensor = det.sensor;
+  d.measurement_seq = det.seq;
+  return d;
+}
+
+// ---------------------------------------------------------------------------------------------
+/// Odometry only (eq. 1-2); covariance propagated by linearisation with the same process noise.
+class DeadReckoningFilter final : public Filter {
+ public:
+  explicit DeadReckoningFilter(const FilterConfig& c) : cfg_(c) {
+    Eigen::VectorXd x;
+    Eigen::MatrixXd P;
+    initialState(cfg_, names_, x, P);
+    x_ = x;
+    P_ = P;
+  }
+  std::string name() const override { return "dead_reckoning"; }
+  FilterState state() const override {
+    FilterState s;
+    s.utime = utime_;
+    s.x = x_;
+    s.P = P_;
+    s.names = names_;
+    s.status = FilterStatus::DeadReckoning;
+    return s;
+  }
+  void initialize(const FilterState& from) override {
+    Eigen::VectorXd x;
+    Eigen::MatrixXd P;
+    initialState(cfg_, names_, x, P);
+    copyMatching(from, names_, x, P);
+    x_ = x;
+    P_ = P;
+    utime_ = from.utime;
+  }
+  void predict(const OdometryInput& odo) override {
+    if (!isFinite(odo)) return;
+    const double ds = odo.delta_s, dth = headingIncrement(odo, cfg_.wheelbase);
+    const double mid = x_.z() + 0.5 * dth;
+    Mat3 F = Mat3::Identity();
+    F(0, 2) = -ds * std::sin(mid);
+    F(1, 2) = ds * std::cos(mid);
+    x_ = propagatePose(x_, ds, dth);
+    P_ = F * P_ * F.transpose();
+    P_.diagonal() += poseProcessNoise(cfg_, ds);
+    utime_ = odo.utime;
+  }
+  GateDecision update(const RulerDetection& det) override {
+    GateDecision d = makeDecision(det);
+    d.gate = kInf;
+    d.reason = std::isfinite(det.lateral_offset) ? "dead_reckoning" : "bad_input";
+    return d;
+  }
+
+ private:
+  FilterConfig cfg_;
+  std::vector<std::string> names_{"x", "y", "theta"};
+  Vec3 x_;
+  Mat3 P_;
+  int64_t utime_ = 0;
+};
+
+// ---------------------------------------------------------------------------------------------
+/// The UKF of §3.2 with the range-bearing ruler measurement (eq. 3-6), association restricted to
+/// markers the ruler can reach, optional chi-square gate (§3.3) and lock-out detection.
+/// N = 3: (x, y, theta). N = 5: + odometer scale error k and steering bias b (online calibration).
+template <int N>
+class RulerUkf final : public Filter {
+  using U = Ukf<N>;
+
+ public:
+  RulerUkf(std::string name, const FilterConfig& c, const MarkerMap& map, bool gated)
+      : name_(std::move(name)), cfg_(c), map_(map), gated_(gated && c.gate.enabled),
+        gate_(gated_ ? c.gate.threshold(2) : kInf), ukf_(c.sigma, kThetaMask) {
+    names_ = {"x", "y", "theta"};
+    if (N == 5) names_.insert(names_.end(), {"odo_scale", "steer_bias"});
+    Eigen::VectorXd x;
+    Eigen::MatrixXd P;
+    initialState(cfg_, names_, x, P);
+    ukf_.reset(x, P);
+    R_ = cfg_.pv_diag.asDiagonal();
+  }
+
+  std::string name() const override { return name_; }
+
+  FilterState state() const override {
+    FilterState s;
+    s.utime = utime_;
+    s.x = ukf_.x();
+    s.P = ukf_.P();
+    s.names = names_;
+    s.status = status_;
+    return s;
+  }
+
+  void initialize(const FilterState& from) override {
+    Eigen::VectorXd x;
+    Eigen::MatrixXd P;
+    initialState(cfg_, names_, x, P);
+    copyMatching(from, names_, x, P);
+    ukf_.reset(x, P);
+    utime_ = from.utime;
+    status_ = FilterStatus::Ok;
+    consecutive_rejections_ = 0;
+  }
+
+  void predict(const OdometryInput& odo) override {
+    if (!isFinite(odo)) return;
+    const double L = cfg_.wheelbase;
+    auto f = [&odo, L](const typename U::Vector& s) {
+      typename U::Vector out = s;
+      double ds = odo.delta_s, dth = odo.delta_theta;
+      if constexpr (N == 5) {
+        ds *= 1.0 + s[3];
+        if (odo.has_steering) dth = headingIncrement(ds, odo.steering - s[4], L);
+      } else {
+        if (odo.has_steering) dth = headingIncrement(ds, odo.steering, L);
+      }
+      out.template head<3>() = propagatePose(s.template head<3>(), ds, dth);
+      return out;
+    };
+    typename U::Matrix Q = U::Matrix::Zero();
+    Q.template topLeftCorner<3, 3>().diagonal() = poseProcessNoise(cfg_, odo.delta_s);
+    if constexpr (N == 5) {
+      Q(3, 3) = cfg_.scale_rw * cfg_.scale_rw * std::abs(odo.delta_s);
+      Q(4, 4) = cfg_.steer_bias_rw * cfg_.steer_bias_rw * std::abs(odo.delta_s);
+    }
+    if (ukf_.predict(f, Q)) utime_ = odo.utime;
+  }
+
+  GateDecision update(const RulerDetection& det) override {
+    GateDecision d = makeDecision(det);
+    d.gate = gate_;
+    typename U::Sigmas X;
+    if (!std::isfinite(det.lateral_offset) || !std::isfinite(det.quality) ||
+        !ukf_.sigmaPoints(X)) {
+      d.reason = "bad_input";
+      return d;
+    }
+    const Vec2 z = rulerObservation(det.lateral_offset, cfg_.ruler_offset);
+    const Pose pose = ukf_.x().template head<3>();
+    Innovation<N, 2> best, cand;
+    int best_id = -1;
+    for (const Marker& m : map_) {
+      if (!reachable(markerInBody(pose, m.x, m.y))) continue;
+      auto h = [&m](const typename U::Vector& s) {
+        return predictRangeBearing(s.template head<3>(), m.x, m.y);
+      };
+      if (!ukf_.template innovate<2>(X, h, R_, z, kBearingMask, cand)) continue;
+      if (best_id < 0 || cand.mahalanobis < best.mahalanobis) {
+        best = cand;
+        best_id = m.id;
+      }
+    }
+    utime_ = std::max(utime_, det.utime);
+    if (best_id < 0) {
+      d.reason = "no_candidate";
+      return d;
+    }
+    d.marker_id = best_id;
+    d.innovation = best.v;
+    d.mahalanobis = best.mahalanobis;
+    if (gated_ && !(best.mahalanobis <= gate_)) {
+      d.reason = "gate";
+      onGateRejection();
+      return d;
+    }
+    ukf_.correct(best);
+    d.accepted = true;
+    d.reason = gated_ ? "accepted" : "ungated";
+    consecutive_rejections_ = 0;
+    status_ = FilterStatus::Ok;
+    return d;
+  }
+
+ private:
+  bool reachable(const Vec2& body) const {
+    return std::abs(body.x() - cfg_.ruler_offset) <= cfg_.reach_forward &&
+           std::abs(body.y()) <= cfg_.ruler_half_width + cfg_.reach_lateral;
+  }
+  void onGateRejection() {
+    ++consecutive_rejections_;
+    if (cfg_.lockout_rejections > 0 && consecutive_rejections_ >= cfg_.lockout_rejections &&
+        status_ != FilterStatus::Lockout) {
+      status_ = FilterStatus::Lockout;
+      ukf_.scaleCovariance(cfg_.lockout_inflation);
+    }
+  }
+
+  std::string name_;
+  FilterConfig cfg_;
+  MarkerMap map_;
+  bool gated_;
+  double gate_;
+  U ukf_;
+  Mat2 R_;
+  std::vector<std::string> names_;
+  int64_t utime_ = 0;
+  FilterStatus status_ = FilterStatus::Ok;
+  int consecutive_rejections_ = 0;
+};
+
+}  // namespace
+
+std::vector<std::string> filterTypes() { return {"dead_reckoning", "ukf", "ukf_gated", "ukf_calib"}; }
+
+std::unique_ptr<Filter> makeFilter(const FilterConfig& cfg, const MarkerMap& map) {
+  validate(cfg);
+  if (cfg.type == "dead_reckoning") return std::make_unique<DeadReckoningFilter>(cfg);
+  if (cfg.type == "ukf") return std::make_unique<RulerUkf<3>>(cfg.type, cfg, map, false);
+  if (cfg.type == "ukf_gated") return std::make_unique<RulerUkf<3>>(cfg.type, cfg, map, true);
+  if (cfg.type == "ukf_calib") return std::make_unique<RulerUkf<5>>(cfg.type, cfg, map, true);
+  throw std::invalid_argument("filter config: unknown type '" + cfg.type +
+                              "' (known: dead_reckoning, ukf, ukf_gated, ukf_calib)");
+}
+
+}  // namespace lcmloc::core
