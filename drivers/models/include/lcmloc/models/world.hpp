@@ -2,8 +2,10 @@
 // The simulated world: reference path, marker map, vehicle and sensor models. No middleware,
 // no clock: each model is stepped with message times and its own seeded generator, so a
 // process wrapping it and the in-process scenario runner produce the same numbers.
+#include <memory>
 #include <optional>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "lcmloc/core/types.hpp"
@@ -74,6 +76,16 @@ class OdometrySensor {
   int64_t ticks_total_ = 0;
 };
 
+/// Vertical component [gauss] of the field of a vertical magnetic dipole of moment [A m^2]
+/// (pointing up), at horizontal distance rho [m] and height dz [m] above the dipole:
+/// Bz = mu0/(4 pi) m (3 cos^2(phi) - 1) / r^3, cos(phi) = dz / r (1 T = 1e4 gauss).
+double dipoleVerticalField(double moment, double rho, double dz);
+
+/// Noise-free readings [gauss] of the ruler's sensors with a single marker at `along` [m]
+/// ahead of the ruler line and `lateral` [m] left of the ruler centre (body frame), Earth field
+/// included. The one dipole profile used by the ruler's calibration and the fault injector.
+std::vector<double> singleMarkerReadings(const MagRulerConfig& cfg, double along, double lateral);
+
 /// Physical magnetic ruler: 13 AMR sensors reading the vertical field of dipole markers plus the
 /// Earth's field and disturbances; peak mapping recovers d_m.
 struct RulerReading {
@@ -121,6 +133,7 @@ class FaultInjector {
   MagRulerConfig ruler_;
   std::size_t next_ = 0;
   std::mt19937_64 rng_;
+  std::shared_ptr<const MagneticRuler> mapper_;  // peak mapping of the synthesised readings
 };
 
 }  // namespace lcmloc::models

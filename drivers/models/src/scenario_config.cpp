@@ -1,0 +1,28 @@
+#include "lcmloc/models/scenario_config.hpp"
+
+namespace lcmloc::models {
+namespace {
+
+uint64_t fnv1a64(const std::string& s) {
+  uint64_t h = 1469598103934665603ULL;
+  for (unsigned char c : s) {
+    h ^= c;
+    h *= 1099511628211ULL;
+  }
+  return h;
+}
+
+uint64_t splitmix64(uint64_t x) {
+  x += 0x9E3779B97F4A7C15ULL;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
+  return x ^ (x >> 31);
+}
+
+}  // namespace
+
+uint64_t componentSeed(uint64_t master, const std::string& component) {
+  return splitmix64(master ^ fnv1a64(component));
+}
+
+}  // namespace lcmloc::models
