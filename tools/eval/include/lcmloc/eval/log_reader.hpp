@@ -1,0 +1,78 @@
+#pragma once
+// Reads an LCM log file directly (lcm::LogFile, no network) and decodes the channels the
+// evaluation needs. A damaged log (truncated tail, corrupt event, undecodable payload) is read
+// up to and past the damage where possible; every problem is recorded with its event index and
+// byte offset.
+#include <atomic>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "lcmloc/common/config.hpp"
+#include "lcmloc/core/engine.hpp"
+
+namespace lcmloc::eval {
+
+struct TruthSample {
+  int64_t utime = 0;
+  double x = 0, y = 0, heading = 0, distance = 0;
+};
+
+/// One FAULT_EVENTS message: which measurement was faulty (ground truth for scoring).
+struct FaultRecord {
+  int64_t utime = 0;
+  std::string kind;
+  std::string channel;
+  int64_t measurement_seq = 0;
+  double x = 0, y = 0;          ///< true position of M when injected [m]
+  double lateral_offset = 0;    ///< d_m the fault reported [m]
+};
+
+/// A pose published live by the fusion daemon (POSE).
+struct LivePose {
+  int64_t utime = 0;
+  std::string filter;
+  double x = 0, y = 0, theta = 0;
+  int status = 0;
+};
+
+/// A gate decision published live by the fusion daemon (GATE).
+struct LiveDecision {
+  std::string filter;
+  core::GateDecision decision;
+};
+
+/// A problem found while reading: damage of the file or a message that could not be used.
+struct LogIssue {
+  int64_t event_index = 0;   ///< index of the event (0-based, counting events read so far)
+  int64_t byte_offset = 0;   ///< where in the file
+  std::string what;
+};
+
+struct LogData {
+  std::string path;
+  int64_t file_size = 0;
+  int64_t events_read = 0;        ///< events returned intact by the reader
+  int64_t bytes_unreadable = 0;   ///< bytes skipped over damage
+  bool damaged = false;           ///< some part of the file could not be read
+  bool interrupted = false;       ///< reading stopped early on request (SIGINT)
+  std::map<std::string, int64_t> channel_counts;
+  std::vector<TruthSample> truth;            ///< sorted by utime
+  std::vector<core::EngineInput> inputs;     ///< odometry + ruler detections, in log order
+  int64_t odometry_messages = 0, ruler_messages = 0, ruler_detections = 0;
+  std::vector<FaultRecord> faults;
+  std::vector<LivePose> live_poses;
+  std::vector<LiveDecision> live_decisions;
+  std::vector<LogIssue> issues;              ///< file damage first noticed, then bad messages
+
+  /// Something to evaluate: at least one sensor input.
+  bool usable() const { return !inputs.empty(); }
+};
+
+/// Reads the log at path. Throws std::runtime_error when the file cannot be opened.
+/// stop (optional) is polled between events; when set, reading ends early.
+LogData readLog(const std::string& path, const common::ChannelConfig& channels,
+                const std::atomic<bool>* stop = nullptr);
+
+}  // namespace lcmloc::eval

@@ -1,0 +1,154 @@
+#include "lcmloc/eval/report.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <stdexcept>
+
+namespace lcmloc::eval {
+namespace {
+
+using nlohmann::json;
+
+/// JSON has no infinity or NaN: such values become null.
+json number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+json metricsJson(const Metrics& m) {
+  return {{"rmse_m", m.rmse_m},
+          {"max_error_m", m.max_error_m},
+          {"final_error_m", m.final_error_m},
+          {"samples", m.samples},
+          {"accepted", m.accepted},
+          {"rejected", m.rejected},
+          {"ignored", m.ignored},
+          {"faults_total", m.faults_total},
+          {"faults_rejected", m.faults_rejected},
+          {"faults_accepted", m.faults_accepted},
+          {"valid_rejected", m.valid_rejected},
+          {"lockouts", m.lockouts}};
+}
+
+json measurementsJson(const FilterRun& run, int64_t t0) {
+  json list = json::array();
+  for (const auto& r : run.decisions) {
+    const auto& d = r.decision;
+    list.push_back({{"utime", d.utime},
+                    {"t_s", static_cast<double>(d.utime - t0) * 1e-6},
+                    {"sensor", d.sensor},
+                    {"measurement_seq", d.measurement_seq},
+                    {"innovation_distance", number(d.mahalanobis)},
+                    {"gate", number(d.gate)},
+                    {"accepted", d.accepted},
+                    {"reason", d.reason},
+                    {"marker_id", d.marker_id},
+                    {"fault", r.is_fault}});
+  }
+  return list;
+}
+
+json filterJson(const FilterRun& run, int64_t t0) {
+  json j = metricsJson(run.metrics);
+  j["measurements"] = measurementsJson(run, t0);
+  return j;
+}
+
+json logJson(const LogData& data) {
+  json issues = json::array();
+  for (const auto& i : data.issues)
+    issues.push_back({{"event_index", i.event_index}, {"byte_offset", i.byte_offset}, {"what", i.what}});
+  return {{"path", data.path},
+          {"file_size", data.file_size},
+          {"events_read", data.events_read},
+          {"bytes_unreadable", data.bytes_unreadable},
+          {"damaged", data.damaged},
+          {"interrupted", data.interrupted},
+          {"channels", data.channel_counts},
+          {"odometry_messages", data.odometry_messages},
+          {"ruler_messages", data.ruler_messages},
+          {"ruler_detections", data.ruler_detections},
+          {"truth_samples", data.truth.size()},
+          {"issues", issues}};
+}
+
+void row(std::ostream& os, const std::string& name, const Metrics& m, bool scored) {
+  os << std::left << std::setw(22) << name << std::right << std::fixed << std::setprecision(3);
+  if (scored)
+    os << std::setw(9) << m.rmse_m << std::setw(9) << m.max_error_m << std::setw(10) << m.final_error_m;
+  else
+    os << std::setw(9) << "-" << std::setw(9) << "-" << std::setw(10) << "-";
+  os << std::setw(10) << m.accepted << std::setw(10) << m.rejected << std::setw(8)
+     << (std::to_string(m.faults_rejected) + "/" + std::to_string(m.faults_total)) << std::setw(11)
+     << m.valid_rejected << "\n";
+}
+
+}  // namespace
+
+json makeReport(const LogData& data, const Evaluation& ev, const ReportMeta& meta) {
+  json j;
+  j["log"] = logJson(data);
+  j["config"] = meta.config_file;
+  j["gate_threshold"] = ev.gate_threshold;
+  j["gate"] = {{"threshold", ev.gate_threshold},
+               {"probability", meta.gate.probability},
+               {"dof", meta.gate.dof == 0 ? 2 : meta.gate.dof},
+               {"value", meta.gate.value ? json(*meta.gate.value) : json(nullptr)}};
+  json faults = json::array();
+  for (const auto& f : ev.faults)
+    faults.push_back({{"utime", f.fault.utime},
+                      {"kind", f.fault.kind},
+                      {"channel", f.fault.channel},
+                      {"measurement_seq", f.fault.measurement_seq},
+                      {"x", f.fault.x},
+                      {"y", f.fault.y},
+                      {"lateral_offset", f.fault.lateral_offset}});
+  j["faults"] = faults;
+  j["filters"] = json::object();
+  for (const auto& run : ev.filters) j["filters"][run.name] = filterJson(run, ev.t0_utime);
+  if (ev.live) {
+    json live = filterJson(ev.live->run, ev.t0_utime);
+    live["filter"] = ev.live->filter;
+    live["poses"] = ev.live->run.track.size();
+    live["matched_poses"] = ev.live->matched_poses;
+    live["max_diff_to_replay_m"] = ev.live->max_diff_to_replay_m >= 0 ? json(ev.live->max_diff_to_replay_m) : json(nullptr);
+    j["live"] = live;
+  } else {
+    j["live"] = nullptr;
+  }
+  return j;
+}
+
+void writeJson(const json& report, const std::string& path) {
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error("cannot write '" + path + "'");
+  f << report.dump(2) << "\n";
+  if (!f) throw std::runtime_error("error while writing '" + path + "'");
+}
+
+void printSummary(std::ostream& os, const LogData& data, const Evaluation& ev) {
+  const bool scored = !data.truth.empty();
+  os << std::left << std::setw(22) << "filter" << std::right << std::setw(9) << "RMSE[m]"
+     << std::setw(9) << "max[m]" << std::setw(10) << "final[m]" << std::setw(10) << "accepted"
+     << std::setw(10) << "rejected" << std::setw(8) << "faults" << std::setw(11) << "valid_rej"
+     << "\n";
+  for (const auto& run : ev.filters) row(os, run.name, run.metrics, scored);
+  if (ev.live) row(os, ev.live->run.name, ev.live->run.metrics, scored);
+  os << "faults = rejected/total; gate threshold " << std::setprecision(3) << ev.gate_threshold
+     << " (innovation distance, 2-dof chi-square)\n";
+  if (ev.live && ev.live->max_diff_to_replay_m >= 0)
+    os << "live " << ev.live->filter << " vs offline replay: max position difference "
+       << std::scientific << std::setprecision(2) << ev.live->max_diff_to_replay_m << " m over "
+       << ev.live->matched_poses << " poses\n" << std::fixed;
+  if (!scored) os << "no ground truth in the log: errors not computed\n";
+  os << "log: " << data.events_read << " events, " << data.file_size << " bytes";
+  if (data.damaged) os << ", DAMAGED (" << data.bytes_unreadable << " bytes unreadable)";
+  os << ", " << data.issues.size() << " issue(s)\n";
+  constexpr std::size_t kShown = 10;
+  for (std::size_t k = 0; k < data.issues.size() && k < kShown; ++k) {
+    const auto& i = data.issues[k];
+    os << "  event " << i.event_index << " @ byte " << i.byte_offset << ": " << i.what << "\n";
+  }
+  if (data.issues.size() > kShown)
+    os << "  ... and " << data.issues.size() - kShown << " more (see report.json)\n";
+}
+
+}  // namespace lcmloc::eval
