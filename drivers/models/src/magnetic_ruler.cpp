@@ -68,6 +68,7 @@ struct MagneticRuler::Impl {
   // Calibration: parabola vertex (sensor-index units) -> true lateral offset, increasing.
   std::vector<double> cal_vertex, cal_offset;
   double nominal_peak = 1.0;  // noise-free amplitude with the marker under the centre
+  std::vector<double> gains;  // per-sensor sensitivity (1 + mismatch), drawn once
 
   // Disturbance process.
   double disturbance = 0.0;
@@ -104,6 +105,8 @@ MagneticRuler::MagneticRuler(const MagRulerConfig& cfg, const core::MarkerMap& m
   impl_->cal_vertex.assign(v.begin() + lo, v.begin() + hi + 1);
   impl_->cal_offset.assign(d.begin() + lo, d.begin() + hi + 1);
   impl_->nominal_peak = rawPeak(singleMarkerReadings(cfg_, 0.0, 0.0)).amplitude;
+  std::normal_distribution<double> gain(1.0, cfg_.gain_std);
+  for (int i = 0; i < cfg_.num_sensors; ++i) impl_->gains.push_back(gain(rng_));
 }
 
 double MagneticRuler::sensorLateral(int i) const { return sensorLateralOf(cfg_, i); }
@@ -137,7 +140,8 @@ std::vector<double> MagneticRuler::read(const TruthState& truth) {
   std::vector<double> out(cfg_.num_sensors);
   for (int i = 0; i < cfg_.num_sensors; ++i) {
     const double lat = sensorLateral(i);
-    out[i] = fieldAt(cx - lat * s, cy + lat * c) + impl_->disturbance + cfg_.noise_std * normal(rng_);
+    out[i] = impl_->gains[i] * (fieldAt(cx - lat * s, cy + lat * c) + impl_->disturbance) +
+             cfg_.noise_std * normal(rng_);
   }
   return out;
 }

@@ -1,0 +1,305 @@
+// Unit tests of the simulated world and sensor models.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "lcmloc/core/ruler_model.hpp"
+#include "lcmloc/core/vehicle_model.hpp"
+#include "lcmloc/models/world.hpp"
+
+using namespace lcmloc;
+using namespace lcmloc::models;
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+
+TruthState straightTruth(int64_t utime, double distance, double steering = 0.0) {
+  TruthState t;
+  t.utime = utime;
+  t.distance = distance;
+  t.y = distance;
+  t.heading = kPi / 2;
+  t.steering = steering;
+  return t;
+}
+}  // namespace
+
+TEST(Path, SegmentsOfConstantCurvature) {
+  const Path path(PathConfig{});  // 12 m straight north, 14 m at 0.06 1/m, 16 m straight
+  EXPECT_DOUBLE_EQ(path.length(), 42.0);
+  const core::Pose p12 = path.poseAt(12.0);
+  EXPECT_NEAR(p12.x(), 0.0, 1e-12);
+  EXPECT_NEAR(p12.y(), 12.0, 1e-12);
+  EXPECT_NEAR(p12.z(), kPi / 2, 1e-12);
+  // End of the arc: centre of the circle at (-1/k, 12), heading turned by k*14 = 0.84 rad.
+  const double k = 0.06, r = 1.0 / k;
+  const core::Pose p26 = path.poseAt(26.0);
+  EXPECT_NEAR(p26.x(), -r + r * std::cos(0.84), 1e-9);
+  EXPECT_NEAR(p26.y(), 12.0 + r * std::sin(0.84), 1e-9);
+  EXPECT_NEAR(p26.z(), kPi / 2 + 0.84, 1e-12);
+  EXPECT_DOUBLE_EQ(path.curvatureAt(20.0), 0.06);
+  EXPECT_DOUBLE_EQ(path.curvatureAt(30.0), 0.0);
+  // The last straight keeps the heading; beyond the end the path extends straight on.
+  const core::Pose p42 = path.poseAt(42.0), p44 = path.poseAt(44.0);
+  EXPECT_NEAR(p42.z(), p26.z(), 1e-12);
+  EXPECT_NEAR(std::hypot(p44.x() - p42.x(), p44.y() - p42.y()), 2.0, 1e-9);
+  // Projection of a point 0.3 m left of the path at s = 20.
+  const core::Pose p20 = path.poseAt(20.0);
+  const double px = p20.x() - 0.3 * std::sin(p20.z()), py = p20.y() + 0.3 * std::cos(p20.z());
+  EXPECT_NEAR(path.project(px, py, 19.0), 20.0, 1e-7);
+}
+
+TEST(Path, MarkerMapAtArcLengths) {
+  const Path path(PathConfig{});
+  const core::MarkerMap map = makeMarkerMap(path, MarkerLayout{});
+  ASSERT_EQ(map.size(), 20u);
+  for (int i = 0; i < 20; ++i) {
+    EXPECT_EQ(map[i].id, i);
+    const core::Pose p = path.poseAt(2.0 + 2.0 * i);
+    EXPECT_NEAR(map[i].x, p.x(), 1e-12);
+    EXPECT_NEAR(map[i].y, p.y(), 1e-12);
+  }
+  EXPECT_NEAR(map[0].y, 2.0, 1e-12);
+  EXPECT_NEAR(std::hypot(map[1].x - map[0].x, map[1].y - map[0].y), 2.0, 1e-12);
+}
+
+TEST(Seeds, ComponentSeedsAreStableAndDistinct) {
+  EXPECT_EQ(componentSeed(1, "vehicle"), componentSeed(1, "vehicle"));
+  EXPECT_NE(componentSeed(1, "vehicle"), componentSeed(1, "odometry"));
+  EXPECT_NE(componentSeed(1, "vehicle"), componentSeed(2, "vehicle"));
+}
+
+TEST(VehicleSim, FollowsPathWithinWeaveAndStops) {
+  const ScenarioConfig sc;
+  const Path path(sc.path);
+  const double stop_at = 40.0 + sc.vehicle.end_margin;
+  VehicleSim sim(sc.vehicle, path, stop_at, 7);
+  double hint = 0.0, max_lateral = 0.0, max_speed = 0.0, max_steer = 0.0;
+  int64_t last_utime = sim.state().utime;
+  EXPECT_EQ(last_utime, sc.vehicle.start_utime);
+  int steps = 0;
+  while (!sim.finished() && steps < 100000) {
+    const TruthState& t = sim.step();
+    ++steps;
+    EXPECT_EQ(t.utime - last_utime, 10000);
+    last_utime = t.utime;
+    hint = path.project(t.x, t.y, hint);
+    const core::Pose p = path.poseAt(hint);
+    const double lateral = -(t.x - p.x()) * std::sin(p.z()) + (t.y - p.y()) * std::cos(p.z());
+    max_lateral = std::max(max_lateral, std::abs(lateral));
+    max_speed = std::max(max_speed, t.speed);
+    max_steer = std::max(max_steer, std::abs(t.steering));
+  }
+  ASSERT_TRUE(sim.finished());
+  std::printf("vehicle: %d samples, max |lateral| %.4f m, max speed %.3f m/s, stop at arc %.4f\n",
+              steps, max_lateral, max_speed, hint);
+  EXPECT_LE(max_lateral, sc.vehicle.weave_amplitude + 0.03);
+  EXPECT_GE(max_lateral, 0.5 * sc.vehicle.weave_amplitude);  // the weave is really there
+  EXPECT_NEAR(max_speed, sc.vehicle.speed, 1e-9);
+  EXPECT_LE(max_steer, sc.vehicle.max_steering);
+  EXPECT_NEAR(hint, stop_at, 0.01);
+  EXPECT_EQ(sim.state().speed, 0.0);
+  EXPECT_NEAR(sim.state().distance, stop_at, 0.1);  // weave and corner cutting: a few cm
+}
+
+TEST(OdometrySensor, QuantizationScaleAndBias) {
+  OdometrySensorConfig cfg;
+  cfg.scale_error = 0.01;
+  cfg.steering_bias = 0.008727;
+  cfg.rate_hz = 50.0;  // every second truth sample at 100 Hz
+  OdometrySensor odo(cfg, 2.5, 3);
+  const double speed = 1.5, steer = 0.1;
+  double sum_ds = 0.0, sum_bias = 0.0;
+  int n = 0;
+  for (int k = 0; k <= 10000; ++k) {  // 100 s at 100 Hz: 150 m
+    auto s = odo.sample(straightTruth(1000000 + 10000 * k, speed * 0.01 * k, steer));
+    if (k == 0 || k % 2 == 1) {
+      EXPECT_FALSE(s.has_value()) << k;
+      continue;
+    }
+    ASSERT_TRUE(s.has_value()) << k;
+    ++n;
+    EXPECT_EQ(s->input.utime, 1000000 + 10000 * k);
+    EXPECT_DOUBLE_EQ(s->input.delta_s, s->ticks * cfg.tick_length);
+    EXPECT_TRUE(s->input.has_steering);
+    const double q = s->input.steering / cfg.steering_resolution;
+    EXPECT_NEAR(q, std::round(q), 1e-9);
+    EXPECT_DOUBLE_EQ(s->input.delta_theta,
+                     core::headingIncrement(s->input.delta_s, s->input.steering, 2.5));
+    sum_ds += s->input.delta_s;
+    sum_bias += s->input.steering - steer;
+  }
+  EXPECT_EQ(n, 5000);
+  const double true_total = speed * 0.01 * 10000;
+  // Slip: std 0.002 * sqrt(150) = 2.4 cm; quantization never accumulates (< 1 tick).
+  const double scale_meas = sum_ds / true_total - 1.0;
+  std::printf("odometry: measured scale error %.5f (true 0.01), steering bias %.6f (true %.6f)\n",
+              scale_meas, sum_bias / n, cfg.steering_bias);
+  EXPECT_NEAR(sum_ds, 1.01 * true_total, 5 * 0.002 * std::sqrt(true_total) + cfg.tick_length);
+  // Bias: noise 0.002 / sqrt(5000) plus quantization (<= 0.00025 bias possible).
+  EXPECT_NEAR(sum_bias / n, cfg.steering_bias, 0.0003);
+}
+
+TEST(OdometrySensor, SlipNoiseGrowsWithSqrtDistance) {
+  OdometrySensorConfig cfg;
+  cfg.slip_std = 0.01;
+  std::vector<double> err;
+  for (int seed = 0; seed < 400; ++seed) {
+    OdometrySensor odo(cfg, 2.5, componentSeed(seed, "odometry"));
+    double total = 0.0;
+    for (int k = 0; k <= 1000; ++k)  // 10 m
+      if (auto s = odo.sample(straightTruth(10000 * k, 0.01 * k))) total += s->input.delta_s;
+    err.push_back(total - 10.0);
+  }
+  double m = 0.0, v = 0.0;
+  for (double e : err) m += e / err.size();
+  for (double e : err) v += (e - m) * (e - m) / (err.size() - 1);
+  // Expected std 0.01 * sqrt(10) = 0.0316 m; the tick floor biases the mean by < 1 mm.
+  EXPECT_NEAR(std::sqrt(v), 0.01 * std::sqrt(10.0), 0.005);
+  EXPECT_NEAR(m, 0.0, 0.006);
+}
+
+TEST(MagneticRuler, DipoleFieldAgainstHandValues) {
+  // On the axis: mu0/(4 pi) * 2 m / h^3 = 1e-7 * 10 / 0.1925^3 T = 1e-6 / 0.007133328 T
+  // = 1.401870e-4 T = 1.401870 gauss.
+  EXPECT_NEAR(dipoleVerticalField(5.0, 0.0, 0.1925), 1.401870, 1e-6);
+  // rho = dz = 0.2: cos^2 = 0.5, r^3 = 0.0226274: 1e-7 * 5 * 0.5 / r^3 T = 0.110485 gauss.
+  EXPECT_NEAR(dipoleVerticalField(5.0, 0.2, 0.2), 0.110485, 1e-5);
+  // The vertical component vanishes where cos^2 = 1/3 (rho = sqrt(2) dz) and is negative beyond.
+  EXPECT_NEAR(dipoleVerticalField(5.0, 0.1925 * std::sqrt(2.0), 0.1925), 0.0, 1e-12);
+  EXPECT_LT(dipoleVerticalField(5.0, 0.5, 0.1925), 0.0);
+  // The ruler's field includes the Earth's vertical field.
+  MagRulerConfig cfg;
+  MagneticRuler ruler(cfg, {core::Marker{0, 1.0, 2.0}}, 1);
+  EXPECT_NEAR(ruler.fieldAt(1.0, 2.0), cfg.earth_field_z + 1.401870, 1e-6);
+  EXPECT_NEAR(ruler.fieldAt(100.0, 2.0), cfg.earth_field_z, 1e-9);
+  EXPECT_DOUBLE_EQ(ruler.sensorLateral(0), -0.5);
+  EXPECT_DOUBLE_EQ(ruler.sensorLateral(6), 0.0);
+  EXPECT_DOUBLE_EQ(ruler.sensorLateral(12), 0.5);
+}
+
+TEST(MagneticRuler, PeakMappingAccuracyAcrossWidth) {
+  MagRulerConfig cfg;
+  MagneticRuler ruler(cfg, {core::Marker{0, 0.0, 0.0}}, 11);
+  // Noise-free, marker on the ruler line.
+  double max_clean = 0.0;
+  for (int k = -450; k <= 450; ++k) {
+    const double d = 1e-3 * k + 0.00037;  // off the calibration grid
+    auto est = ruler.peakMap(singleMarkerReadings(cfg, 0.0, d));
+    ASSERT_TRUE(est.has_value()) << d;
+    max_clean = std::max(max_clean, std::abs(*est - d));
+  }
+  // With noise, disturbance and sensor gain mismatch (20 rulers), the marker up to half a
+  // sample (0.75 cm) along track.
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> along(-0.0075, 0.0075);
+  double max_noisy = 0.0, sq = 0.0;
+  int n = 0;
+  for (uint64_t seed = 0; seed < 20; ++seed) {
+    MagneticRuler noisy(cfg, {core::Marker{0, 0.0, 0.0}}, componentSeed(seed, "magruler"));
+    for (int k = -450; k <= 450; k += 5) {
+      const double d = 1e-3 * k;
+      // Heading north: body-left is -x. Marker (0,0) at ruler forward a, left d.
+      const double a = along(rng);
+      TruthState t;
+      t.utime = 1000000 + 10000 * n;
+      t.heading = kPi / 2;
+      t.x = d;
+      t.y = -cfg.ruler_offset - a;
+      auto est = noisy.peakMap(noisy.read(t));
+      ASSERT_TRUE(est.has_value()) << d;
+      const double e = *est - d;
+      max_noisy = std::max(max_noisy, std::abs(e));
+      sq += e * e;
+      ++n;
+    }
+  }
+  std::printf("peak mapping over [-0.45, 0.45] m: max error noise-free %.2e m, with noise %.5f m "
+              "(rms %.5f m)\n", max_clean, max_noisy, std::sqrt(sq / n));
+  EXPECT_LT(max_clean, 0.001);
+  EXPECT_LT(max_noisy, 0.01);
+  // No marker nearby: no peak.
+  TruthState far;
+  far.x = 50.0;
+  EXPECT_FALSE(ruler.peakMap(ruler.read(far)).has_value());
+}
+
+TEST(MagneticRuler, DetectsEachMarkerOnceAtTheCrossing) {
+  const ScenarioConfig sc;
+  const Path path(sc.path);
+  const core::MarkerMap map = makeMarkerMap(path, sc.markers);
+  VehicleSim sim(sc.vehicle, path, 40.0 + sc.vehicle.end_margin, 1);
+  MagneticRuler ruler(sc.magruler, map, 2);
+  std::vector<TruthState> truth{sim.state()};
+  std::vector<RulerReading> dets;
+  auto feed = [&](const TruthState& t) {
+    if (auto r = ruler.sample(t)) {
+      ASSERT_TRUE(r->detected);  // publish_rate_hz = 0: detections only
+      ASSERT_EQ(r->readings.size(), 13u);
+      dets.push_back(*r);
+    }
+  };
+  feed(sim.state());
+  while (!sim.finished()) {
+    truth.push_back(sim.step());
+    feed(truth.back());
+  }
+  ASSERT_EQ(dets.size(), map.size());
+  double max_along = 0.0, max_dm = 0.0, max_step = 0.0;
+  for (std::size_t i = 0; i < dets.size(); ++i) {
+    const int64_t k = (dets[i].utime - sc.vehicle.start_utime) / 10000;
+    const TruthState& t = truth.at(k);
+    ASSERT_EQ(t.utime, dets[i].utime);
+    const core::Vec2 body = core::markerInBody(core::Pose(t.x, t.y, t.heading), map[i].x, map[i].y);
+    const double along = body.x() - sc.magruler.ruler_offset;
+    const double step = t.speed * 0.01;
+    max_along = std::max(max_along, std::abs(along));
+    max_step = std::max(max_step, step);
+    EXPECT_LE(std::abs(along), step + 1e-3) << "marker " << i;
+    max_dm = std::max(max_dm, std::abs(dets[i].lateral_offset - body.y()));
+    EXPECT_GT(dets[i].quality, 0.8);
+  }
+  std::printf("detection: max along-track distance at detection %.4f m (sample spacing %.4f m), "
+              "max d_m error %.5f m\n", max_along, max_step, max_dm);
+  EXPECT_LT(max_dm, 0.01);
+}
+
+TEST(MagneticRuler, RawReadingsAtPublishRate) {
+  MagRulerConfig cfg;
+  cfg.publish_rate_hz = 10.0;
+  MagneticRuler ruler(cfg, {}, 3);
+  int raw = 0;
+  for (int k = 0; k < 1000; ++k)  // 10 s at 100 Hz, no marker
+    if (auto r = ruler.sample(straightTruth(10000 * k, 0.015 * k))) {
+      EXPECT_FALSE(r->detected);
+      EXPECT_NEAR(r->readings[6], cfg.earth_field_z, 0.02);
+      ++raw;
+    }
+  EXPECT_EQ(raw, 100);
+}
+
+TEST(FaultInjector, FiresOnceAtEachDistance) {
+  const ScenarioConfig sc;  // faults at 12.9 m (0.10 m) and 24.5 m (0.35 m)
+  FaultInjector inj(sc.faults, sc.magruler, 9);
+  std::vector<InjectedFault> fired;
+  for (int k = 0; k <= 3000; ++k)
+    if (auto f = inj.sample(straightTruth(10000 * k, 0.015 * k))) fired.push_back(*f);
+  ASSERT_EQ(fired.size(), 2u);
+  EXPECT_EQ(fired[0].fault.kind, "phantom_marker");
+  EXPECT_EQ(fired[1].fault.kind, "wrong_offset");
+  for (const auto& f : fired) {
+    EXPECT_GE(f.truth.distance, f.fault.at_distance);
+    EXPECT_LT(f.truth.distance - 0.015, f.fault.at_distance);  // the first sample that reaches it
+    EXPECT_EQ(f.reading.utime, f.truth.utime);
+    EXPECT_TRUE(f.reading.detected);
+    EXPECT_DOUBLE_EQ(f.reading.quality, 1.0);
+    EXPECT_NEAR(f.reading.lateral_offset, f.fault.lateral_offset, 0.003);
+    ASSERT_EQ(f.reading.readings.size(), 13u);
+    // Single peak at the sensor nearest the offset.
+    const auto imax = std::max_element(f.reading.readings.begin(), f.reading.readings.end()) -
+                      f.reading.readings.begin();
+    EXPECT_EQ(imax, std::lround((f.fault.lateral_offset + 0.5) * 12));
+  }
+}
