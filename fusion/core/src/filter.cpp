@@ -224,14 +224,14 @@ class RulerUkf final : public Filter {
   void predict(const OdometryInput& odo) override {
     if (!isFinite(odo)) return;
     const double L = cfg_.wheelbase;
-    auto f = [&odo, L](const typename U::Vector& s) {
+    // eq. 1-2; with N = 5 the increments are corrected by the calibration states.
+    const double dth_meas = headingIncrement(odo, L);
+    auto f = [&odo, L, dth_meas](const typename U::Vector& s) {
       typename U::Vector out = s;
-      double ds = odo.delta_s, dth = odo.delta_theta;
+      double ds = odo.delta_s, dth = dth_meas;
       if constexpr (N == 5) {
         ds *= 1.0 + s[3];
         if (odo.has_steering) dth = headingIncrement(ds, odo.steering - s[4], L);
-      } else {
-        if (odo.has_steering) dth = headingIncrement(ds, odo.steering, L);
       }
       out.template head<3>() = propagatePose(s.template head<3>(), ds, dth);
       return out;

@@ -42,8 +42,13 @@ struct SigmaWeights {
 using AngleMask = std::uint32_t;
 constexpr bool isAngle(AngleMask m, int i) { return (m >> i) & 1u; }
 
-/// Weighted mean of the columns of a sigma-point set (2N+1 columns); angle rows are averaged
-/// circularly, the result wrapped to (-pi, pi].
+/// Weighted mean of the columns of a sigma-point set (2N+1 columns). Angle rows are averaged
+/// as wrapped deviations from the first column (the propagated mean point):
+///   m = Y0 + sum_k w_k wrap(Y_k - Y0), wrapped to (-pi, pi].
+/// This is wrap-aware (the mean of +179 deg and -179 deg is 180 deg), reduces to the ordinary
+/// weighted mean when nothing wraps (so a linear system gives exactly the Kalman filter), agrees
+/// with the atan2 circular mean to third order in the spread, and needs no sin/cos (half the
+/// cost of a predict + update). circularMean() in angles.hpp is the atan2 form.
 template <int N, int R>
 Eigen::Matrix<double, R, 1> sigmaMean(const Eigen::Matrix<double, R, 2 * N + 1>& Y,
                                       const SigmaWeights<N>& w, AngleMask angles) {
@@ -51,13 +56,10 @@ Eigen::Matrix<double, R, 1> sigmaMean(const Eigen::Matrix<double, R, 2 * N + 1>&
       w.wm0 * Y.col(0) + w.wi * Y.template rightCols<2 * N>().rowwise().sum();
   for (int r = 0; r < R; ++r) {
     if (!isAngle(angles, r)) continue;
-    double s = w.wm0 * std::sin(Y(r, 0)), c = w.wm0 * std::cos(Y(r, 0));
-    double si = 0.0, ci = 0.0;
-    for (int k = 1; k < 2 * N + 1; ++k) {
-      si += std::sin(Y(r, k));
-      ci += std::cos(Y(r, k));
-    }
-    m[r] = wrapAngle(std::atan2(s + w.wi * si, c + w.wi * ci));
+    const double ref = Y(r, 0);
+    double sum = 0.0;
+    for (int k = 1; k < 2 * N + 1; ++k) sum += wrapAngle(Y(r, k) - ref);
+    m[r] = wrapAngle(ref + w.wi * sum);  // the weights sum to 1: wm0 * 0 + wi * sum
   }
   return m;
 }
@@ -82,6 +84,42 @@ Eigen::Matrix<double, RA, RB> sigmaCovariance(const Eigen::Matrix<double, RA, 2 
   Eigen::Matrix<double, RA, RB> C = w.wi * (A * B.transpose());
   C.noalias() += (w.wc0 - w.wi) * A.col(0) * B.col(0).transpose();
   return C;
+}
+
+/// Lower Cholesky factor L of a small symmetric matrix A = L L' (plain loops: for the 2..5
+/// sized matrices of this filter this is several times faster than Eigen::LLT's generic path).
+/// False when A is not positive definite (or not finite).
+template <int N>
+bool choleskyLower(const Eigen::Matrix<double, N, N>& A, Eigen::Matrix<double, N, N>& L) {
+  L.setZero();
+  for (int j = 0; j < N; ++j) {
+    double d = A(j, j);
+    for (int k = 0; k < j; ++k) d -= L(j, k) * L(j, k);
+    if (!(d > 0.0)) return false;  // also catches NaN
+    const double ljj = std::sqrt(d);
+    L(j, j) = ljj;
+    for (int i = j + 1; i < N; ++i) {
+      double v = A(i, j);
+      for (int k = 0; k < j; ++k) v -= L(i, k) * L(j, k);
+      L(i, j) = v / ljj;
+    }
+  }
+  return true;
+}
+
+/// Inverse of a small symmetric positive definite matrix from its Cholesky factor.
+template <int N>
+Eigen::Matrix<double, N, N> inverseFromCholesky(const Eigen::Matrix<double, N, N>& L) {
+  Eigen::Matrix<double, N, N> Li = Eigen::Matrix<double, N, N>::Zero();  // L^-1, lower
+  for (int j = 0; j < N; ++j) {
+    Li(j, j) = 1.0 / L(j, j);
+    for (int i = j + 1; i < N; ++i) {
+      double v = 0.0;
+      for (int k = j; k < i; ++k) v -= L(i, k) * Li(k, j);
+      Li(i, j) = v / L(i, i);
+    }
+  }
+  return Li.transpose() * Li;
 }
 
 /// Result of a measurement prediction, before any decision.
@@ -122,9 +160,8 @@ class Ukf {
   /// Sigma points of (x, P), eq. 9: columns x, x + sqrt((n+lambda)P)_i, x - sqrt((n+lambda)P)_i,
   /// the square root being the lower Cholesky factor. False when P is not positive definite.
   bool sigmaPoints(Sigmas& X) const {
-    Eigen::LLT<Matrix> llt((N + w_.lambda) * P_);
-    if (llt.info() != Eigen::Success) return false;
-    const Matrix L = llt.matrixL();
+    Matrix L;
+    if (!choleskyLower<N>((N + w_.lambda) * P_, L)) return false;
     X.col(0) = x_;
     X.template middleCols<N>(1) = L.colwise() + x_;
     X.template rightCols<N>() = (-L).colwise() + x_;
@@ -160,15 +197,16 @@ class Ukf {
     if (!Z.allFinite() || !z.allFinite()) return false;
     out.z_hat = sigmaMean<N, M>(Z, w_, z_angles);
     const Eigen::Matrix<double, M, kSigma> DZ = sigmaDeviations<N, M>(Z, out.z_hat, z_angles);
-    const Sigmas DX = sigmaDeviations<N, N>(X, x_, angles_);
+    const Sigmas DX = sigmaDeviations<N, N>(X, X.col(0), angles_);
     out.S = sigmaCovariance<N, M, M>(DZ, DZ, w_) + R;
     const Eigen::Matrix<double, N, M> Pxz = sigmaCovariance<N, N, M>(DX, DZ, w_);
-    Eigen::LLT<Eigen::Matrix<double, M, M>> llt(out.S);
-    if (llt.info() != Eigen::Success) return false;
+    Eigen::Matrix<double, M, M> Ls;
+    if (!choleskyLower<M>(out.S, Ls)) return false;
+    const Eigen::Matrix<double, M, M> S_inv = inverseFromCholesky<M>(Ls);
     out.v = z - out.z_hat;
     wrapAngles(out.v, z_angles);
-    out.K = llt.solve(Pxz.transpose()).transpose();  // S symmetric: K = Pxz S^-1
-    out.mahalanobis = out.v.dot(llt.solve(out.v));
+    out.K.noalias() = Pxz * S_inv;
+    out.mahalanobis = out.v.dot(S_inv * out.v);
     return std::isfinite(out.mahalanobis) && out.K.allFinite();
   }
 
