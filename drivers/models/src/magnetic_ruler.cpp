@@ -178,8 +178,11 @@ std::optional<RulerReading> MagneticRuler::sample(const TruthState& truth) {
   const double amplitude = rawPeak(now.readings).amplitude;
 
   std::optional<RulerReading> out;
-  if (st.tracking && amplitude <= st.best_amplitude) {
-    // The along-track maximum was the previous sample: that is where the ruler crossed.
+  // The along-track maximum is confirmed once the amplitude has fallen clearly (well above the
+  // noise) below the best sample's.
+  const double fall_margin = 10.0 * cfg_.noise_std + 1e-3;
+  if (st.tracking && amplitude < st.best_amplitude - fall_margin) {
+    // The best sample is where the ruler crossed the marker.
     double q = 0.0;
     if (auto d = peakMap(st.best.readings, &q)) {
       out = st.best;
@@ -190,7 +193,8 @@ std::optional<RulerReading> MagneticRuler::sample(const TruthState& truth) {
     st.tracking = false;
     st.armed = false;
     st.best_amplitude = 0.0;
-  } else if (st.armed && amplitude >= cfg_.detection_threshold && amplitude > st.best_amplitude) {
+  } else if (st.armed && amplitude >= cfg_.detection_threshold &&
+             amplitude > st.best_amplitude) {
     st.tracking = true;
     st.best_amplitude = amplitude;
     st.best = now;
