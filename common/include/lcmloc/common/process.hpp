@@ -1,0 +1,96 @@
+#pragma once
+// What every lcmloc process shares: the command line (--config, --lcm-url, --log-level),
+// spdlog set-up, SIGINT/SIGTERM -> stop flag, the HEARTBEAT publisher and a pacer that runs
+// simulated time against wall time with a real-time factor.
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "lcmloc/common/transport.hpp"
+
+namespace lcmloc::common {
+
+/// Exit codes shared by every executable.
+enum ExitCode : int { kExitOk = 0, kExitRuntimeError = 1, kExitConfigError = 2 };
+
+struct CommonOptions {
+  std::string config;     ///< scenario/system YAML file
+  std::string lcm_url;    ///< LCM provider URL
+  std::string log_level = "info";
+};
+
+/// The repository's default scenario file (config/paper.yaml).
+std::string defaultConfigPath();
+
+/// Adds --config, --lcm-url, --log-level to app, with defaults filled into opts.
+void addCommonOptions(CLI::App& app, CommonOptions& opts);
+
+/// Sets the default spdlog logger (stderr, "[name] " prefix) at level ("trace".."off").
+void setupLogging(const std::string& process_name, const std::string& level);
+
+/// Installs SIGINT/SIGTERM handlers (no SA_RESTART, so a blocking handleTimeout returns early).
+void installSignalHandlers();
+bool stopRequested();
+void requestStop();
+/// Signal number that requested the stop (0 if none).
+int stopSignal();
+
+/// Parses the command line and runs body(), turning exceptions into one clear error line and
+/// an exit code (ConfigError -> 2, anything else -> 1). Returns the process exit code.
+int runProcess(CLI::App& app, int argc, char** argv, const CommonOptions& opts,
+               const std::string& process_name, const std::function<int()>& body);
+
+/// Publishes heartbeat_t on the heartbeat channel once per wall second (and at the first tick).
+class Heartbeat {
+ public:
+  using Counters = std::vector<std::pair<std::string, int64_t>>;
+  Heartbeat(Bus& bus, std::string channel, std::string process,
+            std::function<Counters()> counters = nullptr);
+  /// Publishes if a second of wall time has passed since the last heartbeat (or none was sent).
+  void tick();
+  /// Publishes now with the given state ("starting", "running", "stopping").
+  void publish(const std::string& state);
+ private:
+  Bus& bus_;
+  std::string channel_, process_;
+  std::function<Counters()> counters_;
+  int64_t seq_ = 0;
+  std::chrono::steady_clock::time_point last_{};
+  bool sent_ = false;
+};
+
+/// Paces simulated time against wall time: sim time t is due at wall start + (t - t0) / factor.
+/// factor <= 0 means as fast as possible.
+class Pacer {
+ public:
+  explicit Pacer(double realtime_factor);
+  /// Blocks until sim_utime is due, calling idle() at least every 100 ms while waiting.
+  /// Returns false when a stop was requested meanwhile.
+  bool waitUntil(int64_t sim_utime, const std::function<void()>& idle = nullptr);
+ private:
+  double factor_;
+  bool started_ = false;
+  int64_t t0_ = 0;
+  std::chrono::steady_clock::time_point wall0_;
+};
+
+/// Per-channel sequence-gap counter: gaps += seq - last - 1 when seq jumps forward.
+class SeqTracker {
+ public:
+  /// Returns the number of messages missing before this one (0 in order; duplicates and
+  /// restarts (seq <= last) count nothing).
+  int64_t observe(const std::string& key, int64_t seq);
+  int64_t gaps() const { return total_; }
+  int64_t gaps(const std::string& key) const;
+ private:
+  struct Entry { int64_t last = 0; int64_t gaps = 0; };
+  std::vector<std::pair<std::string, Entry>> entries_;
+  int64_t total_ = 0;
+};
+
+}  // namespace lcmloc::common

@@ -1,0 +1,106 @@
+#pragma once
+// A thin typed adapter over lcm::LCM (after Drake's Publish<T> / Subscribe<T>).
+//  - Bus(url) throws TransportError when LCM cannot start (checks good() AND getFileno() >= 0).
+//  - subscribe<T>(channel, handler): handler(channel, msg, recv_utime). Payloads are decoded here
+//    so an undecodable message is caught, counted and logged once per channel (never a crash);
+//    an optional on_error callback sees every one.
+//  - every subscription queue is unbounded (LCM's default of 30 drops bursts).
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <lcm/lcm-cpp.hpp>
+
+namespace lcmloc::common {
+
+class TransportError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Default URL: $LCM_DEFAULT_URL, else loopback-friendly udpm with a 4 MB receive buffer.
+std::string defaultLcmUrl();
+
+class Bus {
+ public:
+  /// Raw handler: (channel, payload, size, recv_utime).
+  using RawHandler = std::function<void(const std::string&, const uint8_t*, std::size_t, int64_t)>;
+  /// Called for each undecodable message: (channel, reason).
+  using ErrorHandler = std::function<void(const std::string&, const std::string&)>;
+
+  explicit Bus(const std::string& url);
+  ~Bus();
+  Bus(const Bus&) = delete;
+  Bus& operator=(const Bus&) = delete;
+
+  const std::string& url() const { return url_; }
+
+  /// Encodes and publishes; returns false (and counts/logs once) on failure.
+  template <typename T>
+  bool publish(const std::string& channel, const T& msg) {
+    std::vector<uint8_t> buf(static_cast<std::size_t>(msg.getEncodedSize()));
+    if (msg.encode(buf.data(), 0, static_cast<int>(buf.size())) < 0) return publishFailed(channel, "encode");
+    return publishRaw(channel, buf.data(), buf.size());
+  }
+  bool publishRaw(const std::string& channel, const void* data, std::size_t size);
+
+  /// Typed subscription; channel is an LCM regex.
+  template <typename T>
+  void subscribe(const std::string& channel,
+                 std::function<void(const std::string&, const T&, int64_t)> handler,
+                 ErrorHandler on_error = nullptr) {
+    subscribeRaw(
+        channel,
+        [this, handler = std::move(handler), on_error = std::move(on_error)](
+            const std::string& ch, const uint8_t* data, std::size_t size, int64_t recv_utime) {
+          T msg;
+          std::string why;
+          try {
+            if (msg.decode(data, 0, static_cast<int>(size)) >= 0) {
+              handler(ch, msg, recv_utime);
+              return;
+            }
+            why = "cannot decode " + std::string(T::getTypeName()) + " (" + std::to_string(size) +
+                  " bytes; wrong type or corrupt)";
+          } catch (const std::bad_alloc&) {
+            why = "cannot decode " + std::string(T::getTypeName()) + ": absurd array length";
+          } catch (const std::length_error&) {
+            why = "cannot decode " + std::string(T::getTypeName()) + ": negative array length";
+          }
+          decodeFailed(ch, why);
+          if (on_error) on_error(ch, why);
+        });
+  }
+  void subscribeRaw(const std::string& channel, RawHandler handler);
+
+  /// Waits up to timeout_ms for messages and dispatches them. >0 handled, 0 timeout, <0 error
+  /// (e.g. interrupted by a signal).
+  int handle(int timeout_ms);
+
+  int64_t decodeErrors() const;
+  int64_t decodeErrors(const std::string& channel) const;
+  int64_t publishErrors() const { return publish_errors_; }
+
+  lcm::LCM& lcm() { return *lcm_; }
+
+ private:
+  struct Sub;
+  bool publishFailed(const std::string& channel, const char* what);
+  void decodeFailed(const std::string& channel, const std::string& why);
+
+  std::string url_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  std::vector<std::unique_ptr<Sub>> subs_;
+  std::map<std::string, int64_t> decode_errors_;
+  std::map<std::string, bool> publish_error_logged_;
+  int64_t publish_errors_ = 0;
+};
+
+/// Wall clock in microseconds since the epoch (heartbeats, log timestamps; never fusion logic).
+int64_t wallMicros();
+
+}  // namespace lcmloc::common

@@ -1,0 +1,267 @@
+// YAML -> config structs. Every map is read through a KeyReader that remembers which keys were
+// asked for, so a key nobody asked for is reported as unknown (with the list of valid keys).
+#include "lcmloc/common/config.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+
+#include "lcmloc/common/yaml_reader.hpp"
+#include "lcmloc/core/filter.hpp"
+
+namespace lcmloc::common {
+
+namespace {
+
+using yaml_detail::join;
+using yaml_detail::nodeText;
+
+std::string describe(const std::string& file, const std::string& key, const std::string& reason) {
+  std::string s = file;
+  if (!key.empty()) s += ": " + key;
+  return s + ": " + reason;
+}
+
+
+constexpr double kPi = 3.14159265358979323846;
+
+void parseScenarioSection(KeyReader& root, models::ScenarioConfig& s) {
+  KeyReader r(root.child("scenario"), root.file(), "scenario");
+  r.get("name", s.name);
+  r.get<uint64_t>("seed", s.seed);
+  r.get("realtime_factor", s.realtime_factor, 0.0, 1e6, "0 = as fast as possible");
+  r.finish();
+}
+
+void parsePath(KeyReader& root, models::PathConfig& p) {
+  KeyReader r(root.child("path"), root.file(), "path");
+  r.get("x0", p.x0);
+  r.get("y0", p.y0);
+  r.get("theta0", p.theta0, -kPi, kPi);
+  YAML::Node segs = r.child("segments");
+  if (segs) {
+    const std::string kp = r.keyPath("segments");
+    if (!segs.IsSequence() || segs.size() == 0)
+      throw ConfigError(root.file(), kp, "expected a non-empty list of {length, curvature}");
+    p.segments.clear();
+    for (std::size_t i = 0; i < segs.size(); ++i) {
+      models::PathSegment seg;
+      KeyReader sr(segs[i], root.file(), kp + "[" + std::to_string(i) + "]");
+      sr.get("length", seg.length, 1e-3, 1e6);
+      sr.get("curvature", seg.curvature, -10.0, 10.0);
+      sr.finish();
+      p.segments.push_back(seg);
+    }
+  }
+  r.finish();
+}
+
+void parseMarkers(KeyReader& root, models::MarkerLayout& m) {
+  KeyReader r(root.child("markers"), root.file(), "markers");
+  r.get("count", m.count, 0, 100000);
+  r.get("spacing", m.spacing, 1e-3, 1e6);
+  r.get("first_at", m.first_at, 0.0, 1e6);
+  r.finish();
+}
+
+void parseVehicle(KeyReader& root, models::VehicleConfig& v) {
+  KeyReader r(root.child("vehicle"), root.file(), "vehicle");
+  r.get("wheelbase", v.wheelbase, 0.1, 20.0);
+  r.get("speed", v.speed, 0.01, 100.0);
+  r.get("accel", v.accel, 0.01, 100.0);
+  r.get("max_steering", v.max_steering, 0.01, 1.5);
+  r.get("lookahead", v.lookahead, 0.1, 100.0);
+  r.get("weave_amplitude", v.weave_amplitude, 0.0, 10.0);
+  r.get("weave_wavelength", v.weave_wavelength, 0.1, 1e4);
+  r.get("rate_hz", v.rate_hz, 1.0, 10000.0);
+  r.get("substeps", v.substeps, 1, 1000);
+  r.get("end_margin", v.end_margin, 0.0, 1e4);
+  r.get<int64_t>("start_utime", v.start_utime, 0, std::numeric_limits<int64_t>::max() / 2);
+  r.finish();
+}
+
+void parseOdometry(KeyReader& root, models::OdometrySensorConfig& o) {
+  KeyReader r(root.child("odometry"), root.file(), "odometry");
+  r.get("rate_hz", o.rate_hz, 0.1, 10000.0);
+  r.get("tick_length", o.tick_length, 1e-6, 1.0);
+  r.get("scale_error", o.scale_error, -0.5, 0.5);
+  r.get("slip_std", o.slip_std, 0.0, 1.0);
+  r.get("steering_bias", o.steering_bias, -0.5, 0.5);
+  r.get("steering_std", o.steering_std, 0.0, 0.5);
+  r.get("steering_resolution", o.steering_resolution, 0.0, 0.5);
+  r.finish();
+}
+
+void parseMagRuler(KeyReader& root, models::MagRulerConfig& m) {
+  KeyReader r(root.child("magruler"), root.file(), "magruler");
+  r.get("num_sensors", m.num_sensors, 2, 1000);
+  r.get("length", m.length, 0.01, 10.0);
+  r.get("height", m.height, 0.001, 10.0);
+  r.get("marker_depth", m.marker_depth, 0.0, 10.0);
+  r.get("ruler_offset", m.ruler_offset, -20.0, 20.0);
+  r.get("dipole_moment", m.dipole_moment, 0.0, 1e6);
+  r.get("earth_field_z", m.earth_field_z, -10.0, 10.0);
+  r.get("noise_std", m.noise_std, 0.0, 10.0);
+  r.get("disturbance_std", m.disturbance_std, 0.0, 10.0);
+  r.get("detection_threshold", m.detection_threshold, 0.0, 100.0);
+  r.get("publish_rate_hz", m.publish_rate_hz, 0.0, 10000.0);
+  r.finish();
+}
+
+void parseFaults(KeyReader& root, std::vector<models::FaultConfig>& faults) {
+  YAML::Node n = root.child("faults");
+  if (!n) return;
+  if (n.IsNull()) { faults.clear(); return; }
+  if (!n.IsSequence()) throw ConfigError(root.file(), "faults", "expected a list of faults, got " + nodeText(n));
+  faults.clear();
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    const std::string kp = "faults[" + std::to_string(i) + "]";
+    models::FaultConfig f;
+    KeyReader r(n[i], root.file(), kp);
+    r.get("kind", f.kind);
+    if (f.kind != "phantom_marker" && f.kind != "wrong_offset")
+      throw ConfigError(root.file(), kp + ".kind",
+                        "unknown fault kind '" + f.kind + "' (valid: phantom_marker, wrong_offset)");
+    r.get("at_distance", f.at_distance, 0.0, 1e6);
+    r.get("lateral_offset", f.lateral_offset, -5.0, 5.0);
+    r.finish();
+    faults.push_back(f);
+  }
+}
+
+void parseChannels(KeyReader& root, ChannelConfig& c) {
+  KeyReader r(root.child("channels"), root.file(), "channels");
+  r.get("ground_truth", c.ground_truth);
+  r.get("odometry", c.odometry);
+  r.getStrings("magruler", c.magruler);
+  r.get("magruler_fault", c.magruler_fault);
+  r.get("fault_events", c.fault_events);
+  r.get("pose", c.pose);
+  r.get("gate", c.gate);
+  r.get("control", c.control);
+  r.get("status", c.status);
+  r.get("heartbeat", c.heartbeat);
+  r.finish();
+}
+
+void checkFilterType(const std::string& type, const std::string& file, const std::string& key) {
+  const auto types = core::filterTypes();
+  if (std::find(types.begin(), types.end(), type) == types.end())
+    throw ConfigError(file, key, "unknown filter type '" + type + "' (valid: " + join(types) + ")");
+}
+
+void parseFusion(KeyReader& root, FusionConfig& f) {
+  KeyReader r(root.child("fusion"), root.file(), "fusion");
+  YAML::Node filter = r.child("filter");
+  if (filter) f.filter = parseFilterConfig(filter, f.filter, root.file(), "fusion.filter");
+  r.getStrings("shadow", f.shadow);
+  for (std::size_t i = 0; i < f.shadow.size(); ++i)
+    checkFilterType(f.shadow[i], root.file(), "fusion.shadow[" + std::to_string(i) + "]");
+  r.get("reorder_window", f.reorder_window, 0.0, 10.0);
+  r.get("status_period", f.status_period, 0.01, 3600.0);
+  r.finish();
+}
+
+void parseLogger(KeyReader& root, LoggerConfig& l) {
+  KeyReader r(root.child("logger"), root.file(), "logger");
+  r.get("output", l.output);
+  if (l.output.empty()) throw ConfigError(root.file(), "logger.output", "must not be empty");
+  r.getStrings("channels", l.channels);
+  r.get("queue_capacity", l.queue_capacity, 1, 100000000);
+  r.finish();
+}
+
+}  // namespace
+
+ConfigError::ConfigError(const std::string& file, const std::string& key, const std::string& reason)
+    : std::runtime_error(describe(file, key, reason)) {}
+
+core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterConfig& base,
+                                     const std::string& file, const std::string& key_prefix) {
+  core::FilterConfig c = base;
+  KeyReader r(node, file, key_prefix);
+  r.get("type", c.type);
+  checkFilterType(c.type, file, r.keyPath("type"));
+  r.get("wheelbase", c.wheelbase, 0.1, 20.0);
+  r.get("ruler_offset", c.ruler_offset, -20.0, 20.0);
+  r.get("ruler_half_width", c.ruler_half_width, 0.01, 10.0);
+  r.getVector("initial_pose", c.initial_pose, -1e7, 1e7);
+  if (std::abs(c.initial_pose[2]) > kPi)
+    throw ConfigError(file, r.keyPath("initial_pose[2]"), "heading must be within [-pi, pi]");
+  r.getVector("p0_diag", c.p0_diag, 0.0, 1e6);
+  r.getVector("pw_diag", c.pw_diag, 0.0, 1e6);
+  r.get("pw_distance", c.pw_distance, 0.0, 1e6);
+  r.getVector("pv_diag", c.pv_diag, 1e-12, 1e6);
+  {
+    KeyReader s(r.child("sigma"), file, r.keyPath("sigma"));
+    s.get("alpha", c.sigma.alpha, 1e-4, 10.0);
+    s.get("beta", c.sigma.beta, 0.0, 10.0);
+    s.get("kappa", c.sigma.kappa, -2.9, 100.0);
+    s.finish();
+  }
+  {
+    KeyReader g(r.child("gate"), file, r.keyPath("gate"));
+    g.get("enabled", c.gate.enabled);
+    YAML::Node v = g.child("value");
+    if (v) {
+      if (v.IsNull()) {
+        c.gate.value.reset();
+      } else {
+        double x = g.convert<double>(v, g.keyPath("value"));
+        if (x <= 0) throw ConfigError(file, g.keyPath("value"), "gate value must be > 0");
+        c.gate.value = x;
+      }
+    }
+    g.get("probability", c.gate.probability, 1e-6, 1.0 - 1e-12);
+    g.get("dof", c.gate.dof, 0, 10);
+    g.finish();
+  }
+  r.get("reach_forward", c.reach_forward, 0.0, 100.0);
+  r.get("reach_lateral", c.reach_lateral, 0.0, 100.0);
+  r.get("lockout_rejections", c.lockout_rejections, 0, 1000000);
+  r.get("lockout_inflation", c.lockout_inflation, 1.0, 1e6);
+  r.get("scale_std0", c.scale_std0, 0.0, 1.0);
+  r.get("steer_bias_std0", c.steer_bias_std0, 0.0, 1.0);
+  r.get("scale_rw", c.scale_rw, 0.0, 1.0);
+  r.get("steer_bias_rw", c.steer_bias_rw, 0.0, 1.0);
+  r.finish();
+  return c;
+}
+
+SystemConfig parseSystemConfig(const std::string& yaml_text, const std::string& file) {
+  YAML::Node doc;
+  try {
+    doc = YAML::Load(yaml_text);
+  } catch (const YAML::ParserException& e) {
+    throw ConfigError(file, "", "YAML syntax error at line " + std::to_string(e.mark.line + 1) +
+                                    ", column " + std::to_string(e.mark.column + 1) + ": " + e.msg);
+  }
+  SystemConfig cfg;
+  cfg.file = file;
+  KeyReader root(doc, file, "");
+  parseScenarioSection(root, cfg.scenario);
+  parsePath(root, cfg.scenario.path);
+  parseMarkers(root, cfg.scenario.markers);
+  parseVehicle(root, cfg.scenario.vehicle);
+  parseOdometry(root, cfg.scenario.odometry);
+  parseMagRuler(root, cfg.scenario.magruler);
+  parseFaults(root, cfg.scenario.faults);
+  parseChannels(root, cfg.channels);
+  parseFusion(root, cfg.fusion);
+  parseLogger(root, cfg.logger);
+  root.finish();
+  return cfg;
+}
+
+SystemConfig loadSystemConfig(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path, "", "cannot open config file (does it exist?)");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parseSystemConfig(ss.str(), path);
+}
+
+}  // namespace lcmloc::common

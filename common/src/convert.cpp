@@ -1,0 +1,189 @@
+// lcmtypes <-> core structs, with NaN/Inf and range validation on the way in.
+#include "lcmloc/common/convert.hpp"
+
+#include <cmath>
+
+namespace lcmloc::common {
+
+namespace {
+
+constexpr double kHalfPi = 1.5707963267948966;
+constexpr double kMaxStepDistance = 100.0;  // [m] per odometry increment: beyond is a broken sensor
+constexpr double kMaxLateralOffset = 5.0;   // [m] far beyond any ruler's half width
+
+bool fail(std::string* why, const std::string& reason) {
+  if (why) *why = reason;
+  return false;
+}
+
+bool finiteField(double v, const char* name, std::string* why) {
+  if (std::isfinite(v)) return true;
+  return fail(why, std::string(name) + " is " + (std::isnan(v) ? "NaN" : "Inf"));
+}
+
+bool validUtime(int64_t utime, std::string* why) {
+  if (utime >= 0) return true;
+  return fail(why, "utime is negative (" + std::to_string(utime) + ")");
+}
+
+}  // namespace
+
+std::optional<core::OdometryInput> toCore(const lcmloc::odometry_t& m, std::string* why) {
+  if (!validUtime(m.utime, why) || !finiteField(m.delta_s, "delta_s", why) ||
+      !finiteField(m.steering, "steering", why) || !finiteField(m.delta_theta, "delta_theta", why))
+    return std::nullopt;
+  if (std::abs(m.delta_s) > kMaxStepDistance) {
+    fail(why, "delta_s " + std::to_string(m.delta_s) + " m out of range");
+    return std::nullopt;
+  }
+  if (m.has_steering && std::abs(m.steering) >= kHalfPi) {
+    fail(why, "steering " + std::to_string(m.steering) + " rad out of range (-pi/2, pi/2)");
+    return std::nullopt;
+  }
+  if (!m.has_steering && std::abs(m.delta_theta) > M_PI) {
+    fail(why, "delta_theta " + std::to_string(m.delta_theta) + " rad out of range [-pi, pi]");
+    return std::nullopt;
+  }
+  core::OdometryInput in;
+  in.utime = m.utime;
+  in.delta_s = m.delta_s;
+  in.steering = m.steering;
+  in.has_steering = m.has_steering;
+  in.delta_theta = m.delta_theta;
+  return in;
+}
+
+std::optional<core::RulerDetection> toCore(const lcmloc::magruler_t& m, const std::string& channel,
+                                           std::string* why) {
+  if (!m.detected) {
+    if (why) why->clear();
+    return std::nullopt;
+  }
+  if (!validUtime(m.utime, why) || !finiteField(m.lateral_offset, "lateral_offset", why) ||
+      !finiteField(m.quality, "quality", why))
+    return std::nullopt;
+  for (std::size_t i = 0; i < m.readings.size(); ++i) {
+    if (!std::isfinite(m.readings[i])) {
+      fail(why, "readings[" + std::to_string(i) + "] is " + (std::isnan(m.readings[i]) ? "NaN" : "Inf"));
+      return std::nullopt;
+    }
+  }
+  if (std::abs(m.lateral_offset) > kMaxLateralOffset) {
+    fail(why, "lateral_offset " + std::to_string(m.lateral_offset) + " m out of range");
+    return std::nullopt;
+  }
+  if (m.quality < 0.0 || m.quality > 1.0) {
+    fail(why, "quality " + std::to_string(m.quality) + " out of range [0, 1]");
+    return std::nullopt;
+  }
+  core::RulerDetection d;
+  d.utime = m.utime;
+  d.lateral_offset = m.lateral_offset;
+  d.quality = m.quality;
+  d.sensor = channel;
+  d.seq = m.seq;
+  return d;
+}
+
+models::TruthState toCore(const lcmloc::ground_truth_t& m) {
+  models::TruthState s;
+  s.utime = m.utime;
+  s.x = m.x;
+  s.y = m.y;
+  s.heading = m.heading;
+  s.speed = m.speed;
+  s.steering = m.steering;
+  s.distance = m.distance;
+  return s;
+}
+
+lcmloc::ground_truth_t toLcm(const models::TruthState& s, int64_t seq) {
+  lcmloc::ground_truth_t m;
+  m.utime = s.utime;
+  m.seq = seq;
+  m.x = s.x;
+  m.y = s.y;
+  m.heading = s.heading;
+  m.speed = s.speed;
+  m.steering = s.steering;
+  m.distance = s.distance;
+  return m;
+}
+
+lcmloc::odometry_t toLcm(const models::OdometrySample& s, int64_t seq) {
+  lcmloc::odometry_t m;
+  m.utime = s.input.utime;
+  m.seq = seq;
+  m.delta_s = s.input.delta_s;
+  m.ticks = s.ticks;
+  m.steering = s.input.steering;
+  m.has_steering = s.input.has_steering;
+  m.delta_theta = s.input.delta_theta;
+  return m;
+}
+
+lcmloc::magruler_t toLcm(const models::RulerReading& r, int64_t seq) {
+  lcmloc::magruler_t m;
+  m.utime = r.utime;
+  m.seq = seq;
+  m.num_sensors = static_cast<int32_t>(r.readings.size());
+  m.readings = r.readings;
+  m.detected = r.detected;
+  m.lateral_offset = r.lateral_offset;
+  m.quality = r.quality;
+  return m;
+}
+
+lcmloc::pose_t toLcm(const core::FilterState& s, const std::string& filter, int64_t seq) {
+  lcmloc::pose_t m;
+  const auto n = static_cast<int>(s.x.size());
+  m.utime = s.utime;
+  m.seq = seq;
+  m.filter = filter;
+  m.status = static_cast<int32_t>(s.status);
+  m.dim = n;
+  m.state.assign(s.x.data(), s.x.data() + n);
+  m.state_names.resize(n);
+  for (int i = 0; i < n; ++i)
+    m.state_names[i] = i < static_cast<int>(s.names.size()) ? s.names[i] : "s" + std::to_string(i);
+  m.covariance.assign(n, std::vector<double>(n, 0.0));
+  for (int i = 0; i < n && i < s.P.rows(); ++i)
+    for (int j = 0; j < n && j < s.P.cols(); ++j) m.covariance[i][j] = s.P(i, j);
+  return m;
+}
+
+lcmloc::gate_decision_t toLcm(const core::GateDecision& d, const std::string& filter, int64_t seq) {
+  lcmloc::gate_decision_t m;
+  m.utime = d.utime;
+  m.seq = seq;
+  m.filter = filter;
+  m.sensor = d.sensor;
+  m.measurement_seq = d.measurement_seq;
+  m.dim = static_cast<int32_t>(d.innovation.size());
+  m.innovation.assign(d.innovation.data(), d.innovation.data() + d.innovation.size());
+  m.mahalanobis = d.mahalanobis;
+  m.gate = d.gate;
+  m.accepted = d.accepted;
+  m.marker_id = d.marker_id;
+  m.reason = d.reason;
+  return m;
+}
+
+core::FilterState toCore(const lcmloc::pose_t& m) {
+  core::FilterState s;
+  const int n = std::max(0, std::min<int>(m.dim, static_cast<int>(m.state.size())));
+  s.utime = m.utime;
+  s.x = Eigen::VectorXd::Zero(n);
+  s.P = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0; i < n; ++i) {
+    s.x[i] = m.state[i];
+    if (i < static_cast<int>(m.state_names.size())) s.names.push_back(m.state_names[i]);
+    for (int j = 0; j < n; ++j)
+      if (i < static_cast<int>(m.covariance.size()) && j < static_cast<int>(m.covariance[i].size()))
+        s.P(i, j) = m.covariance[i][j];
+  }
+  s.status = static_cast<core::FilterStatus>(m.status);
+  return s;
+}
+
+}  // namespace lcmloc::common

@@ -1,0 +1,84 @@
+#include "lcmloc/common/transport.hpp"
+
+#include <chrono>
+#include <cstdlib>
+
+#include <spdlog/spdlog.h>
+
+namespace lcmloc::common {
+
+std::string defaultLcmUrl() {
+  const char* env = std::getenv("LCM_DEFAULT_URL");
+  if (env && *env) return env;
+  return "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+}
+
+int64_t wallMicros() {
+  using namespace std::chrono;
+  return duration_cast<microseconds>(system_clock::now().time_since_epoch()).count();
+}
+
+/// One LCM subscription: LCM 1.3.1 has no lambda subscribe, so a member function forwards.
+struct Bus::Sub {
+  RawHandler handler;
+  void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    handler(channel, static_cast<const uint8_t*>(rbuf->data), rbuf->data_size, rbuf->recv_utime);
+  }
+};
+
+Bus::Bus(const std::string& url) : url_(url) {
+  lcm_ = std::make_unique<lcm::LCM>(url);
+  if (!lcm_->good() || lcm_->getFileno() < 0) {
+    std::string hint;
+    if (url.rfind("udpm://", 0) == 0 || url.empty())
+      hint = " (udpm needs a multicast route; on loopback: `ip route add 224.0.0.0/4 dev lo` as root)";
+    throw TransportError("cannot start LCM on '" + url + "'" + hint);
+  }
+}
+
+Bus::~Bus() = default;
+
+bool Bus::publishRaw(const std::string& channel, const void* data, std::size_t size) {
+  if (lcm_->publish(channel, data, static_cast<unsigned int>(size)) < 0)
+    return publishFailed(channel, "publish");
+  return true;
+}
+
+bool Bus::publishFailed(const std::string& channel, const char* what) {
+  ++publish_errors_;
+  if (!publish_error_logged_[channel]) {
+    publish_error_logged_[channel] = true;
+    spdlog::error("{}: {} failed (message too large or transport down); further failures on this "
+                  "channel are counted, not logged", channel, what);
+  }
+  return false;
+}
+
+void Bus::subscribeRaw(const std::string& channel, RawHandler handler) {
+  auto sub = std::make_unique<Sub>();
+  sub->handler = std::move(handler);
+  lcm::Subscription* s = lcm_->subscribe(channel, &Sub::onMessage, sub.get());
+  if (!s) throw TransportError("cannot subscribe to '" + channel + "'");
+  s->setQueueCapacity(0);  // unbounded: bursts must not be dropped silently
+  subs_.push_back(std::move(sub));
+}
+
+int Bus::handle(int timeout_ms) { return lcm_->handleTimeout(timeout_ms); }
+
+void Bus::decodeFailed(const std::string& channel, const std::string& why) {
+  if (decode_errors_[channel]++ == 0)
+    spdlog::warn("{}: {}; further decode errors on this channel are counted, not logged", channel, why);
+}
+
+int64_t Bus::decodeErrors() const {
+  int64_t n = 0;
+  for (const auto& kv : decode_errors_) n += kv.second;
+  return n;
+}
+
+int64_t Bus::decodeErrors(const std::string& channel) const {
+  auto it = decode_errors_.find(channel);
+  return it == decode_errors_.end() ? 0 : it->second;
+}
+
+}  // namespace lcmloc::common

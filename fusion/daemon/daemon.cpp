@@ -1,0 +1,208 @@
+#include "daemon.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+
+#include <spdlog/spdlog.h>
+
+#include "lcmloc/common/convert.hpp"
+#include "lcmloc/fusion_status_t.hpp"
+#include "lcmloc/models/world.hpp"
+
+namespace lcmloc::fusion {
+
+namespace {
+
+/// Log the first few occurrences of each kind of problem, then one in a thousand.
+bool shouldLog(std::map<std::string, int64_t>& counts, const std::string& key) {
+  const int64_t n = ++counts[key];
+  return n <= 5 || n % 1000 == 0;
+}
+
+std::string upper(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::toupper(c); });
+  return s;
+}
+
+}  // namespace
+
+FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::Bus& bus) : cfg_(cfg), bus_(bus) {
+  core::EngineConfig ec;
+  ec.filter = cfg.fusion.filter;
+  ec.shadow = cfg.fusion.shadow;
+  ec.reorder_window_us = static_cast<int64_t>(std::llround(cfg.fusion.reorder_window * 1e6));
+  core::EngineOutputs out;
+  out.on_state = [this](const std::string& f, bool active, const core::FilterState& s) { publishState(f, active, s); };
+  out.on_decision = [this](const std::string& f, bool, const core::GateDecision& d) {
+    bus_.publish(cfg_.channels.gate, common::toLcm(d, f, out_seq_[cfg_.channels.gate]++));
+    if (!d.accepted && d.reason == "gate")
+      spdlog::info("{}: {} seq {} rejected by the gate (tau = {:.2f} > {:.3f})", f, d.sensor,
+                   d.measurement_seq, d.mahalanobis, d.gate);
+  };
+  out.on_event = [this](const std::string& event, const std::string& detail, int64_t utime) {
+    event_seen_ = true;
+    if (event == "too_old") {
+      ++rejected_;
+      if (shouldLog(log_count_, "too_old"))
+        spdlog::warn("rejected input: {} (older than the {:.3f} s reorder window)", detail, cfg_.fusion.reorder_window);
+      publishStatus("rejected_input", "too old: " + detail, utime);
+      return;
+    }
+    spdlog::info("{}: {}", event, detail);
+    publishStatus(event, detail, utime);
+  };
+  const auto map = models::makeMarkerMap(models::Path(cfg.scenario.path), cfg.scenario.markers);
+  engine_ = std::make_unique<core::FusionEngine>(ec, map, out);
+
+  const auto& ch = cfg.channels;
+  auto err = [this](const std::string& c, const std::string& why) { onDecodeError(c, why); };
+  bus_.subscribe<lcmloc::odometry_t>(
+      ch.odometry, [this](const std::string& c, const lcmloc::odometry_t& m, int64_t) { onOdometry(c, m); }, err);
+  for (const auto& r : ch.magruler)
+    bus_.subscribe<lcmloc::magruler_t>(
+        r, [this](const std::string& c, const lcmloc::magruler_t& m, int64_t) { onRuler(c, m); }, err);
+  bus_.subscribe<lcmloc::fusion_control_t>(
+      ch.control, [this](const std::string& c, const lcmloc::fusion_control_t& m, int64_t) { onControl(c, m); },
+      err);
+
+  spdlog::info("filter {} (shadow: {}), {} markers, reorder window {:.3f} s; in: {}, {}, {}; out: {}, {}, {}",
+               cfg.fusion.filter.type, cfg.fusion.shadow.empty() ? "none" : fmt::format("{}", fmt::join(cfg.fusion.shadow, ", ")),
+               map.size(), cfg.fusion.reorder_window, ch.odometry, fmt::format("{}", fmt::join(ch.magruler, ", ")),
+               ch.control, ch.pose, ch.gate, ch.status);
+  publishStatus("started", "filter " + engine_->activeFilter(), 0);
+}
+
+bool FusionDaemon::received(const std::string& ch, int64_t seq) {
+  ++messages_in_;
+  if (int64_t missing = gaps_.observe(ch, seq)) {
+    if (shouldLog(log_count_, "gap:" + ch))
+      spdlog::warn("{}: {} message(s) missing before seq {}", ch, missing, seq);
+    publishStatus("drop", ch + ": " + std::to_string(missing) + " message(s) missing before seq " + std::to_string(seq),
+                  last_utime_);
+  }
+  return true;
+}
+
+void FusionDaemon::reject(const std::string& ch, int64_t seq, int64_t utime, const std::string& why) {
+  ++rejected_;
+  const std::string detail = ch + " seq " + std::to_string(seq) + ": " + why;
+  if (shouldLog(log_count_, "reject:" + ch)) spdlog::warn("rejected input: {}", detail);
+  publishStatus("rejected_input", detail, utime > 0 ? utime : last_utime_);
+}
+
+void FusionDaemon::onDecodeError(const std::string& ch, const std::string& why) {
+  ++messages_in_;
+  ++rejected_;
+  if (shouldLog(log_count_, "decode:" + ch)) spdlog::warn("rejected input: {}: {}", ch, why);
+  publishStatus("rejected_input", ch + ": " + why, last_utime_);
+}
+
+void FusionDaemon::push(core::EngineInput in) {
+  event_seen_ = false;
+  const std::string ch = in.channel;
+  const int64_t seq = in.seq, utime = in.utime;
+  if (!engine_->push(std::move(in)) && !event_seen_)  // the engine normally reports it itself
+    reject(ch, seq, utime, "older than the reorder window");
+}
+
+void FusionDaemon::onOdometry(const std::string& ch, const lcmloc::odometry_t& m) {
+  received(ch, m.seq);
+  std::string why;
+  auto odo = common::toCore(m, &why);
+  if (!odo) return reject(ch, m.seq, m.utime, why);
+  push({ch, m.seq, m.utime, *odo});
+}
+
+void FusionDaemon::onRuler(const std::string& ch, const lcmloc::magruler_t& m) {
+  received(ch, m.seq);
+  std::string why;
+  auto det = common::toCore(m, ch, &why);
+  if (!det) {
+    if (!why.empty()) reject(ch, m.seq, m.utime, why);
+    return;  // a raw reading without detection: nothing for the filter
+  }
+  push({ch, m.seq, m.utime, *det});
+}
+
+void FusionDaemon::onControl(const std::string& ch, const lcmloc::fusion_control_t& m) {
+  received(ch, m.seq);
+  if (m.utime < 0) return reject(ch, m.seq, m.utime, "utime is negative");
+  core::ControlCommand cmd;
+  switch (m.command) {
+    case lcmloc::fusion_control_t::CMD_SWITCH_FILTER: {
+      core::FilterConfig fc = cfg_.fusion.filter;
+      try {
+        YAML::Node params = m.parameters.empty() ? YAML::Node() : YAML::Load(m.parameters);
+        if (!m.filter.empty()) params["type"] = m.filter;
+        fc = common::parseFilterConfig(params, fc, ch, "parameters");
+      } catch (const std::exception& e) {
+        spdlog::warn("refused switch to '{}': {}", m.filter, e.what());
+        publishStatus("refused", std::string("switch to '") + m.filter + "': " + e.what(), m.utime);
+        return;
+      }
+      cmd = core::SwitchFilter{fc};
+      break;
+    }
+    case lcmloc::fusion_control_t::CMD_RESET:
+      cmd = core::ResetFilter{};
+      break;
+    case lcmloc::fusion_control_t::CMD_SET_POSE:
+      cmd = core::SetPose{core::Pose(m.pose[0], m.pose[1], m.pose[2]),
+                          core::Vec3(m.pose_std[0], m.pose_std[1], m.pose_std[2])};
+      break;
+    default:
+      return reject(ch, m.seq, m.utime, "unknown command " + std::to_string(m.command));
+  }
+  push({ch, m.seq, m.utime, cmd});
+}
+
+std::string FusionDaemon::poseChannel(const std::string& filter, bool active) const {
+  return active ? cfg_.channels.pose : cfg_.channels.pose + "_" + upper(filter);
+}
+
+void FusionDaemon::publishState(const std::string& filter, bool active, const core::FilterState& s) {
+  const std::string ch = poseChannel(filter, active);
+  bus_.publish(ch, common::toLcm(s, filter, out_seq_[ch]++));
+  if (!active) return;
+  last_utime_ = s.utime;
+  last_status_ = s.status;
+  const auto period = static_cast<int64_t>(std::llround(cfg_.fusion.status_period * 1e6));
+  if (s.utime >= next_status_utime_) {
+    if (next_status_utime_ != INT64_MIN) publishStatus("periodic", "", s.utime);
+    next_status_utime_ = s.utime + period;
+  }
+}
+
+void FusionDaemon::publishStatus(const std::string& event, const std::string& detail, int64_t utime) {
+  lcmloc::fusion_status_t m;
+  m.utime = utime;
+  m.seq = out_seq_[cfg_.channels.status]++;
+  m.filter = engine_->activeFilter();
+  m.status = static_cast<int32_t>(last_status_);
+  m.event = event;
+  m.detail = detail;
+  m.messages_in = messages_in_;
+  m.messages_used = engine_->counters().processed;
+  m.messages_rejected = rejected_;
+  m.sequence_gaps = gaps_.gaps();
+  bus_.publish(cfg_.channels.status, m);
+}
+
+void FusionDaemon::shutdown() {
+  engine_->flush();
+  const auto c = engine_->counters();
+  const std::string detail = fmt::format(
+      "in {}, processed {}, rejected {} (too old {}), gaps {}, gate accepted {}, rejected {}", messages_in_,
+      c.processed, rejected_, c.too_old, gaps_.gaps(), c.accepted, c.rejected);
+  publishStatus("stopped", detail, last_utime_);
+  spdlog::info("stopping: {}", detail);
+}
+
+common::Heartbeat::Counters FusionDaemon::counters() const {
+  const auto c = engine_->counters();
+  return {{"in", messages_in_}, {"processed", c.processed}, {"rejected", rejected_},
+          {"gaps", gaps_.gaps()}, {"accepted", c.accepted}, {"gate_rejected", c.rejected}};
+}
+
+}  // namespace lcmloc::fusion
