@@ -1,0 +1,374 @@
+// lcmloc-eval on a small hand-made log: a straight run north at 1 m/s with exact odometry,
+// four genuine marker detections, one wrong-offset fault (instead of the genuine detection of
+// the marker at y = 6) and one phantom marker between markers, plus live POSE/GATE messages.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+#include <nlohmann/json.hpp>
+
+#include "lcmloc/common/config.hpp"
+#include "lcmloc/eval/evaluate.hpp"
+#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/fault_event_t.hpp"
+#include "lcmloc/gate_decision_t.hpp"
+#include "lcmloc/ground_truth_t.hpp"
+#include "lcmloc/magruler_t.hpp"
+#include "lcmloc/models/world.hpp"
+#include "lcmloc/odometry_t.hpp"
+#include "lcmloc/pose_t.hpp"
+
+namespace fs = std::filesystem;
+using namespace lcmloc;
+
+namespace {
+
+constexpr int64_t kT0 = 1000000;        // utime of the first sample [us]
+constexpr int64_t kDt = 10000;          // 100 Hz
+constexpr int kSteps = 1000;            // 10 s at 1 m/s: y from 0 to 10 m
+constexpr double kLiveOffsetX = 0.1;    // the fake live daemon's constant x error [m]
+
+/// Where each event of a written log starts, and its channel.
+struct LogLayout {
+  std::vector<int64_t> starts;
+  std::vector<std::string> channels;
+};
+
+/// Writes events with lcm::LogFile and remembers where each one starts.
+class LogWriter {
+ public:
+  explicit LogWriter(const std::string& path) : log_(path, "w") {}
+  template <typename T>
+  void add(const std::string& channel, const T& msg, int64_t utime) {
+    std::vector<uint8_t> buf(static_cast<size_t>(msg.getEncodedSize()));
+    msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
+    lcm::LogEvent ev;
+    ev.eventnum = 0;
+    ev.timestamp = utime;
+    ev.channel = channel;
+    ev.datalen = static_cast<int32_t>(buf.size());
+    ev.data = buf.data();
+    layout.starts.push_back(offset_);
+    layout.channels.push_back(channel);
+    offset_ += 28 + static_cast<int64_t>(channel.size()) + ev.datalen;
+    ASSERT_EQ(log_.writeEvent(&ev), 0);
+  }
+  LogLayout layout;
+
+ private:
+  lcm::LogFile log_;
+  int64_t offset_ = 0;
+};
+
+struct Detection { int step; double offset; std::string channel; int64_t seq; const char* fault; };
+
+/// Genuine detections where the ruler (1.5 m ahead of M) passes markers 2, 4, 8, 10; a
+/// wrong-offset fault over marker 6; a phantom 1 m from any marker (out of the ruler's reach).
+const std::vector<Detection> kDetections{{50, 0.0, "MAGRULER", 0, nullptr},
+                                         {250, 0.0, "MAGRULER", 1, nullptr},
+                                         {450, 0.35, "MAGRULER_FAULT", 0, "wrong_offset"},
+                                         {650, 0.0, "MAGRULER", 2, nullptr},
+                                         {750, 0.0, "MAGRULER_FAULT", 1, "phantom_marker"},
+                                         {850, 0.0, "MAGRULER", 3, nullptr}};
+
+lcmloc::magruler_t ruler(int64_t utime, int64_t seq, double offset) {
+  lcmloc::magruler_t m;
+  m.utime = utime;
+  m.seq = seq;
+  m.num_sensors = 13;
+  m.readings.assign(13, -0.45);
+  m.detected = true;
+  m.lateral_offset = offset;
+  m.quality = 1.0;
+  return m;
+}
+
+/// Writes the whole run; with_live adds POSE (x off by kLiveOffsetX) and GATE messages.
+LogLayout writeRun(const std::string& path, bool with_live) {
+  LogWriter w(path);
+  int64_t pose_seq = 0, gate_seq = 0, fault_seq = 0;
+  size_t next_det = 0;
+  for (int k = 0; k <= kSteps; ++k) {
+    const int64_t t = kT0 + k * kDt;
+    const double y = 0.01 * k;
+    lcmloc::ground_truth_t gt{};
+    gt.utime = t; gt.seq = k; gt.x = 0.0; gt.y = y; gt.heading = M_PI / 2; gt.speed = 1.0;
+    gt.distance = y;
+    w.add("GROUND_TRUTH", gt, t);
+    if (k > 0) {
+      lcmloc::odometry_t od{};
+      od.utime = t; od.seq = k - 1; od.delta_s = 0.01; od.ticks = 10; od.has_steering = true;
+      w.add("ODOMETRY", od, t);
+    }
+    if (next_det < kDetections.size() && kDetections[next_det].step == k) {
+      const Detection& d = kDetections[next_det++];
+      w.add(d.channel, ruler(t, d.seq, d.offset), t);
+      if (d.fault) {
+        lcmloc::fault_event_t f{};
+        f.utime = t; f.seq = fault_seq++; f.kind = d.fault; f.channel = d.channel;
+        f.measurement_seq = d.seq; f.x = 0.0; f.y = y; f.lateral_offset = d.offset;
+        w.add("FAULT_EVENTS", f, t);
+      }
+      if (with_live) {
+        lcmloc::gate_decision_t g{};
+        g.utime = t; g.seq = gate_seq++; g.filter = "ukf_gated"; g.sensor = d.channel;
+        g.measurement_seq = d.seq; g.dim = 2; g.innovation = {0.0, 0.0};
+        g.mahalanobis = d.fault ? 50.0 : 1.0; g.gate = 9.21; g.accepted = d.fault == nullptr;
+        g.marker_id = -1; g.reason = d.fault ? "gate" : "accepted";
+        w.add("GATE", g, t);
+      }
+    }
+    if (with_live && k > 0 && k % 10 == 0) {
+      lcmloc::pose_t p{};
+      p.utime = t; p.seq = pose_seq++; p.filter = "ukf_gated"; p.status = 0; p.dim = 3;
+      p.state = {kLiveOffsetX, y, M_PI / 2};
+      p.state_names = {"x", "y", "theta"};
+      p.covariance.assign(3, std::vector<double>(3, 0.0));
+      w.add("POSE", p, t);
+    }
+  }
+  return w.layout;  // the file is closed (and flushed) when w goes out of scope
+}
+
+class EvalTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           ("lcmloc_test_eval_" + std::to_string(::getpid()) + "_" + info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    cfg_ = common::loadSystemConfig(LCMLOC_TEST_DATA_DIR "/eval_straight.yaml");
+    setup_.filter = cfg_.fusion.filter;
+    setup_.map = models::makeMarkerMap(models::Path(cfg_.scenario.path), cfg_.scenario.markers);
+    setup_.reorder_window_us = static_cast<int64_t>(std::llround(cfg_.fusion.reorder_window * 1e6));
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string file(const std::string& name) const { return (dir_ / name).string(); }
+  const eval::FilterRun& run(const eval::Evaluation& ev, const std::string& name) {
+    for (const auto& r : ev.filters) if (r.name == name) return r;
+    throw std::runtime_error("no run " + name);
+  }
+
+  fs::path dir_;
+  common::SystemConfig cfg_;
+  eval::EvalSetup setup_;
+};
+
+TEST_F(EvalTest, MarkerMapOfTheTestWorld) {
+  ASSERT_EQ(setup_.map.size(), 5u);
+  EXPECT_NEAR(setup_.map[2].x, 0.0, 1e-9);
+  EXPECT_NEAR(setup_.map[2].y, 6.0, 1e-9);
+}
+
+TEST_F(EvalTest, ReadsEveryChannel) {
+  const auto w = writeRun(file("run.lcmlog"), false);
+  const auto data = eval::readLog(file("run.lcmlog"), cfg_.channels);
+  EXPECT_EQ(data.events_read, static_cast<int64_t>(w.starts.size()));
+  EXPECT_FALSE(data.damaged);
+  EXPECT_TRUE(data.issues.empty());
+  EXPECT_EQ(data.truth.size(), static_cast<size_t>(kSteps + 1));
+  EXPECT_EQ(data.odometry_messages, kSteps);
+  EXPECT_EQ(data.ruler_detections, 6);
+  EXPECT_EQ(data.inputs.size(), static_cast<size_t>(kSteps + 6));
+  ASSERT_EQ(data.faults.size(), 2u);
+  EXPECT_EQ(data.faults[0].channel, "MAGRULER_FAULT");
+  EXPECT_EQ(data.faults[1].measurement_seq, 1);
+}
+
+TEST_F(EvalTest, CountsAndMetricsOfEachFilter) {
+  writeRun(file("run.lcmlog"), false);
+  const auto data = eval::readLog(file("run.lcmlog"), cfg_.channels);
+  const auto ev = eval::evaluate(data, setup_);
+  ASSERT_EQ(ev.filters.size(), 3u);
+  EXPECT_NEAR(ev.gate_threshold, 9.21, 0.01);  // default: 99 % on the innovation's 2 dof
+  EXPECT_FALSE(ev.live.has_value());
+
+  const auto& dr = run(ev, "dead_reckoning").metrics;  // exact odometry on a straight line
+  EXPECT_LT(dr.rmse_m, 1e-9);
+  EXPECT_EQ(dr.accepted, 0);
+  EXPECT_EQ(dr.rejected, 0);
+  EXPECT_EQ(dr.ignored, 6);
+  EXPECT_EQ(dr.faults_total, 2);
+  EXPECT_GE(dr.samples, kSteps);
+
+  const auto& ukf = run(ev, "ukf").metrics;  // ungated: takes the wrong offset
+  EXPECT_EQ(ukf.accepted, 5);
+  EXPECT_EQ(ukf.rejected, 1);  // the phantom has no reachable marker
+  EXPECT_EQ(ukf.faults_total, 2);
+  EXPECT_EQ(ukf.faults_accepted, 1);
+  EXPECT_EQ(ukf.faults_rejected, 1);
+  EXPECT_EQ(ukf.valid_rejected, 0);
+  EXPECT_GT(ukf.max_error_m, 0.05);
+
+  const auto& gated = run(ev, "ukf_gated").metrics;
+  EXPECT_EQ(gated.accepted, 4);
+  EXPECT_EQ(gated.rejected, 2);
+  EXPECT_EQ(gated.faults_total, 2);
+  EXPECT_EQ(gated.faults_rejected, 2);
+  EXPECT_EQ(gated.faults_accepted, 0);
+  EXPECT_EQ(gated.valid_rejected, 0);
+  EXPECT_LT(gated.max_error_m, 0.02);
+  EXPECT_LT(gated.final_error_m, 0.01);
+  EXPECT_GT(ukf.max_error_m, 3 * gated.max_error_m);
+
+  // The wrong offset is far outside the gate, the valid markers inside it.
+  const auto& decisions = run(ev, "ukf_gated").decisions;
+  ASSERT_EQ(decisions.size(), 6u);
+  EXPECT_TRUE(decisions[2].is_fault);
+  EXPECT_EQ(decisions[2].decision.reason, "gate");
+  EXPECT_GT(decisions[2].decision.mahalanobis, ev.gate_threshold);
+  EXPECT_EQ(decisions[4].decision.reason, "no_candidate");
+  for (int i : {0, 1, 3, 5}) {
+    EXPECT_FALSE(decisions[i].is_fault);
+    EXPECT_LT(decisions[i].decision.mahalanobis, ev.gate_threshold) << i;
+  }
+}
+
+TEST_F(EvalTest, LivePoseIsScoredAndComparedWithReplay) {
+  writeRun(file("run.lcmlog"), true);
+  const auto data = eval::readLog(file("run.lcmlog"), cfg_.channels);
+  const auto ev = eval::evaluate(data, setup_);
+  ASSERT_TRUE(ev.live.has_value());
+  EXPECT_EQ(ev.live->filter, "ukf_gated");
+  const auto& m = ev.live->run.metrics;
+  EXPECT_EQ(m.samples, kSteps / 10);
+  EXPECT_NEAR(m.rmse_m, kLiveOffsetX, 1e-9);
+  EXPECT_NEAR(m.final_error_m, kLiveOffsetX, 1e-9);
+  EXPECT_EQ(m.accepted, 4);
+  EXPECT_EQ(m.faults_rejected, 2);
+  EXPECT_EQ(ev.live->matched_poses, kSteps / 10);
+  EXPECT_NEAR(ev.live->max_diff_to_replay_m, kLiveOffsetX, 0.02);
+}
+
+TEST_F(EvalTest, TruncatedLogReportsOffsetAndKeepsWhatWasRead) {
+  const auto w = writeRun(file("run.lcmlog"), false);
+  const auto size = static_cast<int64_t>(fs::file_size(file("run.lcmlog")));
+  fs::resize_file(file("run.lcmlog"), static_cast<uintmax_t>(size - 5));  // cut the last event
+  const auto data = eval::readLog(file("run.lcmlog"), cfg_.channels);
+  EXPECT_EQ(data.events_read, static_cast<int64_t>(w.starts.size()) - 1);
+  EXPECT_TRUE(data.damaged);
+  ASSERT_EQ(data.issues.size(), 1u);
+  EXPECT_EQ(data.issues[0].byte_offset, w.starts.back());
+  EXPECT_EQ(data.issues[0].event_index, static_cast<int64_t>(w.starts.size()) - 1);
+  EXPECT_NE(data.issues[0].what.find("truncated"), std::string::npos) << data.issues[0].what;
+  EXPECT_EQ(data.bytes_unreadable, size - 5 - w.starts.back());
+  // What was read is still evaluated.
+  const auto ev = eval::evaluate(data, setup_);
+  EXPECT_EQ(run(ev, "ukf_gated").metrics.faults_rejected, 2);
+}
+
+TEST_F(EvalTest, CorruptEventIsSkippedAndReadingResumes) {
+  const auto w = writeRun(file("run.lcmlog"), false);
+  const size_t bad = 500;  // an event in the middle: corrupt its channel length
+  {
+    std::fstream f(file("run.lcmlog"), std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(w.starts[bad] + 20);
+    const char huge[4] = {0x00, 0x00, 0x7f, 0x00};
+    f.write(huge, 4);
+  }
+  const auto data = eval::readLog(file("run.lcmlog"), cfg_.channels);
+  EXPECT_EQ(data.events_read, static_cast<int64_t>(w.starts.size()) - 1);
+  EXPECT_TRUE(data.damaged);
+  ASSERT_EQ(data.issues.size(), 1u);
+  EXPECT_EQ(data.issues[0].byte_offset, w.starts[bad]);
+  EXPECT_EQ(data.issues[0].event_index, static_cast<int64_t>(bad));
+  EXPECT_EQ(data.bytes_unreadable, w.starts[bad + 1] - w.starts[bad]);
+  EXPECT_NE(data.issues[0].what.find("resumed at byte " + std::to_string(w.starts[bad + 1])),
+            std::string::npos) << data.issues[0].what;
+  EXPECT_EQ(data.truth.size() + static_cast<size_t>(data.odometry_messages),
+            static_cast<size_t>(2 * kSteps));  // exactly one truth or odometry event lost
+}
+
+TEST_F(EvalTest, UndecodablePayloadIsReportedAndSkipped) {
+  const auto w = writeRun(file("run.lcmlog"), false);
+  size_t bad = 0;
+  while (w.channels[bad] != "ODOMETRY") ++bad;
+  {
+    std::fstream f(file("run.lcmlog"), std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(w.starts[bad] + 28 + static_cast<int64_t>(w.channels[bad].size()));  // fingerprint
+    f.write("\xde\xad\xbe\xef", 4);
+  }
+  const auto data = eval::readLog(file("run.lcmlog"), cfg_.channels);
+  EXPECT_EQ(data.events_read, static_cast<int64_t>(w.starts.size()));
+  EXPECT_FALSE(data.damaged);
+  ASSERT_EQ(data.issues.size(), 1u);
+  EXPECT_EQ(data.issues[0].byte_offset, w.starts[bad]);
+  EXPECT_NE(data.issues[0].what.find("undecodable ODOMETRY"), std::string::npos);
+  EXPECT_EQ(data.odometry_messages, kSteps - 1);
+}
+
+TEST_F(EvalTest, MissingFileThrows) {
+  EXPECT_THROW(eval::readLog(file("nope.lcmlog"), cfg_.channels), std::runtime_error);
+}
+
+TEST(TruthAt, InterpolatesInsideAndRefusesFarOutside) {
+  std::vector<eval::TruthSample> truth{{1000000, 0.0, 0.0, 3.0, 0.0}, {1010000, 1.0, 2.0, -3.0, 1.0}};
+  auto mid = eval::truthAt(truth, 1005000);
+  ASSERT_TRUE(mid.has_value());
+  EXPECT_DOUBLE_EQ(mid->x, 0.5);
+  EXPECT_DOUBLE_EQ(mid->y, 1.0);
+  EXPECT_NEAR(std::abs(mid->heading), M_PI, 1e-12);  // midway between 3 and -3 across +-pi
+  EXPECT_TRUE(eval::truthAt(truth, 1050000).has_value());   // within 0.1 s of the end
+  EXPECT_FALSE(eval::truthAt(truth, 1200000).has_value());
+  EXPECT_FALSE(eval::truthAt({}, 0).has_value());
+}
+
+/// Runs a command; returns its exit status.
+int shell(const std::string& cmd) {
+  const int rc = std::system(cmd.c_str());
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+TEST_F(EvalTest, CommandLineWritesReportAndFigures) {
+  writeRun(file("run.lcmlog"), true);
+  const std::string out = file("out");
+  const int rc = shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") +
+                     " --config " LCMLOC_TEST_DATA_DIR "/eval_straight.yaml --out " + out +
+                     " > " + file("stdout.txt") + " 2>&1");
+  ASSERT_EQ(rc, 0);
+  std::ifstream f(out + "/report.json");
+  ASSERT_TRUE(f.good());
+  const auto j = nlohmann::json::parse(f);
+  for (const char* name : {"dead_reckoning", "ukf", "ukf_gated"}) {
+    const auto& m = j.at("filters").at(name);
+    for (const char* key : {"rmse_m", "max_error_m", "final_error_m", "accepted", "rejected",
+                            "faults_total", "faults_rejected", "valid_rejected"})
+      EXPECT_TRUE(m.contains(key)) << name << "." << key;
+    EXPECT_EQ(m.at("measurements").size(), 6u);
+    EXPECT_EQ(m.at("faults_total"), 2);
+  }
+  EXPECT_EQ(j["filters"]["ukf_gated"]["faults_rejected"], 2);
+  EXPECT_EQ(j["filters"]["ukf"]["faults_rejected"], 1);
+  EXPECT_TRUE(j["filters"]["ukf"]["measurements"][0]["gate"].is_null());  // ungated: +inf
+  EXPECT_NEAR(j["gate_threshold"].get<double>(), 9.21, 0.01);
+  EXPECT_EQ(j["live"]["filter"], "ukf_gated");
+  EXPECT_NEAR(j["live"]["rmse_m"].get<double>(), kLiveOffsetX, 1e-9);
+  if (shell("command -v gnuplot > /dev/null") == 0) {
+    for (const char* png : {"trajectories.png", "innovation.png", "error_x.png", "error_y.png"})
+      EXPECT_GT(fs::file_size(out + "/" + png), 1000u) << png;
+  }
+}
+
+TEST_F(EvalTest, CommandLineFailsWhenNothingIsUsable) {
+  EXPECT_NE(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("missing.lcmlog") + " --no-plots --out " +
+                file("out") + " > /dev/null 2>&1"), 0);
+  { std::ofstream empty(file("empty.lcmlog")); }
+  EXPECT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("empty.lcmlog") + " --no-plots --out " +
+                file("out") + " > /dev/null 2>&1"), 1);
+  writeRun(file("run.lcmlog"), false);
+  EXPECT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") +
+                " --filters nope --no-plots --out " + file("out") + " > /dev/null 2>&1"), 2);
+  EXPECT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") + " --config " +
+                file("missing.yaml") + " --no-plots --out " + file("out") + " > /dev/null 2>&1"), 2);
+}
+
+}  // namespace
