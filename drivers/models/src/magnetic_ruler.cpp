@@ -14,6 +14,7 @@ constexpr double kMu0Over4Pi = 1e-7;   // [T m / A]
 constexpr double kGaussPerTesla = 1e4;
 constexpr double kCullDistance = 3.0;  // markers farther than this contribute < 1 mgauss [m]
 constexpr int kBaselineExclusion = 4;  // sensors this close to the maximum are not baseline
+constexpr double kBackgroundTau = 1.0;  // background tracking time constant [s]
 
 double sensorLateralOf(const MagRulerConfig& cfg, int i) {
   return -0.5 * cfg.length + cfg.length * i / (cfg.num_sensors - 1);
@@ -74,6 +75,11 @@ struct MagneticRuler::Impl {
   double disturbance = 0.0;
   int64_t last_read_utime = 0;
   bool have_read = false;
+
+  // Per-sensor background (Earth field through each sensor's own gain, slow disturbances),
+  // tracked while no marker is near; detection works on readings minus background.
+  std::vector<double> background;
+  int64_t background_utime = 0;
 
   // Detection state.
   bool armed = true, tracking = false;
@@ -175,7 +181,16 @@ std::optional<RulerReading> MagneticRuler::sample(const TruthState& truth) {
   RulerReading now;
   now.utime = truth.utime;
   now.readings = read(truth);
-  const double amplitude = rawPeak(now.readings).amplitude;
+  if (st.background.empty()) st.background = now.readings;
+  std::vector<double> residual(now.readings.size());
+  for (std::size_t i = 0; i < residual.size(); ++i) residual[i] = now.readings[i] - st.background[i];
+  const double amplitude = rawPeak(residual).amplitude;
+  if (!st.tracking && amplitude < 0.5 * cfg_.detection_threshold) {
+    const double dt = 1e-6 * static_cast<double>(truth.utime - st.background_utime);
+    const double w = std::clamp(dt / kBackgroundTau, 0.0, 1.0);
+    for (std::size_t i = 0; i < residual.size(); ++i) st.background[i] += w * residual[i];
+  }
+  st.background_utime = truth.utime;
 
   std::optional<RulerReading> out;
   // The along-track maximum is confirmed once the amplitude has fallen clearly (well above the

@@ -63,7 +63,7 @@ struct MagRulerConfig {
   double disturbance_std = 0.002;   ///< slowly varying common-mode disturbance [gauss]
   double gain_std = 0.02;           ///< per-sensor sensitivity mismatch (fixed per ruler) [-]
   double disturbance_tau = 5.0;     ///< correlation time of that disturbance (first-order Markov) [s]
-  double detection_threshold = 0.3;   ///< peak above baseline to declare a marker [gauss] (~20% of the 1.4 G peak)
+  double detection_threshold = 0.05;  ///< peak above the tracked background to declare a marker [gauss]
   double publish_rate_hz = 0.0;     ///< raw (non-detection) readings rate; 0 = detections only
 };
 
