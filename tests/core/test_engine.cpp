@@ -1,0 +1,305 @@
+// Canonical ordering and the fusion engine: control commands, shadows, events, bad input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "lcmloc/core/engine.hpp"
+#include "lcmloc/core/reorder.hpp"
+
+using namespace lcmloc::core;
+
+namespace {
+
+constexpr double kL1 = 1.5;
+
+MarkerMap straightMap(int n) {
+  MarkerMap m;
+  for (int i = 0; i < n; ++i) m.push_back(Marker{i, 0.0, 2.0 * (i + 1) + kL1});
+  return m;
+}
+
+EngineInput odoIn(int64_t utime, int64_t seq, double ds) {
+  OdometryInput o;
+  o.utime = utime;
+  o.delta_s = ds;
+  o.has_steering = true;
+  return EngineInput{"ODOMETRY", seq, utime, o};
+}
+
+EngineInput rulerIn(int64_t utime, int64_t seq, double dm) {
+  RulerDetection d;
+  d.utime = utime;
+  d.seq = seq;
+  d.lateral_offset = dm;
+  return EngineInput{"MAGRULER", seq, utime, d};
+}
+
+EngineInput controlIn(int64_t utime, int64_t seq, ControlCommand c) {
+  return EngineInput{"FUSION_CONTROL", seq, utime, std::move(c)};
+}
+
+/// Everything the engine emitted, in order.
+struct Recorder {
+  struct Event { std::string name, detail; int64_t utime; };
+  std::vector<std::string> log;  // "state:<filter>", "decision:<filter>:<reason>", "event:<name>"
+  std::vector<Event> events;
+  std::vector<GateDecision> decisions;
+  std::map<std::string, FilterState> last_state;
+  EngineOutputs outputs() {
+    EngineOutputs o;
+    o.on_state = [this](const std::string& f, bool active, const FilterState& st) {
+      log.push_back("state:" + f + (active ? "" : "(shadow)"));
+      last_state[f] = st;
+    };
+    o.on_decision = [this](const std::string& f, bool active, const GateDecision& d) {
+      log.push_back("decision:" + f + ":" + d.reason);
+      if (active) decisions.push_back(d);
+    };
+    o.on_event = [this](const std::string& e, const std::string& detail, int64_t utime) {
+      log.push_back("event:" + e);
+      events.push_back({e, detail, utime});
+    };
+    return o;
+  }
+  int count(const std::string& name) const {
+    int n = 0;
+    for (const auto& e : events) n += e.name == name;
+    return n;
+  }
+};
+
+EngineConfig engineConfig(const std::string& type = "ukf_gated") {
+  EngineConfig c;
+  c.filter.type = type;
+  return c;
+}
+
+/// Drives `metres` north in 2 cm steps at 100 Hz from *utime, detecting markers (dm = 0) every
+/// 2 m of travel, i.e. whenever the travelled distance is a multiple of 2 m.
+void driveWithMarkers(FusionEngine& e, double metres, int64_t& utime, int64_t& seq,
+                      double& travelled) {
+  for (int k = 0; k < static_cast<int>(std::lround(metres / 0.02)); ++k) {
+    utime += 10000;
+    ASSERT_TRUE(e.push(odoIn(utime, ++seq, 0.02)));
+    travelled += 0.02;
+    if (std::abs(travelled / 2.0 - std::round(travelled / 2.0)) < 1e-6)
+      ASSERT_TRUE(e.push(rulerIn(utime, ++seq, 0.0)));
+  }
+}
+
+}  // namespace
+
+TEST(ReorderBuffer, CanonicalOrderAndTooOld) {
+  ReorderBuffer<char> buf(100);
+  std::string out;
+  auto sink = [&](const OrderKey&, char c) { out.push_back(c); };
+  EXPECT_TRUE(buf.push({50, 2, 1}, 'A'));
+  EXPECT_TRUE(buf.push({50, 1, 5}, 'B'));
+  EXPECT_TRUE(buf.push({10, 2, 0}, 'C'));
+  EXPECT_TRUE(buf.push({50, 1, 4}, 'D'));
+  buf.releaseReady(sink);
+  EXPECT_EQ(out, "");  // nothing older than newest - window yet
+  EXPECT_TRUE(buf.push({200, 0, 0}, 'E'));
+  buf.releaseReady(sink);
+  EXPECT_EQ(out, "CDBA");  // utime, then rank, then seq
+  EXPECT_FALSE(buf.push({40, 0, 0}, 'F'));   // older than released
+  EXPECT_FALSE(buf.push({50, 2, 1}, 'G'));   // equal to the last released key
+  EXPECT_TRUE(buf.push({120, 0, 0}, 'H'));   // late but not yet released past: still in order
+  EXPECT_FALSE(buf.push({200, 0, 0}, 'I'));  // duplicate key
+  buf.flush(sink);
+  EXPECT_EQ(out, "CDBAHE");
+  EXPECT_EQ(buf.size(), 0u);
+}
+
+TEST(Engine, CanonicalOrderAtEqualUtimeControlOdometryRuler) {
+  Recorder rec;
+  FusionEngine e(engineConfig(), straightMap(3), rec.outputs());
+  const int64_t t = 1000000;
+  ASSERT_TRUE(e.push(rulerIn(t, 1, 0.0)));
+  ASSERT_TRUE(e.push(odoIn(t, 1, 0.02)));
+  ASSERT_TRUE(e.push(controlIn(t, 1, SetPose{Pose(0, 0.48, M_PI / 2), Vec3(0.1, 0.1, 0.05)})));
+  EXPECT_TRUE(rec.log.empty());  // held in the reorder window
+  e.flush();
+  const std::vector<std::string> expected{"event:ack", "state:ukf_gated",
+                                          "decision:ukf_gated:no_candidate", "state:ukf_gated"};
+  EXPECT_EQ(rec.log, expected);
+  EXPECT_EQ(e.counters().processed, 3);
+}
+
+TEST(Engine, TooOldInputIsRejectedAndReported) {
+  Recorder rec;
+  EngineConfig cfg = engineConfig();
+  cfg.reorder_window_us = 50000;
+  FusionEngine e(cfg, straightMap(3), rec.outputs());
+  ASSERT_TRUE(e.push(odoIn(1000000, 1, 0.02)));
+  ASSERT_TRUE(e.push(odoIn(1100000, 2, 0.02)));     // releases 1.0 s
+  EXPECT_TRUE(e.push(odoIn(1060000, 3, 0.02)));     // late, but within the window: kept
+  EXPECT_FALSE(e.push(odoIn(990000, 4, 0.02)));     // older than what was processed
+  EXPECT_EQ(rec.count("too_old"), 1);
+  EXPECT_EQ(rec.events.back().utime, 990000);
+  EXPECT_EQ(e.counters().too_old, 1);
+  e.flush();
+  EXPECT_EQ(e.counters().processed, 3);
+}
+
+TEST(Engine, SwitchFilterKeepsStateContinuity) {
+  Recorder rec;
+  EngineConfig cfg = engineConfig("ukf_gated");
+  cfg.reorder_window_us = 0;
+  FusionEngine e(cfg, straightMap(10), rec.outputs());
+  int64_t t = 1000000, seq = 0;
+  double s = 0;
+  driveWithMarkers(e, 5.0, t, seq, s);
+  e.flush();
+  ASSERT_EQ(rec.decisions.size(), 2u);
+  EXPECT_TRUE(rec.decisions[1].accepted);
+  const FilterState before = e.activeState();
+  SwitchFilter sw;
+  sw.config = cfg.filter;
+  sw.config.type = "ukf_calib";
+  ASSERT_TRUE(e.push(controlIn(t + 1, ++seq, sw)));
+  e.flush();
+  EXPECT_EQ(e.activeFilter(), "ukf_calib");
+  ASSERT_EQ(rec.count("ack"), 1);
+  const FilterState after = e.activeState();
+  ASSERT_EQ(after.x.size(), 5);
+  EXPECT_EQ(Eigen::VectorXd(after.x.head(3)), before.x);
+  EXPECT_EQ(Eigen::MatrixXd(after.P.topLeftCorner(3, 3)), before.P);
+  // The new filter runs on: its states are published as the active ones.
+  rec.log.clear();
+  t += 10;
+  driveWithMarkers(e, 1.0, t, seq, s);
+  e.flush();
+  ASSERT_FALSE(rec.log.empty());
+  for (const auto& line : rec.log) EXPECT_EQ(line.find("ukf_gated"), std::string::npos) << line;
+  EXPECT_EQ(rec.log.back(), "state:ukf_calib");
+  EXPECT_TRUE(rec.decisions.back().accepted);
+}
+
+TEST(Engine, UnknownFilterIsRefusedAndTheRunningFilterContinues) {
+  Recorder rec;
+  EngineConfig cfg = engineConfig("ukf_gated");
+  cfg.reorder_window_us = 0;
+  FusionEngine e(cfg, straightMap(10), rec.outputs());
+  int64_t t = 1000000, seq = 0;
+  double s = 0;
+  driveWithMarkers(e, 1.0, t, seq, s);
+  e.flush();
+  const FilterState before = e.activeState();
+  SwitchFilter sw;
+  sw.config.type = "kalman_magic";
+  ASSERT_TRUE(e.push(controlIn(t + 1, ++seq, sw)));
+  SwitchFilter bad;
+  bad.config.type = "ukf";
+  bad.config.pv_diag = Vec2(-1, 1);  // invalid parameter: refused too
+  ASSERT_TRUE(e.push(controlIn(t + 2, ++seq, bad)));
+  e.flush();
+  EXPECT_EQ(rec.count("refused"), 2);
+  EXPECT_NE(rec.events[0].detail.find("kalman_magic"), std::string::npos);
+  EXPECT_NE(rec.events[1].detail.find("pv_diag"), std::string::npos);
+  EXPECT_EQ(rec.count("ack"), 0);
+  EXPECT_EQ(e.activeFilter(), "ukf_gated");
+  EXPECT_EQ(e.activeState().x, before.x);
+  t += 10;
+  driveWithMarkers(e, 1.0, t, seq, s);  // reaches the first marker at 2 m
+  e.flush();
+  EXPECT_GT(e.activeState().x[1], before.x[1] + 0.9);
+  ASSERT_FALSE(rec.decisions.empty());
+  EXPECT_TRUE(rec.decisions.back().accepted);
+}
+
+TEST(Engine, SetPoseAndResetApplyToActiveAndShadowFilters) {
+  Recorder rec;
+  EngineConfig cfg = engineConfig("ukf_calib");
+  cfg.shadow = {"dead_reckoning", "ukf"};
+  cfg.reorder_window_us = 0;
+  FusionEngine e(cfg, straightMap(10), rec.outputs());
+  int64_t t = 1000000, seq = 0;
+  double s = 0;
+  driveWithMarkers(e, 1.0, t, seq, s);
+  e.flush();
+  // One state per filter per odometry input.
+  EXPECT_EQ(rec.log[0], "state:ukf_calib");
+  EXPECT_EQ(rec.log[1], "state:dead_reckoning(shadow)");
+  EXPECT_EQ(rec.log[2], "state:ukf(shadow)");
+  ASSERT_TRUE(e.push(controlIn(t + 1, ++seq, SetPose{Pose(5, 6, 0.3), Vec3(0.1, 0.2, 0.05)})));
+  e.flush();
+  EXPECT_EQ(rec.count("ack"), 1);
+  FilterState st = e.activeState();
+  EXPECT_EQ(Eigen::VectorXd(st.x.head(3)), Eigen::Vector3d(5, 6, 0.3));
+  EXPECT_NEAR(st.P(0, 0), 0.01, 1e-15);
+  EXPECT_NEAR(st.P(1, 1), 0.04, 1e-15);
+  EXPECT_NEAR(st.P(2, 2), 0.0025, 1e-15);
+  EXPECT_EQ(st.P(0, 1), 0.0);
+  EXPECT_EQ(st.P(0, 3), 0.0);
+  rec.log.clear();
+  ASSERT_TRUE(e.push(odoIn(t + 2, ++seq, 0.0)));
+  e.flush();
+  ASSERT_EQ(rec.log.size(), 3u);  // the shadows were set too
+  for (const auto& name : {"dead_reckoning", "ukf"}) {
+    EXPECT_EQ(Eigen::VectorXd(rec.last_state[name].x.head(3)), Eigen::Vector3d(5, 6, 0.3)) << name;
+    EXPECT_NEAR(rec.last_state[name].P(1, 1), 0.04, 1e-15) << name;
+  }
+  ASSERT_TRUE(e.push(controlIn(t + 3, ++seq, SetPose{Pose(0, 0, 0), Vec3(0, 1, 1)})));
+  e.flush();
+  EXPECT_EQ(rec.count("refused"), 1);  // zero stddev
+  ASSERT_TRUE(e.push(controlIn(t + 4, ++seq, ResetFilter{})));
+  e.flush();
+  st = e.activeState();
+  EXPECT_EQ(Eigen::VectorXd(st.x.head(3)), cfg.filter.initial_pose);
+  EXPECT_EQ(st.x[3], 0.0);
+  EXPECT_EQ(e.activeFilter(), "ukf_calib");
+}
+
+TEST(Engine, NonFiniteInputsAreRejectedWithoutCorruptingTheState) {
+  Recorder rec;
+  EngineConfig cfg = engineConfig("ukf_gated");
+  cfg.reorder_window_us = 0;
+  FusionEngine e(cfg, straightMap(10), rec.outputs());
+  int64_t t = 1000000, seq = 0;
+  double s = 0;
+  driveWithMarkers(e, 2.0, t, seq, s);
+  e.flush();
+  const FilterState before = e.activeState();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  ASSERT_TRUE(e.push(odoIn(t + 1, ++seq, nan)));
+  ASSERT_TRUE(e.push(rulerIn(t + 2, ++seq, std::numeric_limits<double>::infinity())));
+  e.flush();
+  EXPECT_EQ(rec.count("bad_input"), 1);
+  EXPECT_EQ(rec.decisions.back().reason, "bad_input");
+  EXPECT_FALSE(rec.decisions.back().accepted);
+  EXPECT_EQ(e.activeState().x, before.x);
+  EXPECT_EQ(e.activeState().P, before.P);
+  // And it keeps going.
+  t += 10;
+  driveWithMarkers(e, 2.0, t, seq, s);
+  e.flush();
+  EXPECT_TRUE(rec.decisions.back().accepted);
+  EXPECT_NEAR(e.activeState().x[1], 4.0, 0.02);
+}
+
+TEST(Engine, LockoutAndRecoveryEvents) {
+  Recorder rec;
+  EngineConfig cfg = engineConfig("ukf_gated");
+  cfg.reorder_window_us = 0;
+  FusionEngine e(cfg, straightMap(10), rec.outputs());
+  int64_t t = 1000000, seq = 0;
+  double s = 0;
+  driveWithMarkers(e, 6.0, t, seq, s);  // three good markers
+  for (int i = 0; i < cfg.filter.lockout_rejections; ++i)
+    ASSERT_TRUE(e.push(rulerIn(t += 10, ++seq, 0.45)));
+  e.flush();
+  EXPECT_EQ(rec.count("lockout"), 1);
+  EXPECT_EQ(e.activeState().status, FilterStatus::Lockout);
+  driveWithMarkers(e, 2.0, t, seq, s);
+  e.flush();
+  EXPECT_EQ(rec.count("recovered"), 1);
+  EXPECT_EQ(e.activeState().status, FilterStatus::Ok);
+  const auto c = e.counters();
+  EXPECT_EQ(c.rejected, cfg.filter.lockout_rejections);
+  EXPECT_EQ(c.accepted, 4);
+}
