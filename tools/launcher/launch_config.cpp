@@ -1,0 +1,49 @@
+#include "launch_config.hpp"
+
+#include <filesystem>
+#include <fstream>
+
+#include "lcmloc/common/yaml_reader.hpp"
+
+namespace lcmloc::launcher {
+
+LaunchConfig loadLaunchConfig(const std::string& path) {
+  namespace fs = std::filesystem;
+  using common::ConfigError;
+  if (!fs::exists(path)) throw ConfigError(path, "", "cannot open system file (does it exist?)");
+  YAML::Node doc;
+  try {
+    doc = YAML::LoadFile(path);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(path, "", std::string("YAML error: ") + e.what());
+  }
+  LaunchConfig cfg;
+  cfg.file = path;
+  common::KeyReader r(doc, path, "");
+  r.get("scenario", cfg.scenario);
+  r.get("drain_time", cfg.drain_time, 0.0, 3600.0);
+  r.get("stop_timeout", cfg.stop_timeout, 0.1, 3600.0);
+  r.get("ready_timeout", cfg.ready_timeout, 0.0, 3600.0);
+  YAML::Node procs = r.child("processes");
+  if (!procs || !procs.IsSequence() || procs.size() == 0)
+    throw ConfigError(path, "processes", "expected a non-empty list of {name, executable, args, until_exit}");
+  for (std::size_t i = 0; i < procs.size(); ++i) {
+    const std::string kp = "processes[" + std::to_string(i) + "]";
+    ProcessSpec p;
+    common::KeyReader pr(procs[i], path, kp);
+    pr.get("name", p.name);
+    pr.get("executable", p.executable);
+    pr.getStrings("args", p.args);
+    pr.get("until_exit", p.until_exit);
+    pr.finish();
+    if (p.executable.empty()) throw ConfigError(path, kp + ".executable", "missing");
+    if (p.name.empty()) p.name = p.executable;
+    cfg.processes.push_back(p);
+  }
+  r.finish();
+  if (!cfg.scenario.empty() && fs::path(cfg.scenario).is_relative())
+    cfg.scenario = (fs::path(path).parent_path() / cfg.scenario).lexically_normal().string();
+  return cfg;
+}
+
+}  // namespace lcmloc::launcher

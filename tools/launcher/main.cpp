@@ -1,0 +1,216 @@
+// lcmloc-launcher: starts the processes of a system file as children (in list order, each once
+// its heartbeat shows it running), watches them, and stops them in reverse order when the
+// until_exit process (the simulator) has finished, when a child fails, or on Ctrl-C.
+// Exits non-zero if any child failed.
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <cstring>
+#include <map>
+#include <optional>
+#include <thread>
+
+#include <spdlog/spdlog.h>
+
+#include "launch_config.hpp"
+#include "lcmloc/common/config.hpp"
+#include "lcmloc/common/process.hpp"
+#include "lcmloc/heartbeat_t.hpp"
+
+using namespace lcmloc;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+struct Child {
+  launcher::ProcessSpec spec;
+  pid_t pid = -1;
+  bool running = false;
+  int status = 0;            ///< waitpid status once exited
+  bool killed = false;       ///< needed SIGKILL
+  Clock::time_point started;
+  double runtime = 0.0;
+};
+
+std::string resolveExecutable(const std::string& exe) {
+  namespace fs = std::filesystem;
+  if (exe.find('/') != std::string::npos) return exe;
+  std::error_code ec;
+  const auto self = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    const auto sibling = self.parent_path() / exe;
+    if (fs::exists(sibling)) return sibling.string();
+  }
+  return exe;  // execvp searches PATH
+}
+
+pid_t spawn(const Child& c, const std::string& scenario, const std::string& url) {
+  std::vector<std::string> args{resolveExecutable(c.spec.executable), "--config", scenario, "--lcm-url", url};
+  args.insert(args.end(), c.spec.args.begin(), c.spec.args.end());
+  const pid_t parent = ::getpid();
+  const pid_t pid = ::fork();
+  if (pid < 0) throw std::runtime_error("fork failed for " + c.spec.name);
+  if (pid == 0) {
+    ::setpgid(0, 0);                      // Ctrl-C reaches the launcher only: it stops us in order
+    ::prctl(PR_SET_PDEATHSIG, SIGTERM);   // and we stop if the launcher dies
+    if (::getppid() != parent) ::_exit(127);
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    ::execvp(argv[0], argv.data());
+    std::fprintf(stderr, "lcmloc-launcher: cannot execute %s: %s\n", argv[0], std::strerror(errno));
+    ::_exit(127);
+  }
+  return pid;
+}
+
+std::string describeStatus(const Child& c) {
+  if (c.running) return "still running";
+  if (WIFEXITED(c.status)) return "exit " + std::to_string(WEXITSTATUS(c.status));
+  if (WIFSIGNALED(c.status))
+    return std::string("killed by ") + strsignal(WTERMSIG(c.status)) + (c.killed ? " (stop timeout)" : "");
+  return "unknown";
+}
+
+bool failed(const Child& c) { return c.killed || !WIFEXITED(c.status) || WEXITSTATUS(c.status) != 0; }
+
+class Launcher {
+ public:
+  Launcher(launcher::LaunchConfig cfg, std::string scenario, std::string url)
+      : cfg_(std::move(cfg)), scenario_(std::move(scenario)), url_(std::move(url)) {}
+
+  int run() {
+    const auto sys = common::loadSystemConfig(scenario_);  // validate before starting anything
+    common::Bus bus(url_);
+    bus.subscribe<lcmloc::heartbeat_t>(sys.channels.heartbeat,
+                                       [this](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
+                                         if (m.state == "running") ready_[m.pid] = true;
+                                       });
+    for (const auto& spec : cfg_.processes) {
+      children_.emplace_back();
+      children_.back().spec = spec;
+    }
+
+    bool ok = startAll(bus);
+    std::optional<Clock::time_point> drain_until;
+    while (ok && !common::stopRequested()) {
+      bus.handle(100);
+      for (auto& c : children_) {
+        if (!reap(c, false)) continue;
+        if (c.spec.until_exit && !failed(c)) {
+          spdlog::info("{} finished; stopping the others in {:.1f} s", c.spec.name, cfg_.drain_time);
+          drain_until = Clock::now() + secs(cfg_.drain_time);
+        } else {
+          spdlog::error("{} ended unexpectedly ({})", c.spec.name, describeStatus(c));
+          ok = false;
+        }
+      }
+      if (drain_until && Clock::now() >= *drain_until) break;
+    }
+    if (common::stopRequested()) spdlog::info("stop requested (signal {}): stopping all", common::stopSignal());
+    stopAll();
+    return summary();
+  }
+
+ private:
+  static Clock::duration secs(double s) {
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+  }
+
+  bool startAll(common::Bus& bus) {
+    for (auto& c : children_) {
+      if (common::stopRequested()) return false;
+      c.pid = spawn(c, scenario_, url_);
+      c.running = true;
+      c.started = Clock::now();
+      spdlog::info("started {} (pid {})", c.spec.name, c.pid);
+      const auto deadline = Clock::now() + secs(cfg_.ready_timeout);
+      while (!ready_[c.pid] && Clock::now() < deadline && !common::stopRequested()) {
+        bus.handle(50);
+        if (reap(c, false)) {
+          spdlog::error("{} ended during start-up ({})", c.spec.name, describeStatus(c));
+          return false;
+        }
+      }
+      if (!ready_[c.pid] && cfg_.ready_timeout > 0)
+        spdlog::warn("{}: no heartbeat within {:.1f} s; continuing", c.spec.name, cfg_.ready_timeout);
+    }
+    return true;
+  }
+
+  /// Collects the child's exit status if it has ended (blocking=false: just look).
+  bool reap(Child& c, bool blocking) {
+    if (!c.running) return false;
+    int status = 0;
+    const pid_t r = ::waitpid(c.pid, &status, blocking ? 0 : WNOHANG);
+    if (r != c.pid) return false;
+    c.running = false;
+    c.status = status;
+    c.runtime = std::chrono::duration<double>(Clock::now() - c.started).count();
+    return true;
+  }
+
+  /// SIGTERM in reverse start order, each waited for (bounded) before the next, then SIGKILL.
+  void stopAll() {
+    for (auto it = children_.rbegin(); it != children_.rend(); ++it) {
+      Child& c = *it;
+      if (!c.running) continue;
+      ::kill(c.pid, SIGTERM);
+      const auto deadline = Clock::now() + secs(cfg_.stop_timeout);
+      while (!reap(c, false) && Clock::now() < deadline)
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      if (c.running) {
+        spdlog::error("{} did not stop within {:.1f} s: SIGKILL", c.spec.name, cfg_.stop_timeout);
+        ::kill(c.pid, SIGKILL);
+        c.killed = true;
+        reap(c, true);
+      }
+    }
+  }
+
+  int summary() const {
+    bool any_failed = false;
+    for (const auto& c : children_) {
+      if (c.pid < 0) {
+        spdlog::info("  {:<16} not started", c.spec.name);
+        continue;
+      }
+      const bool bad = failed(c);
+      any_failed |= bad;
+      spdlog::info("  {:<16} pid {:<7} {:>7.2f} s  {}  {}", c.spec.name, c.pid, c.runtime, describeStatus(c),
+                   bad ? "FAILED" : "ok");
+    }
+    for (const auto& c : children_) any_failed |= (c.pid < 0);
+    return any_failed ? common::kExitRuntimeError : common::kExitOk;
+  }
+
+  launcher::LaunchConfig cfg_;
+  std::string scenario_, url_;
+  std::vector<Child> children_;
+  std::map<int32_t, bool> ready_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"lcmloc-launcher: starts, watches and stops the processes of a system file"};
+  common::CommonOptions opts;
+  opts.config = "-";  // placeholder: the system file names the scenario unless --config is given
+  common::addCommonOptions(app, opts);
+  std::string system = std::string(LCMLOC_CONFIG_DIR) + "/system.yaml";
+  app.add_option("--system", system, "system file: processes to run")->capture_default_str();
+
+  return common::runProcess(app, argc, argv, opts, "lcmloc-launcher", [&] {
+    auto cfg = launcher::loadLaunchConfig(system);
+    std::string scenario = opts.config != "-" ? opts.config : cfg.scenario;
+    if (scenario.empty()) scenario = common::defaultConfigPath();
+    scenario = std::filesystem::absolute(scenario).string();
+    spdlog::info("system {}: {} processes, scenario {}, LCM {}", system, cfg.processes.size(), scenario,
+                 opts.lcm_url);
+    return Launcher(std::move(cfg), scenario, opts.lcm_url).run();
+  });
+}
