@@ -2,6 +2,9 @@
 //   BM_UkfPredictUpdate:    the fixed-size kernel (lcmloc::core::Ukf<3>) with eq. 1-2 and eq. 5.
 //   BM_FilterPredictUpdate: the same step through the Filter interface ("ukf_gated"), including
 //                           association over a 20-marker map, the gate and the GateDecision.
+//   BM_ModelCallsOnly:      the 7 process-model and 7 measurement-model calls of one step alone
+//                           (sin/cos, atan2, sqrt): the floor no UKF can go below; compare the
+//                           kernel's median with it in the same run on a shared machine.
 // Run: bench_ukf --benchmark_repetitions=10 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
@@ -41,6 +44,19 @@ void BM_UkfPredictUpdate(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_UkfPredictUpdate);
+
+void BM_ModelCallsOnly(benchmark::State& state) {
+  Vec3 x(0.0, 0.0, 1.5707963267948966);
+  const double ds = 0.015, dth = headingIncrement(ds, 0.05, kWheelbase);
+  for (auto _ : state) {
+    for (int k = 0; k < 7; ++k) {
+      const Vec3 s = x + Vec3(1e-3 * k, -1e-3 * k, 1e-2 * k);
+      benchmark::DoNotOptimize(propagatePose(s, ds, dth));
+      benchmark::DoNotOptimize(predictRangeBearing(s, 0.05, 1.5));
+    }
+  }
+}
+BENCHMARK(BM_ModelCallsOnly);
 
 void BM_FilterPredictUpdate(benchmark::State& state) {
   FilterConfig cfg;

@@ -86,8 +86,9 @@ void driveWithMarkers(FusionEngine& e, double metres, int64_t& utime, int64_t& s
     utime += 10000;
     ASSERT_TRUE(e.push(odoIn(utime, ++seq, 0.02)));
     travelled += 0.02;
-    if (std::abs(travelled / 2.0 - std::round(travelled / 2.0)) < 1e-6)
+    if (std::abs(travelled / 2.0 - std::round(travelled / 2.0)) < 1e-6) {
       ASSERT_TRUE(e.push(rulerIn(utime, ++seq, 0.0)));
+    }
   }
 }
 

@@ -96,12 +96,12 @@ bool choleskyLower(const Eigen::Matrix<double, N, N>& A, Eigen::Matrix<double, N
     double d = A(j, j);
     for (int k = 0; k < j; ++k) d -= L(j, k) * L(j, k);
     if (!(d > 0.0)) return false;  // also catches NaN
-    const double ljj = std::sqrt(d);
+    const double ljj = std::sqrt(d), inv = 1.0 / ljj;
     L(j, j) = ljj;
     for (int i = j + 1; i < N; ++i) {
       double v = A(i, j);
       for (int k = 0; k < j; ++k) v -= L(i, k) * L(j, k);
-      L(i, j) = v / ljj;
+      L(i, j) = v * inv;
     }
   }
   return true;
@@ -197,7 +197,8 @@ class Ukf {
     if (!Z.allFinite() || !z.allFinite()) return false;
     out.z_hat = sigmaMean<N, M>(Z, w_, z_angles);
     const Eigen::Matrix<double, M, kSigma> DZ = sigmaDeviations<N, M>(Z, out.z_hat, z_angles);
-    const Sigmas DX = sigmaDeviations<N, N>(X, X.col(0), angles_);
+    // X = x +- columns of a square root: its deviations from X0 = x need no wrapping.
+    const Sigmas DX = X.colwise() - X.col(0);
     out.S = sigmaCovariance<N, M, M>(DZ, DZ, w_) + R;
     const Eigen::Matrix<double, N, M> Pxz = sigmaCovariance<N, N, M>(DX, DZ, w_);
     Eigen::Matrix<double, M, M> Ls;
