@@ -1,0 +1,376 @@
+// lcmloc_common: YAML config, conversions, the typed LCM bus over memq://, process helpers.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "lcmloc/common/config.hpp"
+#include "lcmloc/common/convert.hpp"
+#include "lcmloc/common/process.hpp"
+#include "lcmloc/common/transport.hpp"
+#include "lcmloc/heartbeat_t.hpp"
+
+using namespace lcmloc;
+using common::ConfigError;
+
+namespace {
+
+std::string errorOf(const std::string& yaml, const std::string& file = "test.yaml") {
+  try {
+    common::parseSystemConfig(yaml, file);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Config
+
+TEST(Config, PaperYamlSpellsOutTheDefaults) {
+  const auto cfg = common::loadSystemConfig(LCMLOC_PAPER_YAML);
+  const common::SystemConfig def;
+  const auto& s = cfg.scenario;
+  EXPECT_EQ(cfg.file, LCMLOC_PAPER_YAML);
+  EXPECT_EQ(s.name, "paper");
+  EXPECT_EQ(s.seed, def.scenario.seed);
+  EXPECT_EQ(s.realtime_factor, def.scenario.realtime_factor);
+  ASSERT_EQ(s.path.segments.size(), def.scenario.path.segments.size());
+  for (std::size_t i = 0; i < s.path.segments.size(); ++i) {
+    EXPECT_EQ(s.path.segments[i].length, def.scenario.path.segments[i].length);
+    EXPECT_EQ(s.path.segments[i].curvature, def.scenario.path.segments[i].curvature);
+  }
+  EXPECT_EQ(s.path.theta0, def.scenario.path.theta0);
+  EXPECT_EQ(s.markers.count, 20);
+  EXPECT_EQ(s.markers.spacing, 2.0);
+  EXPECT_EQ(s.vehicle.wheelbase, def.scenario.vehicle.wheelbase);
+  EXPECT_EQ(s.vehicle.start_utime, def.scenario.vehicle.start_utime);
+  EXPECT_EQ(s.odometry.steering_resolution, def.scenario.odometry.steering_resolution);
+  EXPECT_EQ(s.magruler.num_sensors, 13);
+  EXPECT_EQ(s.magruler.dipole_moment, def.scenario.magruler.dipole_moment);
+  ASSERT_EQ(s.faults.size(), 2u);
+  EXPECT_EQ(s.faults[0].kind, "phantom_marker");
+  EXPECT_EQ(s.faults[1].at_distance, def.scenario.faults[1].at_distance);
+  EXPECT_EQ(cfg.channels.magruler, def.channels.magruler);
+  const auto& f = cfg.fusion.filter;
+  const core::FilterConfig fd;
+  EXPECT_EQ(f.type, "ukf_gated");
+  EXPECT_EQ(f.p0_diag, fd.p0_diag);
+  EXPECT_EQ(f.pw_diag, fd.pw_diag);
+  EXPECT_EQ(f.pv_diag, fd.pv_diag);
+  EXPECT_EQ(f.initial_pose, fd.initial_pose);
+  EXPECT_EQ(f.sigma.kappa, fd.sigma.kappa);
+  EXPECT_FALSE(f.gate.value.has_value());
+  EXPECT_EQ(f.gate.probability, 0.99);
+  EXPECT_EQ(f.steer_bias_rw, fd.steer_bias_rw);
+  EXPECT_EQ(cfg.fusion.reorder_window, def.fusion.reorder_window);
+  EXPECT_EQ(cfg.logger.queue_capacity, def.logger.queue_capacity);
+}
+
+TEST(Config, EmptyFileGivesDefaultsAndOverridesApply) {
+  const auto empty = common::parseSystemConfig("", "empty.yaml");
+  EXPECT_EQ(empty.scenario.markers.count, 20);
+  EXPECT_EQ(empty.fusion.filter.type, "ukf_gated");
+
+  const auto c = common::parseSystemConfig(R"(
+scenario: {seed: 42, realtime_factor: 10}
+faults: []
+fusion:
+  filter: {type: ukf, gate: {value: 6.635, dof: 1}, p0_diag: [1, 2, 3]}
+  shadow: [dead_reckoning]
+logger: {channels: ["POSE.*", GATE]}
+)", "o.yaml");
+  EXPECT_EQ(c.scenario.seed, 42u);
+  EXPECT_EQ(c.scenario.realtime_factor, 10.0);
+  EXPECT_TRUE(c.scenario.faults.empty());
+  EXPECT_EQ(c.fusion.filter.type, "ukf");
+  ASSERT_TRUE(c.fusion.filter.gate.value.has_value());
+  EXPECT_DOUBLE_EQ(*c.fusion.filter.gate.value, 6.635);
+  EXPECT_EQ(c.fusion.filter.gate.dof, 1);
+  EXPECT_EQ(c.fusion.filter.p0_diag, core::Vec3(1, 2, 3));
+  EXPECT_EQ(c.fusion.filter.wheelbase, 2.5);  // untouched keys keep their defaults
+  EXPECT_EQ(c.fusion.shadow, std::vector<std::string>{"dead_reckoning"});
+  EXPECT_EQ(c.logger.channels, (std::vector<std::string>{"POSE.*", "GATE"}));
+}
+
+TEST(Config, UnknownKeyNamesFileKeyPathAndValidKeys) {
+  EXPECT_EQ(errorOf("bogus: 1").rfind("test.yaml: bogus: unknown key (valid keys: scenario, path,", 0), 0u)
+      << errorOf("bogus: 1");
+  const std::string nested = errorOf("vehicle: {wheelbas: 2.0}");
+  EXPECT_NE(nested.find("test.yaml: vehicle.wheelbas: unknown key"), std::string::npos) << nested;
+  EXPECT_NE(nested.find("wheelbase"), std::string::npos) << nested;
+  const std::string deep = errorOf("fusion: {filter: {gate: {treshold: 3}}}");
+  EXPECT_NE(deep.find("test.yaml: fusion.filter.gate.treshold: unknown key"), std::string::npos) << deep;
+  const std::string in_list = errorOf("faults: [{kind: wrong_offset, at: 3}]");
+  EXPECT_NE(in_list.find("faults[0].at: unknown key"), std::string::npos) << in_list;
+}
+
+TEST(Config, WrongTypeAndRangeAreClear) {
+  const std::string t = errorOf("vehicle: {speed: fast}");
+  EXPECT_EQ(t, "test.yaml: vehicle.speed: expected a number, got 'fast'");
+  EXPECT_NE(errorOf("markers: {count: 2.5}").find("markers.count: expected an integer"), std::string::npos);
+  EXPECT_NE(errorOf("markers: {count: -1}").find("markers.count: value -1 out of range"), std::string::npos);
+  EXPECT_NE(errorOf("vehicle: 3").find("vehicle: expected a map"), std::string::npos);
+  EXPECT_NE(errorOf("fusion: {filter: {p0_diag: [1, 2]}}").find("fusion.filter.p0_diag: expected a list of 3"),
+            std::string::npos);
+  const std::string type = errorOf("fusion: {filter: {type: ekf}}");
+  EXPECT_NE(type.find("fusion.filter.type: unknown filter type 'ekf' (valid: "), std::string::npos) << type;
+  EXPECT_NE(type.find("ukf_gated"), std::string::npos);
+  EXPECT_NE(errorOf("faults: [{kind: gremlin}]").find("faults[0].kind: unknown fault kind"), std::string::npos);
+  EXPECT_NE(errorOf("vehicle: {speed: .nan}").find("expected a finite number"), std::string::npos);
+  EXPECT_NE(errorOf("scenario: [1").find("test.yaml: YAML syntax error at line"), std::string::npos);
+}
+
+TEST(Config, MissingFileNamesTheFile) {
+  try {
+    common::loadSystemConfig("/nonexistent/dir/scenario.yaml");
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), "/nonexistent/dir/scenario.yaml: cannot open config file (does it exist?)");
+  }
+}
+
+TEST(Config, FilterParametersFromAControlString) {
+  const core::FilterConfig base;
+  const auto c = common::parseFilterConfig(YAML::Load("{type: ukf_calib, scale_std0: 0.05}"), base,
+                                           "FUSION_CONTROL", "parameters");
+  EXPECT_EQ(c.type, "ukf_calib");
+  EXPECT_EQ(c.scale_std0, 0.05);
+  EXPECT_THROW(common::parseFilterConfig(YAML::Load("{kapa: 1}"), base, "FUSION_CONTROL", "parameters"),
+               ConfigError);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Conversions
+
+TEST(Convert, OdometryRejectsNaNInfAndOutOfRange) {
+  lcmloc::odometry_t m{};
+  m.utime = 1000;
+  m.seq = 3;
+  m.delta_s = 0.015;
+  m.steering = 0.1;
+  m.has_steering = true;
+  std::string why;
+  auto ok = common::toCore(m, &why);
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(ok->utime, 1000);
+  EXPECT_EQ(ok->delta_s, 0.015);
+  EXPECT_TRUE(ok->has_steering);
+
+  auto bad = m;
+  bad.delta_s = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(common::toCore(bad, &why));
+  EXPECT_EQ(why, "delta_s is NaN");
+  bad = m;
+  bad.steering = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(common::toCore(bad, &why));
+  EXPECT_EQ(why, "steering is Inf");
+  bad = m;
+  bad.steering = 1.6;
+  EXPECT_FALSE(common::toCore(bad, &why));
+  EXPECT_NE(why.find("steering"), std::string::npos);
+  bad = m;
+  bad.utime = -5;
+  EXPECT_FALSE(common::toCore(bad, &why));
+  EXPECT_NE(why.find("utime"), std::string::npos);
+}
+
+TEST(Convert, RulerDetectionsOnlyAndValidated) {
+  models::RulerReading r;
+  r.utime = 2000;
+  r.readings.assign(13, -0.45);
+  r.detected = true;
+  r.lateral_offset = -0.123;
+  r.quality = 0.8;
+  const auto m = common::toLcm(r, 7);
+  EXPECT_EQ(m.num_sensors, 13);
+  std::string why = "x";
+  auto d = common::toCore(m, "MAGRULER_FAULT", &why);
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->lateral_offset, -0.123);
+  EXPECT_EQ(d->sensor, "MAGRULER_FAULT");
+  EXPECT_EQ(d->seq, 7);
+
+  auto none = m;
+  none.detected = false;
+  EXPECT_FALSE(common::toCore(none, "MAGRULER", &why));
+  EXPECT_TRUE(why.empty());
+  auto nan = m;
+  nan.readings[4] = std::nan("");
+  EXPECT_FALSE(common::toCore(nan, "MAGRULER", &why));
+  EXPECT_EQ(why, "readings[4] is NaN");
+  auto q = m;
+  q.quality = 1.5;
+  EXPECT_FALSE(common::toCore(q, "MAGRULER", &why));
+  EXPECT_NE(why.find("quality"), std::string::npos);
+}
+
+TEST(Convert, RoundTrips) {
+  models::TruthState t;
+  t.utime = 123456;
+  t.x = 1.5;
+  t.y = -2.25;
+  t.heading = 3.0;
+  t.speed = 1.4;
+  t.steering = -0.2;
+  t.distance = 17.0;
+  const auto back = common::toCore(common::toLcm(t, 9));
+  EXPECT_EQ(back.utime, t.utime);
+  EXPECT_EQ(back.x, t.x);
+  EXPECT_EQ(back.heading, t.heading);
+  EXPECT_EQ(back.distance, t.distance);
+
+  core::FilterState s;
+  s.utime = 99;
+  s.x = Eigen::VectorXd::LinSpaced(5, 1.0, 5.0);
+  s.P = Eigen::MatrixXd::Random(5, 5);
+  s.names = {"x", "y", "theta", "odo_scale", "steer_bias"};
+  s.status = core::FilterStatus::Lockout;
+  const auto msg = common::toLcm(s, "ukf_calib", 4);
+  EXPECT_EQ(msg.dim, 5);
+  EXPECT_EQ(msg.filter, "ukf_calib");
+  EXPECT_EQ(msg.status, lcmloc::pose_t::STATUS_LOCKOUT);
+  const auto s2 = common::toCore(msg);
+  EXPECT_EQ(s2.x, s.x);
+  EXPECT_EQ(s2.P, s.P);
+  EXPECT_EQ(s2.names, s.names);
+  EXPECT_EQ(s2.status, s.status);
+
+  core::GateDecision d;
+  d.utime = 5;
+  d.sensor = "MAGRULER";
+  d.measurement_seq = 11;
+  d.innovation = Eigen::Vector2d(0.01, -0.02);
+  d.mahalanobis = 3.2;
+  d.gate = 9.21;
+  d.accepted = true;
+  d.marker_id = 4;
+  d.reason = "accepted";
+  const auto g = common::toLcm(d, "ukf_gated", 1);
+  EXPECT_EQ(g.dim, 2);
+  EXPECT_EQ(g.innovation[1], -0.02);
+  EXPECT_EQ(g.measurement_seq, 11);
+  EXPECT_EQ(g.marker_id, 4);
+  EXPECT_TRUE(g.accepted);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Transport over memq://
+
+TEST(Transport, PublishSubscribeTyped) {
+  common::Bus bus("memq://");
+  std::vector<lcmloc::odometry_t> got;
+  std::string channel;
+  bus.subscribe<lcmloc::odometry_t>("ODO.*", [&](const std::string& ch, const lcmloc::odometry_t& m, int64_t) {
+    channel = ch;
+    got.push_back(m);
+  });
+  lcmloc::odometry_t m{};
+  m.utime = 42;
+  m.seq = 1;
+  m.delta_s = 0.5;
+  ASSERT_TRUE(bus.publish("ODOMETRY", m));
+  m.seq = 2;
+  ASSERT_TRUE(bus.publish("ODOMETRY", m));
+  for (int i = 0; i < 10 && got.size() < 2; ++i) bus.handle(100);
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(channel, "ODOMETRY");
+  EXPECT_EQ(got[0].utime, 42);
+  EXPECT_EQ(got[1].seq, 2);
+  EXPECT_EQ(got[1].delta_s, 0.5);
+}
+
+TEST(Transport, UndecodablePayloadIsCountedNotFatal) {
+  common::Bus bus("memq://");
+  int good = 0;
+  std::vector<std::string> errors;
+  bus.subscribe<lcmloc::magruler_t>(
+      "MAGRULER", [&](const std::string&, const lcmloc::magruler_t&, int64_t) { ++good; },
+      [&](const std::string& ch, const std::string& why) { errors.push_back(ch + ": " + why); });
+  const char garbage[] = "definitely not a magruler_t";
+  bus.publishRaw("MAGRULER", garbage, sizeof garbage);
+  // A right fingerprint with a negative array length must not crash either.
+  lcmloc::magruler_t m{};
+  m.num_sensors = 1;
+  m.readings = {0.1};
+  std::vector<uint8_t> buf(m.getEncodedSize());
+  m.encode(buf.data(), 0, static_cast<int>(buf.size()));
+  buf[8 + 16 + 3] = 0xff;  // num_sensors = 0x000000ff -> longer than the payload
+  bus.publishRaw("MAGRULER", buf.data(), buf.size());
+  buf[8 + 16] = 0xff;      // num_sensors negative
+  bus.publishRaw("MAGRULER", buf.data(), buf.size());
+  m.num_sensors = 0;
+  m.readings.clear();
+  bus.publish("MAGRULER", m);
+  for (int i = 0; i < 10 && good + static_cast<int>(errors.size()) < 4; ++i) bus.handle(100);
+  EXPECT_EQ(errors.size(), 3u);
+  EXPECT_EQ(bus.decodeErrors("MAGRULER"), 3);
+  EXPECT_EQ(bus.decodeErrors(), 3);
+  EXPECT_EQ(good, 1);  // the valid message after the bad ones still arrives
+  ASSERT_FALSE(errors.empty());
+  EXPECT_NE(errors[0].find("cannot decode magruler_t"), std::string::npos) << errors[0];
+}
+
+TEST(Transport, BadUrlThrowsClearError) {
+  try {
+    common::Bus bus("nonsense://nowhere");
+    FAIL() << "no error";
+  } catch (const common::TransportError& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot start LCM on 'nonsense://nowhere'"), std::string::npos);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Process helpers
+
+TEST(Process, SeqTrackerCountsGapsPerKey) {
+  common::SeqTracker t;
+  EXPECT_EQ(t.observe("A", 5), 0);  // first message: no gap whatever its seq
+  EXPECT_EQ(t.observe("A", 6), 0);
+  EXPECT_EQ(t.observe("A", 9), 2);
+  EXPECT_EQ(t.observe("B", 0), 0);
+  EXPECT_EQ(t.observe("B", 2), 1);
+  EXPECT_EQ(t.observe("A", 9), 0);  // duplicate
+  EXPECT_EQ(t.gaps("A"), 2);
+  EXPECT_EQ(t.gaps("B"), 1);
+  EXPECT_EQ(t.gaps(), 3);
+}
+
+TEST(Process, PacerFollowsTheRealtimeFactor) {
+  common::Pacer fast(0.0);
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_TRUE(fast.waitUntil(0));
+  EXPECT_TRUE(fast.waitUntil(3600000000LL));  // an hour of sim time, no wait
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(1));
+
+  common::Pacer x100(100.0);
+  const auto t1 = std::chrono::steady_clock::now();
+  EXPECT_TRUE(x100.waitUntil(1000000));
+  EXPECT_TRUE(x100.waitUntil(1000000 + 20000000));  // 20 s of sim time at x100 = 200 ms wall
+  EXPECT_GE(std::chrono::steady_clock::now() - t1, std::chrono::milliseconds(195));
+}
+
+TEST(Process, HeartbeatPublishesNameStateAndCounters) {
+  common::Bus bus("memq://");
+  std::vector<lcmloc::heartbeat_t> got;
+  bus.subscribe<lcmloc::heartbeat_t>("HEARTBEAT",
+                                     [&](const std::string&, const lcmloc::heartbeat_t& m, int64_t) { got.push_back(m); });
+  int64_t n = 0;
+  common::Heartbeat hb(bus, "HEARTBEAT", "test-proc", [&] { return common::Heartbeat::Counters{{"n", n}}; });
+  n = 7;
+  hb.tick();
+  hb.tick();  // within the same second: nothing
+  hb.publish("stopping");
+  for (int i = 0; i < 10 && got.size() < 2; ++i) bus.handle(100);
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[0].process, "test-proc");
+  EXPECT_EQ(got[0].state, "running");
+  EXPECT_EQ(got[0].seq, 0);
+  EXPECT_EQ(got[1].seq, 1);
+  EXPECT_EQ(got[1].state, "stopping");
+  ASSERT_EQ(got[0].num_counters, 1);
+  EXPECT_EQ(got[0].counter_names[0], "n");
+  EXPECT_EQ(got[0].counters[0], 7);
+}
