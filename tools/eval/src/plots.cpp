@@ -92,17 +92,47 @@ bool writeDecisions(const std::string& path, const FilterRun& run, int64_t t0) {
 
 struct Series { std::string name, stem; bool live; };
 
+void trajectorySeries(std::ostream& gp, const std::vector<Series>& series, bool faults) {
+  gp << "plot 'truth.dat' u 2:3 w l lw 4 lc rgb '#000000' t 'ground truth'";
+  for (const auto& s : series)
+    gp << ", \\\n  'track_" << s.stem << ".dat' u 2:3 w l lw 2 " << (s.live ? "dt 2 " : "")
+       << "lc rgb '" << colour(s.live ? "" : s.name) << "' t '" << title(s.name) << "'";
+  gp << ", \\\n  'markers.dat' u 1:2 w p pt 7 ps 1.2 lc rgb '#7f7f7f' t 'markers'";
+  if (faults) gp << ", \\\n  'faults.dat' u 1:2 w p pt 2 ps 2.5 lw 3 lc rgb '#d55e00' t 'fault markers'";
+  gp << "\n";
+}
+
 void trajectoryPlot(std::ostream& gp, const std::vector<Series>& series, bool faults) {
   gp << "set output 'trajectories.png'\n"
         "set title 'Trajectories: ground truth, dead reckoning and fused estimates'\n"
         "set xlabel 'X [m]'\nset ylabel 'Y [m]'\nset size ratio -1\n"
-        "plot 'truth.dat' u 2:3 w l lw 4 lc rgb '#000000' t 'ground truth'";
-  for (const auto& s : series)
-    gp << ", \\\n  'track_" << s.stem << ".dat' u 2:3 w l lw 2 " << (s.live ? "dt 2 " : "")
-       << "lc rgb '" << colour(s.live ? "" : s.name) << "' t '" << title(s.name) << "'";
-  gp << ", \\\n  'markers.dat' u 1:2 w p pt 7 ps 1.2 lc rgb '#0072b2' t 'markers'";
-  if (faults) gp << ", \\\n  'faults.dat' u 1:2 w p pt 2 ps 2.5 lw 3 lc rgb '#d55e00' t 'fault markers'";
-  gp << "\nset size noratio\n";
+        "set key inside left bottom box opaque\n";
+  trajectorySeries(gp, series, faults);
+  gp << "set size noratio\nset key outside right top nobox\n";
+}
+
+/// One panel per located fault, 1.5 m around where the faulty marker would lie.
+void faultZoomPlot(std::ostream& gp, const std::vector<Series>& series,
+                   const std::vector<Evaluation::FaultMark>& faults) {
+  std::vector<const Evaluation::FaultMark*> located;
+  for (const auto& f : faults) if (f.located) located.push_back(&f);
+  if (located.empty()) return;
+  const std::size_t n = std::min<std::size_t>(located.size(), 4);
+  gp << "set output 'trajectories_faults.png'\n"
+     << "set terminal pngcairo size " << 560 * n << ",640 noenhanced font 'Sans,11'\n"
+     << "set multiplot layout 1," << n << " title 'Around each fault marker (1.5 m)'\n"
+     << "set size ratio -1\nset key inside left bottom box opaque font ',9'\n"
+        "set xlabel 'X [m]'\nset ylabel 'Y [m]'\n";
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& f = *located[i];
+    gp << "set title '" << f.fault.kind << " (" << f.fault.channel << " seq "
+       << f.fault.measurement_seq << ")'\n"
+       << "set xrange [" << f.marker_x - 1.5 << ":" << f.marker_x + 1.5 << "]\n"
+       << "set yrange [" << f.marker_y - 1.5 << ":" << f.marker_y + 1.5 << "]\n";
+    trajectorySeries(gp, series, true);
+  }
+  gp << "unset multiplot\nset autoscale xy\nset size noratio\nset key outside right top nobox font ',12'\n"
+        "set terminal pngcairo size 1100,800 noenhanced font 'Sans,12'\n";
 }
 
 void errorPlot(std::ostream& gp, const std::vector<Series>& series, const std::string& axis,
@@ -188,6 +218,10 @@ PlotResult writePlots(const LogData& data, const Evaluation& ev, const core::Mar
     if (!data.truth.empty() || !series.empty()) {
       trajectoryPlot(gp, series, located_faults);
       res.figures.push_back("trajectories.png");
+      if (located_faults) {
+        faultZoomPlot(gp, series, ev.faults);
+        res.figures.push_back("trajectories_faults.png");
+      }
     }
     if (!with_decisions.empty()) {
       innovationPlot(gp, with_decisions, ev.gate_threshold);
