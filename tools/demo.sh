@@ -50,11 +50,19 @@ export LCM_DEFAULT_URL="${LCM_DEFAULT_URL:-udpm://239.255.76.67:7667?ttl=0&recv_
 mkdir -p "$out"
 log="$out/run.lcmlog"
 rm -f "$log"
+# The run's scenario: config/paper.yaml with this run's real-time factor and log file.
+scenario="$out/scenario.yaml"
+sed -e "s|^\(  realtime_factor:\)[^#]*|\1 $factor   |" -e "s|^\(  output:\)[^#]*|\1 $log   |" \
+  "$LCMLOC_ROOT/config/paper.yaml" > "$scenario"
+if [[ $(grep -c -e "^  realtime_factor: $factor " -e "^  output: $log " "$scenario") -ne 2 ]]; then
+  lcmloc_log "could not set realtime_factor and logger output in $scenario"
+  exit 1
+fi
+
 lcmloc_log "running the paper scenario live (real-time factor $factor) on $LCM_DEFAULT_URL"
 start=$SECONDS
-"$bin/lcmloc-launcher" --config "$LCMLOC_ROOT/config/system.yaml" \
-  --realtime-factor "$factor" --log "$log"
+"$bin/lcmloc-launcher" --system "$LCMLOC_ROOT/config/system.yaml" --config "$scenario"
 lcmloc_log "live run done in $((SECONDS - start)) s: $log ($(stat -c %s "$log") bytes)"
 
 lcmloc_log "evaluating the log offline"
-"$bin/lcmloc-eval" "$log" --config "$LCMLOC_ROOT/config/paper.yaml" --out "$out"
+"$bin/lcmloc-eval" "$log" --config "$scenario" --out "$out"

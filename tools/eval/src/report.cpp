@@ -76,6 +76,11 @@ void row(std::ostream& os, const std::string& name, const Metrics& m, bool score
     os << std::setw(9) << m.rmse_m << std::setw(9) << m.max_error_m << std::setw(10) << m.final_error_m;
   else
     os << std::setw(9) << "-" << std::setw(9) << "-" << std::setw(10) << "-";
+  if (m.ignored > 0 && m.accepted + m.rejected == 0) {  // dead reckoning: uses no ruler data
+    os << std::setw(10) << "-" << std::setw(10) << "-" << std::setw(8)
+       << ("-/" + std::to_string(m.faults_total)) << std::setw(11) << "-" << "\n";
+    return;
+  }
   os << std::setw(10) << m.accepted << std::setw(10) << m.rejected << std::setw(8)
      << (std::to_string(m.faults_rejected) + "/" + std::to_string(m.faults_total)) << std::setw(11)
      << m.valid_rejected << "\n";
@@ -132,7 +137,7 @@ void printSummary(std::ostream& os, const LogData& data, const Evaluation& ev) {
      << "\n";
   for (const auto& run : ev.filters) row(os, run.name, run.metrics, scored);
   if (ev.live) row(os, ev.live->run.name, ev.live->run.metrics, scored);
-  os << "faults = rejected/total; gate threshold " << std::setprecision(3) << ev.gate_threshold
+  os << "faults = rejected/total (- = filter does not use the ruler); gate threshold " << std::setprecision(3) << ev.gate_threshold
      << " (innovation distance, 2-dof chi-square)\n";
   if (ev.live && ev.live->max_diff_to_replay_m >= 0)
     os << "live " << ev.live->filter << " vs offline replay: max position difference "
