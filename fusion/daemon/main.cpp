@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
       hb.tick();
       bus.handle(100);
     }
+    while (bus.handle(0) > 0) {}  // what already arrived is processed too
     daemon.shutdown();
     hb.publish("stopping");
     return common::kExitOk;

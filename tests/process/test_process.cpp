@@ -1,0 +1,300 @@
+// Process tests: the real executables over udpm on loopback (a unique multicast port per test).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <set>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "child.hpp"
+#include "lcmloc/common/transport.hpp"
+#include "lcmloc/fusion_status_t.hpp"
+#include "lcmloc/heartbeat_t.hpp"
+#include "lcmloc/odometry_t.hpp"
+#include "lcmloc/pose_t.hpp"
+
+using namespace std::chrono_literals;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::map<std::string, std::string> kExecutables{
+    {"lcmloc-sim", LCMLOC_SIM}, {"lcmloc-odometry", LCMLOC_ODOMETRY}, {"lcmloc-magruler", LCMLOC_MAGRULER},
+    {"lcmloc-fault-injector", LCMLOC_FAULT_INJECTOR}, {"lcmloc-fusion", LCMLOC_FUSION},
+    {"lcmloc-logger", LCMLOC_LOGGER}, {"lcmloc-launcher", LCMLOC_LAUNCHER}};
+
+/// A port no other test (in this run or a parallel one) uses.
+std::string uniqueUrl() {
+  static int next = 0;
+  const int port = 20000 + (::getpid() % 4000) * 8 + (next++ % 8);
+  return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0&recv_buf_size=4194304";
+}
+
+class ProcessTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           ("lcmloc_process_" + std::to_string(::getpid()) + "_" + info->test_suite_name() + "_" + info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    url_ = uniqueUrl();
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir_);
+  }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string writeFile(const std::string& name, const std::string& text) const {
+    std::ofstream(path(name)) << text;
+    return path(name);
+  }
+
+  fs::path dir_;
+  std::string url_;
+};
+
+/// Handles bus messages until pred() or the timeout; returns pred().
+bool waitFor(lcmloc::common::Bus& bus, const std::function<bool()>& pred, std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (!pred() && std::chrono::steady_clock::now() < deadline) bus.handle(50);
+  return pred();
+}
+
+struct LogEvent {
+  std::string channel;
+  std::vector<uint8_t> data;
+};
+
+std::vector<LogEvent> readLog(const std::string& file) {
+  std::vector<LogEvent> out;
+  lcm::LogFile log(file, "r");
+  if (!log.good()) return out;
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    const auto* p = static_cast<const uint8_t*>(ev->data);
+    out.push_back({ev->channel, std::vector<uint8_t>(p, p + ev->datalen)});
+  }
+  return out;
+}
+
+int64_t seqOf(const std::vector<uint8_t>& d) {
+  uint64_t v = 0;
+  for (int i = 16; i < 24; ++i) v = (v << 8) | d[i];
+  return static_cast<int64_t>(v);
+}
+
+template <typename T>
+T decode(const LogEvent& ev) {
+  T m;
+  EXPECT_GE(m.decode(ev.data.data(), 0, static_cast<int>(ev.data.size())), 0) << ev.channel;
+  return m;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+TEST_F(ProcessTest, LauncherRunsTheSystemAndTheLogHasEveryChannelWithoutGaps) {
+  const std::string log = path("run.lcmlog");
+  const std::string scenario =
+      writeFile("scenario.yaml", "scenario: {realtime_factor: 10}\nlogger: {output: " + log + "}\n");
+  Child launcher(LCMLOC_LAUNCHER, {"--system", LCMLOC_SYSTEM_YAML, "--config", scenario, "--lcm-url", url_},
+                 path("launcher.out"));
+  const auto rc = launcher.wait(90s);
+  ASSERT_TRUE(rc.has_value()) << "launcher did not finish within 90 s\n" << launcher.output();
+  ASSERT_EQ(*rc, 0) << launcher.output();
+
+  const auto events = readLog(log);
+  std::map<std::string, int64_t> count;
+  std::map<std::string, std::vector<int64_t>> seqs;  // HEARTBEAT keyed per process
+  std::vector<lcmloc::fusion_status_t> status;
+  for (const auto& ev : events) {
+    ++count[ev.channel];
+    if (ev.channel == "LCM_SELF_TEST") continue;
+    std::string key = ev.channel;
+    if (ev.channel == "HEARTBEAT") key += "[" + decode<lcmloc::heartbeat_t>(ev).process + "]";
+    if (ev.channel == "FUSION_STATUS") status.push_back(decode<lcmloc::fusion_status_t>(ev));
+    seqs[key].push_back(seqOf(ev.data));
+  }
+  for (const char* ch : {"GROUND_TRUTH", "ODOMETRY", "MAGRULER", "MAGRULER_FAULT", "FAULT_EVENTS", "POSE", "GATE",
+                         "FUSION_STATUS", "HEARTBEAT"})
+    EXPECT_GT(count[ch], 0) << ch << " missing from the log";
+  for (const auto& [key, s] : seqs) {
+    for (std::size_t i = 1; i < s.size(); ++i)
+      ASSERT_EQ(s[i], s[i - 1] + 1) << key << ": sequence gap or reorder at index " << i;
+  }
+  // Every process reported a heartbeat.
+  for (const char* p : {"lcmloc-sim", "lcmloc-odometry", "lcmloc-magruler", "lcmloc-fault-injector",
+                        "lcmloc-fusion", "lcmloc-logger"})
+    EXPECT_TRUE(seqs.count(std::string("HEARTBEAT[") + p + "]")) << p;
+
+  // The whole run, end to end: ground truth from its first sample, all 20 markers detected,
+  // both faults injected and gated out, one pose per processed measurement, one gate decision
+  // per ruler measurement, and the fusion's final status recorded (the logger stops last).
+  EXPECT_EQ(seqs["GROUND_TRUTH"].front(), 0);
+  EXPECT_GT(count["GROUND_TRUTH"], 2500);
+  EXPECT_EQ(count["MAGRULER"], 20);
+  EXPECT_EQ(count["MAGRULER_FAULT"], 2);
+  EXPECT_EQ(count["FAULT_EVENTS"], 2);
+  EXPECT_EQ(count["POSE"], count["ODOMETRY"] + count["MAGRULER"] + count["MAGRULER_FAULT"]);
+  EXPECT_EQ(count["GATE"], count["MAGRULER"] + count["MAGRULER_FAULT"]);
+  ASSERT_FALSE(status.empty());
+  EXPECT_EQ(status.front().event, "started");
+  EXPECT_EQ(status.back().event, "stopped");
+  EXPECT_EQ(status.back().sequence_gaps, 0);
+  EXPECT_EQ(status.back().messages_rejected, 0);
+  EXPECT_EQ(status.back().messages_used, count["POSE"]);
+}
+
+TEST_F(ProcessTest, DaemonSurvivesBadInputAndReportsEachOnStatus) {
+  Child daemon(LCMLOC_FUSION, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML}, path("fusion.out"));
+  lcmloc::common::Bus bus(url_);
+  bool ready = false;
+  std::vector<lcmloc::fusion_status_t> status;
+  int64_t last_pose_utime = -1;
+  bus.subscribe<lcmloc::heartbeat_t>("HEARTBEAT", [&](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
+    ready |= m.process == "lcmloc-fusion" && m.pid == daemon.pid();
+  });
+  bus.subscribe<lcmloc::fusion_status_t>(
+      "FUSION_STATUS", [&](const std::string&, const lcmloc::fusion_status_t& m, int64_t) { status.push_back(m); });
+  bus.subscribe<lcmloc::pose_t>("POSE", [&](const std::string&, const lcmloc::pose_t& m, int64_t) {
+    last_pose_utime = m.utime;
+  });
+  ASSERT_TRUE(waitFor(bus, [&] { return ready; }, 10s)) << daemon.output();
+
+  auto odo = [](int64_t seq, int64_t utime) {
+    lcmloc::odometry_t m{};
+    m.utime = utime;
+    m.seq = seq;
+    m.delta_s = 0.015;
+    m.ticks = 15;
+    m.steering = 0.0;
+    m.has_steering = true;
+    return m;
+  };
+  const int64_t t0 = 1000000, dt = 10000;
+  int64_t seq = 0;
+  for (; seq < 20; ++seq) bus.publish("ODOMETRY", odo(seq, t0 + seq * dt));
+  ASSERT_TRUE(waitFor(bus, [&] { return last_pose_utime >= t0 + 10 * dt; }, 10s)) << daemon.output();
+
+  const char garbage[] = "\x01\x02 not an odometry_t";
+  bus.publishRaw("ODOMETRY", garbage, sizeof garbage);
+  auto nan = odo(seq, t0 + seq * dt);
+  nan.delta_s = std::nan("");
+  bus.publish("ODOMETRY", nan);
+  ++seq;
+  bus.publish("ODOMETRY", odo(seq++, t0));  // older than the reorder window
+  const int64_t resume = seq;
+  for (; seq < resume + 20; ++seq) bus.publish("ODOMETRY", odo(seq, t0 + seq * dt));
+
+  auto rejected = [&](const std::string& what) {
+    for (const auto& s : status)
+      if (s.event == "rejected_input" && s.detail.find(what) != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(waitFor(bus, [&] { return last_pose_utime >= t0 + (resume + 10) * dt; }, 10s))
+      << "the daemon stopped publishing after bad input\n" << daemon.output();
+  EXPECT_TRUE(waitFor(bus, [&] { return rejected("cannot decode"); }, 5s)) << daemon.output();
+  EXPECT_TRUE(rejected("delta_s is NaN")) << daemon.output();
+  EXPECT_TRUE(rejected("too old")) << daemon.output();
+  // Everything older than the 50 ms reorder window is processed; the rest waits for the flush.
+  const int64_t last_input = t0 + (seq - 1) * dt;
+  ASSERT_TRUE(waitFor(bus, [&] { return last_pose_utime >= last_input - 60000; }, 10s)) << daemon.output();
+  EXPECT_LT(last_pose_utime, last_input);
+
+  daemon.signal(SIGTERM);
+  const auto rc = daemon.wait(10s);
+  ASSERT_TRUE(rc.has_value()) << "the daemon did not stop on SIGTERM";
+  EXPECT_EQ(*rc, 0) << daemon.output();
+  ASSERT_TRUE(waitFor(bus, [&] { return !status.empty() && status.back().event == "stopped"; }, 5s));
+  EXPECT_EQ(status.back().messages_rejected, 3);
+  EXPECT_EQ(status.back().sequence_gaps, 0);
+  EXPECT_EQ(last_pose_utime, last_input);  // flushed on shutdown: the last input processed
+  const std::string out = daemon.output();
+  EXPECT_NE(out.find("rejected input: ODOMETRY: cannot decode"), std::string::npos) << out;
+  EXPECT_NE(out.find("rejected input: ODOMETRY seq 20: delta_s is NaN"), std::string::npos) << out;
+}
+
+TEST_F(ProcessTest, LoggerFlushesOnSigtermAndReportsGaps) {
+  const std::string log = path("gaps.lcmlog");
+  Child logger(LCMLOC_LOGGER, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML, "--output", log, "--channel",
+                               "TEST_.*"},
+               path("logger.out"));
+  lcmloc::common::Bus bus(url_);
+  int64_t logger_received = -1;
+  bus.subscribe<lcmloc::heartbeat_t>("HEARTBEAT", [&](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
+    if (m.pid != logger.pid()) return;
+    for (int i = 0; i < m.num_counters; ++i)
+      if (m.counter_names[i] == "received") logger_received = m.counters[i];
+  });
+  ASSERT_TRUE(waitFor(bus, [&] { return logger_received >= 0; }, 10s)) << logger.output();
+  for (int64_t seq : {0, 1, 2, 5}) {
+    lcmloc::odometry_t m{};
+    m.utime = 1000 + seq;
+    m.seq = seq;
+    bus.publish("TEST_ODOMETRY", m);
+  }
+  bus.publish("NOT_RECORDED", lcmloc::odometry_t{});
+  ASSERT_TRUE(waitFor(bus, [&] { return logger_received >= 4; }, 10s)) << logger.output();
+
+  logger.signal(SIGTERM);
+  const auto rc = logger.wait(10s);
+  ASSERT_TRUE(rc.has_value()) << "the logger did not stop on SIGTERM";
+  EXPECT_EQ(*rc, 0) << logger.output();
+  const auto events = readLog(log);
+  ASSERT_EQ(events.size(), 4u) << logger.output();
+  std::vector<int64_t> seqs;
+  for (const auto& e : events) {
+    EXPECT_EQ(e.channel, "TEST_ODOMETRY");
+    seqs.push_back(seqOf(e.data));
+  }
+  EXPECT_EQ(seqs, (std::vector<int64_t>{0, 1, 2, 5}));
+  const std::string out = logger.output();
+  EXPECT_NE(out.find("TEST_ODOMETRY: 2 message(s) missing before seq 5"), std::string::npos) << out;
+  EXPECT_NE(out.find("recorded 4 of 4 messages on 1 channels"), std::string::npos) << out;
+  EXPECT_NE(out.find("2 sequence gaps"), std::string::npos) << out;
+}
+
+TEST_F(ProcessTest, BadConfigExitsNonZeroNamingFileAndKey) {
+  const std::string bad = writeFile("bad.yaml", "fusion:\n  filter:\n    bogus_key: 1\n");
+  const std::string missing = path("does_not_exist.yaml");
+  for (const auto& [name, exe] : kExecutables) {
+    {
+      Child c(exe, {"--config", bad, "--lcm-url", url_}, path(name + ".bad.out"));
+      const auto rc = c.wait(10s);
+      ASSERT_TRUE(rc.has_value()) << name;
+      EXPECT_EQ(*rc, 2) << name << "\n" << c.output();
+      EXPECT_NE(c.output().find(bad + ": fusion.filter.bogus_key: unknown key"), std::string::npos)
+          << name << "\n" << c.output();
+    }
+    {
+      Child c(exe, {"--config", missing, "--lcm-url", url_}, path(name + ".missing.out"));
+      const auto rc = c.wait(10s);
+      ASSERT_TRUE(rc.has_value()) << name;
+      EXPECT_EQ(*rc, 2) << name << "\n" << c.output();
+      EXPECT_NE(c.output().find(missing + ": cannot open config file"), std::string::npos) << name << "\n"
+                                                                                          << c.output();
+    }
+  }
+  Child filter(LCMLOC_FUSION, {"--config", LCMLOC_PAPER_YAML, "--lcm-url", url_, "--filter", "kalman"},
+               path("filter.out"));
+  ASSERT_EQ(filter.wait(10s), std::optional<int>(2)) << filter.output();
+  EXPECT_NE(filter.output().find("unknown filter type 'kalman'"), std::string::npos) << filter.output();
+}
+
+TEST_F(ProcessTest, EveryExecutableHasHelp) {
+  for (const auto& [name, exe] : kExecutables) {
+    Child c(exe, {"--help"}, path(name + ".help"));
+    const auto rc = c.wait(10s);
+    ASSERT_TRUE(rc.has_value()) << name;
+    EXPECT_EQ(*rc, 0) << name;
+    const std::string out = c.output();
+    EXPECT_NE(out.find(name), std::string::npos) << out;
+    for (const char* opt : {"--config", "--lcm-url", "--log-level"})
+      EXPECT_NE(out.find(opt), std::string::npos) << name << " lacks " << opt;
+  }
+}
