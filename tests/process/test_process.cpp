@@ -298,3 +298,20 @@ TEST_F(ProcessTest, EveryExecutableHasHelp) {
       EXPECT_NE(out.find(opt), std::string::npos) << name << " lacks " << opt;
   }
 }
+
+TEST_F(ProcessTest, LauncherFailsWhenAChildFailsAndStopsTheOthers) {
+  const std::string log = path("fail.lcmlog");
+  const std::string scenario = writeFile("scenario.yaml", "logger: {output: " + log + "}\n");
+  const std::string system = writeFile("system.yaml", std::string("scenario: scenario.yaml\nprocesses:\n") +
+                                                          "  - {name: logger, executable: " + LCMLOC_LOGGER + "}\n" +
+                                                          "  - {name: broken, executable: /bin/false}\n");
+  Child launcher(LCMLOC_LAUNCHER, {"--system", system, "--lcm-url", url_}, path("launcher.out"));
+  const auto rc = launcher.wait(30s);
+  ASSERT_TRUE(rc.has_value()) << launcher.output();
+  EXPECT_EQ(*rc, 1) << launcher.output();
+  const std::string out = launcher.output();
+  EXPECT_NE(out.find("broken ended during start-up (exit 1)"), std::string::npos) << out;
+  EXPECT_NE(out.find("exit 0  ok"), std::string::npos) << out;     // the logger, stopped cleanly
+  EXPECT_NE(out.find("exit 1  FAILED"), std::string::npos) << out;  // the broken child
+  EXPECT_TRUE(fs::exists(log));
+}
