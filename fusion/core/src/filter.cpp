@@ -196,6 +196,9 @@ class RulerUkf final : public Filter {
     initialState(cfg_, names_, x, P);
     ukf_.reset(x, P);
     R_ = cfg_.pv_diag.asDiagonal();
+    const double f = cfg_.ruler_offset + cfg_.reach_forward;
+    const double l = cfg_.ruler_half_width + cfg_.reach_lateral;
+    reach_radius2_ = (f * f + l * l) * (1.0 + 1e-9);
   }
 
   std::string name() const override { return name_; }
@@ -259,7 +262,7 @@ class RulerUkf final : public Filter {
     Innovation<N, 2> best, cand;
     int best_id = -1;
     for (const Marker& m : map_) {
-      if (!reachable(markerInBody(pose, m.x, m.y))) continue;
+      if (!reachable(pose, m)) continue;
       auto h = [&m](const typename U::Vector& s) {
         return predictRangeBearing(s.template head<3>(), m.x, m.y);
       };
@@ -291,7 +294,11 @@ class RulerUkf final : public Filter {
   }
 
  private:
-  bool reachable(const Vec2& body) const {
+  /// Association candidates: markers the ruler can physically reach from the predicted pose.
+  bool reachable(const Pose& pose, const Marker& m) const {
+    const double dx = m.x - pose.x(), dy = m.y - pose.y();
+    if (dx * dx + dy * dy > reach_radius2_) return false;  // cheap pre-test, no trigonometry
+    const Vec2 body = markerInBody(pose, m.x, m.y);
     return std::abs(body.x() - cfg_.ruler_offset) <= cfg_.reach_forward &&
            std::abs(body.y()) <= cfg_.ruler_half_width + cfg_.reach_lateral;
   }
@@ -311,6 +318,7 @@ class RulerUkf final : public Filter {
   double gate_;
   U ukf_;
   Mat2 R_;
+  double reach_radius2_ = 0.0;  ///< squared radius around M enclosing the reachable window
   std::vector<std::string> names_;
   int64_t utime_ = 0;
   FilterStatus status_ = FilterStatus::Ok;
