@@ -13,6 +13,7 @@
 
 #include "child.hpp"
 #include "lcmloc/common/transport.hpp"
+#include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/odometry_t.hpp"
@@ -161,8 +162,10 @@ TEST_F(ProcessTest, DaemonSurvivesBadInputAndReportsEachOnStatus) {
   });
   bus.subscribe<lcmloc::fusion_status_t>(
       "FUSION_STATUS", [&](const std::string&, const lcmloc::fusion_status_t& m, int64_t) { status.push_back(m); });
+  std::string last_pose_filter;
   bus.subscribe<lcmloc::pose_t>("POSE", [&](const std::string&, const lcmloc::pose_t& m, int64_t) {
     last_pose_utime = m.utime;
+    last_pose_filter = m.filter;
   });
   ASSERT_TRUE(waitFor(bus, [&] { return ready; }, 10s)) << daemon.output();
 
@@ -189,6 +192,18 @@ TEST_F(ProcessTest, DaemonSurvivesBadInputAndReportsEachOnStatus) {
   ++seq;
   bus.publish("ODOMETRY", odo(seq++, t0));  // older than the reorder window
   const int64_t resume = seq;
+  // Control: a bad parameter is refused with the key named; a valid switch is acknowledged.
+  lcmloc::fusion_control_t ctl{};
+  ctl.utime = t0 + resume * dt;
+  ctl.seq = 0;
+  ctl.command = lcmloc::fusion_control_t::CMD_SWITCH_FILTER;
+  ctl.filter = "ukf";
+  ctl.parameters = "{bogus: 1}";
+  bus.publish("FUSION_CONTROL", ctl);
+  ctl.seq = 1;
+  ctl.filter = "dead_reckoning";
+  ctl.parameters = "";
+  bus.publish("FUSION_CONTROL", ctl);
   for (; seq < resume + 20; ++seq) bus.publish("ODOMETRY", odo(seq, t0 + seq * dt));
 
   auto rejected = [&](const std::string& what) {
@@ -201,6 +216,14 @@ TEST_F(ProcessTest, DaemonSurvivesBadInputAndReportsEachOnStatus) {
   EXPECT_TRUE(waitFor(bus, [&] { return rejected("cannot decode"); }, 5s)) << daemon.output();
   EXPECT_TRUE(rejected("delta_s is NaN")) << daemon.output();
   EXPECT_TRUE(rejected("too old")) << daemon.output();
+  auto event = [&](const std::string& ev, const std::string& what) {
+    for (const auto& st : status)
+      if (st.event == ev && st.detail.find(what) != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(event("refused", "FUSION_CONTROL: parameters.bogus: unknown key")) << daemon.output();
+  EXPECT_TRUE(event("ack", "dead_reckoning")) << daemon.output();
+  EXPECT_EQ(last_pose_filter, "dead_reckoning");
   // Everything older than the 50 ms reorder window is processed; the rest waits for the flush.
   const int64_t last_input = t0 + (seq - 1) * dt;
   ASSERT_TRUE(waitFor(bus, [&] { return last_pose_utime >= last_input - 60000; }, 10s)) << daemon.output();

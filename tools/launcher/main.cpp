@@ -201,6 +201,7 @@ int main(int argc, char** argv) {
   common::CommonOptions opts;
   opts.config = "-";  // placeholder: the system file names the scenario unless --config is given
   common::addCommonOptions(app, opts);
+  app.get_option("--config")->description("scenario YAML for every child (default: the system file's `scenario`)");
   std::string system = std::string(LCMLOC_CONFIG_DIR) + "/system.yaml";
   app.add_option("--system", system, "system file: processes to run")->capture_default_str();
 
