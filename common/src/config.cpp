@@ -106,6 +106,8 @@ void parseMagRuler(KeyReader& root, models::MagRulerConfig& m) {
   r.get("earth_field_z", m.earth_field_z, -10.0, 10.0);
   r.get("noise_std", m.noise_std, 0.0, 10.0);
   r.get("disturbance_std", m.disturbance_std, 0.0, 10.0);
+  r.get("disturbance_tau", m.disturbance_tau, 1e-3, 1e6);
+  r.get("gain_std", m.gain_std, 0.0, 0.5);
   r.get("detection_threshold", m.detection_threshold, 0.0, 100.0);
   r.get("publish_rate_hz", m.publish_rate_hz, 0.0, 10000.0);
   r.finish();
