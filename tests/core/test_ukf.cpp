@@ -151,3 +151,25 @@ TEST(UkfUpdate, InnovateLeavesTheFilterUntouched) {
       [](const Eigen::Vector2d& s) { return Eigen::Matrix<double, 1, 1>(s(0)); },
       Eigen::Matrix<double, 1, 1>(1.0), Eigen::Matrix<double, 1, 1>(NAN), 0u, in));
 }
+
+TEST(SmallLinearAlgebra, CholeskyAndSpdInverse) {
+  Eigen::Matrix3d A;
+  A << 4, 2, 0, 2, 2, 0, 0, 0, 1;
+  Eigen::Matrix3d L;
+  ASSERT_TRUE(choleskyLower<3>(A, L));
+  Eigen::Matrix3d expected;
+  expected << 2, 0, 0, 1, 1, 0, 0, 0, 1;
+  EXPECT_TRUE(L.isApprox(expected, 1e-15));
+  Eigen::Matrix3d A_inv;
+  ASSERT_TRUE(inverseSpd<3>(A, A_inv));
+  EXPECT_TRUE((A * A_inv).isApprox(Eigen::Matrix3d::Identity(), 1e-14));
+  Eigen::Matrix2d S, S_inv;
+  S << 2e-4, 5e-5, 5e-5, 4e-4;
+  ASSERT_TRUE(inverseSpd<2>(S, S_inv));
+  EXPECT_TRUE((S * S_inv).isApprox(Eigen::Matrix2d::Identity(), 1e-12));
+  S << 1, 2, 2, 1;  // indefinite
+  EXPECT_FALSE(inverseSpd<2>(S, S_inv));
+  A(2, 2) = -1;
+  EXPECT_FALSE(choleskyLower<3>(A, L));
+  EXPECT_FALSE(inverseSpd<3>(A, A_inv));
+}

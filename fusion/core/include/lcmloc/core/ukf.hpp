@@ -122,6 +122,28 @@ Eigen::Matrix<double, N, N> inverseFromCholesky(const Eigen::Matrix<double, N, N
   return Li.transpose() * Li;
 }
 
+/// Inverse of a small symmetric matrix, false unless it is positive definite. Closed form for
+/// 1x1 and 2x2 (one division), Cholesky otherwise.
+template <int M>
+bool inverseSpd(const Eigen::Matrix<double, M, M>& S, Eigen::Matrix<double, M, M>& S_inv) {
+  if constexpr (M == 1) {
+    if (!(S(0, 0) > 0.0)) return false;
+    S_inv(0, 0) = 1.0 / S(0, 0);
+    return true;
+  } else if constexpr (M == 2) {
+    const double det = S(0, 0) * S(1, 1) - S(0, 1) * S(0, 1);
+    if (!(S(0, 0) > 0.0 && det > 0.0)) return false;  // Sylvester's criterion; catches NaN
+    const double inv = 1.0 / det;
+    S_inv << S(1, 1) * inv, -S(0, 1) * inv, -S(0, 1) * inv, S(0, 0) * inv;
+    return true;
+  } else {
+    Eigen::Matrix<double, M, M> L;
+    if (!choleskyLower<M>(S, L)) return false;
+    S_inv = inverseFromCholesky<M>(L);
+    return true;
+  }
+}
+
 /// Result of a measurement prediction, before any decision.
 template <int N, int M>
 struct Innovation {
@@ -201,9 +223,8 @@ class Ukf {
     const Sigmas DX = X.colwise() - X.col(0);
     out.S = sigmaCovariance<N, M, M>(DZ, DZ, w_) + R;
     const Eigen::Matrix<double, N, M> Pxz = sigmaCovariance<N, N, M>(DX, DZ, w_);
-    Eigen::Matrix<double, M, M> Ls;
-    if (!choleskyLower<M>(out.S, Ls)) return false;
-    const Eigen::Matrix<double, M, M> S_inv = inverseFromCholesky<M>(Ls);
+    Eigen::Matrix<double, M, M> S_inv;
+    if (!inverseSpd<M>(out.S, S_inv)) return false;
     out.v = z - out.z_hat;
     wrapAngles(out.v, z_angles);
     out.K.noalias() = Pxz * S_inv;
