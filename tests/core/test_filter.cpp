@@ -164,8 +164,17 @@ TEST(Association, SmallestMahalanobisAmongReachableMarkers) {
     EXPECT_TRUE(d.accepted);
     EXPECT_EQ(d.marker_id, dm > 0 ? 1 : 2);
   }
-  auto f = makeFilter(config("ukf_gated"), map);
-  EXPECT_EQ(f->update(detection(1, 0.9)).reason, "gate");  // only the far-out marker would fit
+  // Only the far-out marker would fit. With a confident prior it is out of reach (no
+  // candidate) or gated; with P0 (3 sigma of the ruler position ~0.6 m) it is reachable.
+  FilterConfig confident = config("ukf_gated");
+  confident.p0_diag = Vec3(1e-4, 1e-4, 1e-4);
+  auto f = makeFilter(confident, map);
+  const GateDecision far = f->update(detection(1, 0.9));
+  EXPECT_FALSE(far.accepted);
+  EXPECT_EQ(far.reason, "gate");
+  EXPECT_NE(far.marker_id, 3);
+  auto g = makeFilter(config("ukf_gated"), map);
+  EXPECT_EQ(g->update(detection(1, 0.9)).marker_id, 3);
 }
 
 TEST(Filter, BadInputLeavesTheStateUntouched) {
@@ -244,16 +253,18 @@ TEST(Lockout, ConsecutiveGateRejectionsInflateOnceAndRecover) {
   EXPECT_TRUE(good.accepted);
   EXPECT_EQ(f->state().status, FilterStatus::Ok);
 
-  // Inflation happens once per lock-out: with a gate nothing passes, P is inflated only once.
+  // While nothing passes, P is inflated again every lockout_rejections rejections.
   FilterConfig tight = c;
   tight.gate.value = 1e-9;
   auto g = makeFilter(tight, straightMap(5));
   drive(*g, 2.0, t);
   const Eigen::MatrixXd P0 = g->state().P;
-  for (int i = 0; i < 2 * c.lockout_rejections; ++i)
+  for (int i = 0; i < 2 * c.lockout_rejections - 1; ++i)
     EXPECT_EQ(g->update(detection(++t, 0.1)).reason, "gate");
   EXPECT_EQ(g->state().status, FilterStatus::Lockout);
   EXPECT_TRUE(g->state().P.isApprox(P0 * c.lockout_inflation, 1e-14));
+  EXPECT_EQ(g->update(detection(++t, 0.1)).reason, "gate");
+  EXPECT_TRUE(g->state().P.isApprox(P0 * c.lockout_inflation * c.lockout_inflation, 1e-14));
 
   // The ungated filter never locks out.
   auto u = makeFilter(config("ukf"), straightMap(3));

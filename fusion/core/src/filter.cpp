@@ -198,7 +198,7 @@ class RulerUkf final : public Filter {
     R_ = cfg_.pv_diag.asDiagonal();
     const double f = cfg_.ruler_offset + cfg_.reach_forward;
     const double l = cfg_.ruler_half_width + cfg_.reach_lateral;
-    reach_radius2_ = (f * f + l * l) * (1.0 + 1e-9);
+    reach_radius_ = std::sqrt(f * f + l * l) * (1.0 + 1e-9);
   }
 
   std::string name() const override { return name_; }
@@ -261,8 +261,9 @@ class RulerUkf final : public Filter {
     const Pose pose = ukf_.x().template head<3>();
     Innovation<N, 2> best, cand;
     int best_id = -1;
+    const double margin = reachMargin();
     for (const Marker& m : map_) {
-      if (!reachable(pose, m)) continue;
+      if (!reachable(pose, m, margin)) continue;
       auto h = [&m](const typename U::Vector& s) {
         return predictRangeBearing(s.template head<3>(), m.x, m.y);
       };
@@ -275,6 +276,7 @@ class RulerUkf final : public Filter {
     utime_ = std::max(utime_, det.utime);
     if (best_id < 0) {
       d.reason = "no_candidate";
+      if (gated_) onRejection();
       return d;
     }
     d.marker_id = best_id;
@@ -282,7 +284,7 @@ class RulerUkf final : public Filter {
     d.mahalanobis = best.mahalanobis;
     if (gated_ && !(best.mahalanobis <= gate_)) {
       d.reason = "gate";
-      onGateRejection();
+      onRejection();
       return d;
     }
     ukf_.correct(best);
@@ -295,17 +297,28 @@ class RulerUkf final : public Filter {
 
  private:
   /// Association candidates: markers the ruler can physically reach from the predicted pose.
-  bool reachable(const Pose& pose, const Marker& m) const {
+  /// The window grows by the 3-sigma uncertainty of where the ruler is (position, and heading
+  /// times L1), so that after a lock-out inflation the right marker is a candidate again; while
+  /// tracking (cm-level sigma) the margin is negligible.
+  bool reachable(const Pose& pose, const Marker& m, double margin) const {
     const double dx = m.x - pose.x(), dy = m.y - pose.y();
-    if (dx * dx + dy * dy > reach_radius2_) return false;  // cheap pre-test, no trigonometry
+    const double r = reach_radius_ + margin;
+    if (dx * dx + dy * dy > r * r) return false;  // cheap pre-test, no trigonometry
     const Vec2 body = markerInBody(pose, m.x, m.y);
-    return std::abs(body.x() - cfg_.ruler_offset) <= cfg_.reach_forward &&
-           std::abs(body.y()) <= cfg_.ruler_half_width + cfg_.reach_lateral;
+    return std::abs(body.x() - cfg_.ruler_offset) <= cfg_.reach_forward + margin &&
+           std::abs(body.y()) <= cfg_.ruler_half_width + cfg_.reach_lateral + margin;
   }
-  void onGateRejection() {
+  double reachMargin() const {
+    const auto& P = ukf_.P();
+    const double var = P(0, 0) + P(1, 1) + cfg_.ruler_offset * cfg_.ruler_offset * P(2, 2);
+    return 3.0 * std::sqrt(std::max(var, 0.0));
+  }
+  /// Lock-out: every lockout_rejections consecutive rejections (gate or no candidate) the
+  /// status is Lockout and the covariance is inflated, so the estimate re-acquires the markers
+  /// in a bounded number of rejections instead of drifting away from them for ever.
+  void onRejection() {
     ++consecutive_rejections_;
-    if (cfg_.lockout_rejections > 0 && consecutive_rejections_ >= cfg_.lockout_rejections &&
-        status_ != FilterStatus::Lockout) {
+    if (cfg_.lockout_rejections > 0 && consecutive_rejections_ % cfg_.lockout_rejections == 0) {
       status_ = FilterStatus::Lockout;
       ukf_.scaleCovariance(cfg_.lockout_inflation);
     }
@@ -318,7 +331,7 @@ class RulerUkf final : public Filter {
   double gate_;
   U ukf_;
   Mat2 R_;
-  double reach_radius2_ = 0.0;  ///< squared radius around M enclosing the reachable window
+  double reach_radius_ = 0.0;  ///< radius around M enclosing the reachable window (no margin)
   std::vector<std::string> names_;
   int64_t utime_ = 0;
   FilterStatus status_ = FilterStatus::Ok;

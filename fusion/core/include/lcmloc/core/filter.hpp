@@ -41,12 +41,14 @@ struct FilterConfig {
   SigmaParams sigma{1.0, 0.0, 0.0};  ///< paper: kappa = 0 (n + kappa = 3 for n = 3)
   GateConfig gate;                 ///< ignored by "ukf" (ungated) and "dead_reckoning"
   /// Association candidates: markers whose predicted body-frame position lies within
-  /// |forward - L1| <= reach_forward and |left| <= ruler_half_width + reach_lateral.
+  /// |forward - L1| <= reach_forward + m and |left| <= ruler_half_width + reach_lateral + m,
+  /// m = 3 sigma of the ruler position (position and L1 x heading uncertainty).
   double reach_forward = 0.5;      ///< [m]
   double reach_lateral = 0.2;      ///< [m]
-  /// Lock-out: this many consecutive gate rejections declare a lock-out (status LOCKOUT);
-  /// the filter then inflates its covariance by lockout_inflation so the next valid marker
-  /// re-acquires. 0 disables detection.
+  /// Lock-out: this many consecutive rejections (gate or no candidate) declare a lock-out
+  /// (status LOCKOUT); the filter then inflates its covariance by lockout_inflation, again after
+  /// every further lockout_rejections rejections, until a marker is accepted (re-acquired).
+  /// 0 disables detection.
   int lockout_rejections = 3;
   double lockout_inflation = 25.0;
   /// "ukf_calib" only: odometer scale error k (delta_s_true = (1 + k) delta_s) and steering
