@@ -67,12 +67,13 @@ TEST(PaperScenario, GatedRejectsFaultsUngatedJumpsDeadReckoningDrifts) {
     EXPECT_EQ(f.decisions.size(), 22u);  // 20 markers + 2 faults
     EXPECT_GT(f.track.size(), 2500u);    // ~31 s at 100 Hz
   }
-  // Gated UKF: both faults rejected, every valid marker accepted, error small
-  // (measured over seeds 1-50: max error 1.1-2.5 cm, RMSE about 0.6 cm).
+  // Gated UKF: both faults rejected, every valid marker accepted, error small. The default
+  // encoders carry a 1 % scale error and a 0.5 deg steering bias (measured, seed 1: max error
+  // 4.2 cm, RMSE 2.3 cm; over 200 seeds RMSE median 2.4 cm, p95 2.5 cm).
   EXPECT_EQ(gated.faults_rejected, 2);
   EXPECT_EQ(gated.valid_rejected, 0);
-  EXPECT_LT(gated.max_error_m, 0.05);
-  EXPECT_LT(gated.rmse_m, 0.02);
+  EXPECT_LT(gated.max_error_m, 0.06);
+  EXPECT_LT(gated.rmse_m, 0.035);
   EXPECT_FALSE(gated.locked_out);
 
   // Ungated UKF: takes both faults, and its error jumps at each (measured max about 0.27 m).

@@ -44,9 +44,9 @@ struct VehicleConfig {
 struct OdometrySensorConfig {
   double rate_hz = 100.0;           ///< publication rate [Hz] (<= ground-truth rate)
   double tick_length = 0.001;       ///< drive-encoder resolution [m/tick]
-  double scale_error = 0.0;         ///< per-run odometer scale error k: measured = (1+k) true
+  double scale_error = 0.01;        ///< per-run odometer scale error k: measured = (1+k) true
   double slip_std = 0.002;          ///< slip noise per metre travelled [m/sqrt(m)]
-  double steering_bias = 0.0;       ///< steering-encoder bias [rad]
+  double steering_bias = 0.008727;  ///< steering-encoder bias [rad] (0.5 deg)
   double steering_std = 0.002;      ///< steering-encoder noise [rad]
   double steering_resolution = 0.0005; ///< steering-encoder quantization [rad]
 };
