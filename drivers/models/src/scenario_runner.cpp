@@ -81,9 +81,10 @@ void computeMetrics(FilterRun& run, const std::vector<TruthState>& truth, int64_
   for (std::size_t i = 0; i < r.decisions.size(); ++i) {
     const auto& d = r.decisions[i];
     const bool fault = r.decision_is_fault[i];
+    if (fault) ++r.faults_total;
+    if (d.reason == "dead_reckoning") continue;  // the filter ignores the ruler: no decision
     (d.accepted ? r.accepted : r.rejected)++;
     if (fault) {
-      ++r.faults_total;
       if (!d.accepted) ++r.faults_rejected;
     } else {
       if (!d.accepted) ++r.valid_rejected;
