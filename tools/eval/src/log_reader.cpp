@@ -144,7 +144,7 @@ int64_t findSync(FILE* f, int64_t from) {
 }  // namespace
 
 LogScanner::LogScanner(const std::string& path, std::vector<LogIssue>* issues) : issues_(issues) {
-  file_size_ = fileSize(path);
+  file_size_ = lcmloc::eval::fileSize(path);
   if (file_size_ < 0) throw std::runtime_error("cannot open log '" + path + "': no such file");
   log_ = std::make_unique<lcm::LogFile>(path, "r");
   if (!log_->good()) throw std::runtime_error("cannot open log '" + path + "' for reading");

@@ -64,7 +64,7 @@ struct SyntheticLogStats {
 };
 struct OvalTrack {
   double straight = 40.0;   ///< [m]
-  double radius = 10.0;     ///< [m]
+  double radius = 25.0;     ///< [m] (gentle enough for the path follower to stay on the markers)
   double marker_spacing = 2.0;  ///< [m]
 };
 /// The scenario of the synthetic log (path, markers) from base: the same oval for the replay's
