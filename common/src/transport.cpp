@@ -44,7 +44,7 @@ bool Bus::publishRaw(const std::string& channel, const void* data, std::size_t s
   return true;
 }
 
-bool Bus::publishFailed(const std::string& channel, const char* what) {
+bool MessageBus::publishFailed(const std::string& channel, const char* what) {
   ++publish_errors_;
   if (!publish_error_logged_[channel]) {
     publish_error_logged_[channel] = true;
@@ -65,18 +65,18 @@ void Bus::subscribeRaw(const std::string& channel, RawHandler handler) {
 
 int Bus::handle(int timeout_ms) { return lcm_->handleTimeout(timeout_ms); }
 
-void Bus::decodeFailed(const std::string& channel, const std::string& why) {
+void MessageBus::decodeFailed(const std::string& channel, const std::string& why) {
   if (decode_errors_[channel]++ == 0)
     spdlog::warn("{}: {}; further decode errors on this channel are counted, not logged", channel, why);
 }
 
-int64_t Bus::decodeErrors() const {
+int64_t MessageBus::decodeErrors() const {
   int64_t n = 0;
   for (const auto& kv : decode_errors_) n += kv.second;
   return n;
 }
 
-int64_t Bus::decodeErrors(const std::string& channel) const {
+int64_t MessageBus::decodeErrors(const std::string& channel) const {
   auto it = decode_errors_.find(channel);
   return it == decode_errors_.end() ? 0 : it->second;
 }

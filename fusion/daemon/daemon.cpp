@@ -27,7 +27,11 @@ std::string upper(std::string s) {
 
 }  // namespace
 
-FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::Bus& bus) : cfg_(cfg), bus_(bus) {
+FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& bus)
+    : FusionDaemon(cfg, bus, Options{}) {}
+
+FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& bus, Options opts)
+    : cfg_(cfg), bus_(bus), hold_(opts.hold) {
   core::EngineConfig ec;
   ec.filter = cfg.fusion.filter;
   ec.shadow = cfg.fusion.shadow;
@@ -70,7 +74,30 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::Bus& bus) : 
                cfg.fusion.filter.type, cfg.fusion.shadow.empty() ? "none" : fmt::format("{}", fmt::join(cfg.fusion.shadow, ", ")),
                map.size(), cfg.fusion.reorder_window, ch.odometry, fmt::format("{}", fmt::join(ch.magruler, ", ")),
                ch.control, ch.pose, ch.gate, ch.status);
-  publishStatus("started", "filter " + engine_->activeFilter(), 0);
+  if (!hold_) publishStatus("started", "filter " + engine_->activeFilter(), 0);
+}
+
+void FusionDaemon::release(const std::optional<core::FilterState>& init, const std::string& source) {
+  if (!hold_) return;
+  hold_ = false;
+  std::string detail = "filter " + engine_->activeFilter();
+  int64_t utime = 0;
+  if (init) {
+    engine_->initialize(*init);
+    init_utime_ = init->utime;
+    utime = init->utime;
+    last_utime_ = init->utime;
+    last_status_ = engine_->activeState().status;
+    detail += fmt::format(", initialized from {} at utime {} (x {:.3f}, y {:.3f}, theta {:.4f})", source,
+                          init->utime, init->x(0), init->x(1), init->x(2));
+  } else {
+    detail += ", initialized from the configuration (" + source + ")";
+  }
+  spdlog::info("started: {}", detail);
+  publishStatus("started", detail, utime);
+  auto held = std::move(held_);
+  held_.clear();
+  for (auto& in : held) push(std::move(in));
 }
 
 bool FusionDaemon::received(const std::string& ch, int64_t seq) {
@@ -99,6 +126,14 @@ void FusionDaemon::onDecodeError(const std::string& ch, const std::string& why) 
 }
 
 void FusionDaemon::push(core::EngineInput in) {
+  if (hold_) {
+    held_.push_back(std::move(in));
+    return;
+  }
+  if (init_utime_ && in.utime <= *init_utime_) {  // already in the state handed over
+    ++covered_;
+    return;
+  }
   event_seen_ = false;
   const std::string ch = in.channel;
   const int64_t seq = in.seq, utime = in.utime;
@@ -192,9 +227,10 @@ void FusionDaemon::publishStatus(const std::string& event, const std::string& de
 void FusionDaemon::shutdown() {
   engine_->flush();
   const auto c = engine_->counters();
-  const std::string detail = fmt::format(
+  std::string detail = fmt::format(
       "in {}, processed {}, rejected {} (too old {}), gaps {}, gate accepted {}, rejected {}", messages_in_,
       c.processed, rejected_, c.too_old, gaps_.gaps(), c.accepted, c.rejected);
+  if (covered_ > 0) detail += fmt::format(", covered by the initial state {}", covered_);
   publishStatus("stopped", detail, last_utime_);
   spdlog::info("stopping: {}", detail);
 }

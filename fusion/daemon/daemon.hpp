@@ -6,7 +6,9 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/process.hpp"
@@ -18,12 +20,34 @@
 
 namespace lcmloc::fusion {
 
+/// The daemon is written against common::MessageBus: lcmloc-fusion runs it over LCM, the
+/// offline replay (lcmloc-replay) over a log file, so both publish the same bytes.
 class FusionDaemon {
  public:
-  FusionDaemon(const common::SystemConfig& cfg, common::Bus& bus);
+  struct Options {
+    /// Queue every input until release() (process-level hand-over: wait for the previous
+    /// daemon's last POSE first). "started" is published by release() then.
+    bool hold = false;
+  };
+  FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& bus);
+  FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& bus, Options opts);
+  /// Ends the hold: starts every filter from init (if given; source says where it came from),
+  /// drops the queued inputs that init already covers (utime <= init.utime) and processes the
+  /// rest. Inputs arriving later that init covers are dropped too (counted, not rejected).
+  void release(const std::optional<core::FilterState>& init, const std::string& source);
+  bool holding() const { return hold_; }
   /// Processes everything still in the reorder window and publishes a final status.
   void shutdown();
   common::Heartbeat::Counters counters() const;
+  /// The active filter's latest state (for checkpoints).
+  core::FilterState activeState() const { return engine_->activeState(); }
+  std::string activeFilter() const { return engine_->activeFilter(); }
+  /// Has any input been processed since the start (or the last release)?
+  int64_t processed() const { return engine_->counters().processed; }
+  int64_t messagesIn() const { return messages_in_; }
+  int64_t rejected() const { return rejected_; }
+  int64_t gaps() const { return gaps_.gaps(); }
+  int64_t covered() const { return covered_; }
 
  private:
   void onOdometry(const std::string& ch, const lcmloc::odometry_t& m);
@@ -39,7 +63,7 @@ class FusionDaemon {
   std::string poseChannel(const std::string& filter, bool active) const;
 
   const common::SystemConfig& cfg_;
-  common::Bus& bus_;
+  common::MessageBus& bus_;
   std::unique_ptr<core::FusionEngine> engine_;
   common::SeqTracker gaps_;
   std::map<std::string, int64_t> out_seq_;  ///< per output channel
@@ -47,6 +71,10 @@ class FusionDaemon {
   int64_t messages_in_ = 0, rejected_ = 0, last_utime_ = 0, next_status_utime_ = INT64_MIN;
   core::FilterStatus last_status_ = core::FilterStatus::Uninitialized;
   bool event_seen_ = false;
+  bool hold_ = false;
+  std::vector<core::EngineInput> held_;
+  std::optional<int64_t> init_utime_;  ///< inputs at or before this were covered by the init state
+  int64_t covered_ = 0;
 };
 
 }  // namespace lcmloc::fusion

@@ -1,16 +1,67 @@
 // lcmloc-fusion: the fusion daemon (see daemon.hpp).
+#include <chrono>
+#include <optional>
+
 #include <spdlog/spdlog.h>
 
 #include "daemon.hpp"
+#include "checkpoint.hpp"
+#include "lcmloc/common/convert.hpp"
+#include "lcmloc/fusion_status_t.hpp"
+#include "lcmloc/pose_t.hpp"
 
 using namespace lcmloc;
+
+namespace {
+
+/// Process-level hand-over: listens for the running daemon's POSE until it reports "stopped" on
+/// the status channel or the timeout passes; returns its last POSE.
+std::optional<core::FilterState> lastPoseOnBus(common::Bus& bus, const common::SystemConfig& cfg,
+                                               common::Heartbeat& hb, double timeout_s, std::string* filter) {
+  std::optional<core::FilterState> last;
+  bool waiting = true, stopped = false;
+  bus.subscribe<lcmloc::pose_t>(cfg.channels.pose, [&](const std::string&, const lcmloc::pose_t& m, int64_t) {
+    if (!waiting || m.dim < 3 || static_cast<int>(m.state.size()) < 3) return;
+    last = common::toCore(m);
+    *filter = m.filter;
+  });
+  bus.subscribe<lcmloc::fusion_status_t>(
+      cfg.channels.status, [&](const std::string&, const lcmloc::fusion_status_t& m, int64_t) {
+        if (waiting && m.event == "stopped") stopped = true;
+      });
+  spdlog::info("waiting up to {:.1f} s for the running daemon's last {} (until it reports stopped on {})", timeout_s,
+               cfg.channels.pose, cfg.channels.status);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (!common::stopRequested() && !stopped && std::chrono::steady_clock::now() < deadline) {
+    hb.tick();
+    bus.handle(50);
+  }
+  while (bus.handle(0) > 0) {}
+  waiting = false;
+  if (last && !stopped)
+    spdlog::warn("the daemon that published {} did not report stopped within {:.1f} s: it may still be running",
+                 cfg.channels.pose, timeout_s);
+  return last;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-fusion: fusion daemon, ODOMETRY + MAGRULER* + FUSION_CONTROL -> POSE, GATE, FUSION_STATUS"};
   common::CommonOptions opts;
   common::addCommonOptions(app, opts);
-  std::string filter;
+  std::string filter, checkpoint;
+  double init_from_bus = 0.0, checkpoint_period = 1.0;
   app.add_option("--filter", filter, "override fusion.filter.type (dead_reckoning, ukf, ukf_gated, ukf_calib)");
+  app.add_option("--init-from-bus", init_from_bus,
+                 "hand-over from a running daemon: wait up to SECONDS for its POSE, until it reports stopped, "
+                 "and start from its last POSE (inputs are queued meanwhile); 0 = off")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--checkpoint", checkpoint,
+                 "checkpoint FILE: start from it if it exists (after --init-from-bus found nothing), write the "
+                 "active filter's state to it periodically and at exit");
+  app.add_option("--checkpoint-period", checkpoint_period, "[s, wall] between checkpoint writes")
+      ->check(CLI::PositiveNumber);
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-fusion", [&] {
     auto cfg = common::loadSystemConfig(opts.config);
@@ -19,15 +70,48 @@ int main(int argc, char** argv) {
       n["type"] = filter;
       cfg.fusion.filter = common::parseFilterConfig(n, cfg.fusion.filter, "--filter", "fusion.filter");
     }
+    std::optional<fusion::Checkpoint> saved;
+    if (!checkpoint.empty()) saved = fusion::readCheckpoint(checkpoint);  // a corrupt file is an error now
     common::Bus bus(opts.lcm_url);
-    fusion::FusionDaemon daemon(cfg, bus);
+    const bool hold = init_from_bus > 0 || !checkpoint.empty();
+    fusion::FusionDaemon daemon(cfg, bus, fusion::FusionDaemon::Options{hold});
     common::Heartbeat hb(bus, cfg.channels.heartbeat, "lcmloc-fusion", [&] { return daemon.counters(); });
+    if (hold) {
+      std::optional<core::FilterState> init;
+      std::string source, from_filter;
+      if (init_from_bus > 0) {
+        init = lastPoseOnBus(bus, cfg, hb, init_from_bus, &from_filter);
+        if (init) source = "the last " + cfg.channels.pose + " on the bus (filter " + from_filter + ")";
+      }
+      if (!init && saved) {
+        init = saved->state;
+        source = "checkpoint " + checkpoint + " (filter " + saved->filter + ")";
+      }
+      if (!init) source = init_from_bus > 0 ? "no POSE on the bus and no checkpoint" : "no checkpoint yet";
+      daemon.release(init, source);
+    }
+    auto saveCheckpoint = [&] {
+      if (checkpoint.empty() || daemon.processed() == 0) return;
+      try {
+        fusion::writeCheckpoint(checkpoint, daemon.activeState(), daemon.activeFilter());
+      } catch (const std::exception& e) {
+        spdlog::error("{}", e.what());
+      }
+    };
+    auto last_checkpoint = std::chrono::steady_clock::now();
     while (!common::stopRequested()) {
       hb.tick();
       bus.handle(100);
+      if (!checkpoint.empty() &&
+          std::chrono::steady_clock::now() - last_checkpoint >= std::chrono::duration<double>(checkpoint_period)) {
+        saveCheckpoint();
+        last_checkpoint = std::chrono::steady_clock::now();
+      }
     }
     while (bus.handle(0) > 0) {}  // what already arrived is processed too
     daemon.shutdown();
+    saveCheckpoint();
+    if (!checkpoint.empty()) spdlog::info("checkpoint written to {}", checkpoint);
     hb.publish("stopping");
     return common::kExitOk;
   });

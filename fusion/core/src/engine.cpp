@@ -191,6 +191,11 @@ void FusionEngine::flush() {
   impl_->buffer.flush([this](const OrderKey&, const EngineInput& e) { impl_->process(e); });
 }
 
+void FusionEngine::initialize(const FilterState& state) {
+  impl_->forEachFilter([&](Filter& f, bool) { f.initialize(state); });
+  impl_->last_status = impl_->active->state().status;
+}
+
 std::string FusionEngine::activeFilter() const { return impl_->active->name(); }
 FilterState FusionEngine::activeState() const { return impl_->active->state(); }
 FusionEngine::Counters FusionEngine::counters() const { return impl_->counters; }

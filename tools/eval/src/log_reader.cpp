@@ -120,12 +120,6 @@ class Decoder {
   LogData& out_;
 };
 
-/// Tracks a damaged stretch of the file from the first failed read to the next intact event.
-struct Damage {
-  bool open = false;
-  int64_t event_index = 0, start = 0;
-};
-
 /// Offset of the next sync word at or after from, or -1 when there is none.
 int64_t findSync(FILE* f, int64_t from) {
   static const unsigned char kSync[4] = {0xED, 0xA1, 0xDA, 0x01};
@@ -147,61 +141,86 @@ int64_t findSync(FILE* f, int64_t from) {
   }
 }
 
-void closeDamage(Damage& dmg, int64_t resume_at, LogData& out) {
-  if (!dmg.open) return;
-  const int64_t skipped = resume_at - dmg.start;
-  out.bytes_unreadable += skipped;
-  std::ostringstream s;
-  if (resume_at >= out.file_size)
-    s << "log ends in a damaged or truncated event: the last " << skipped << " bytes from byte "
-      << dmg.start << " could not be read (" << out.events_read << " events read before)";
-  else
-    s << "damaged event at byte " << dmg.start << ": skipped " << skipped
-      << " bytes, resumed at byte " << resume_at;
-  out.issues.push_back({dmg.event_index, dmg.start, s.str()});
-  dmg.open = false;
+}  // namespace
+
+LogScanner::LogScanner(const std::string& path, std::vector<LogIssue>* issues) : issues_(issues) {
+  file_size_ = lcmloc::eval::fileSize(path);
+  if (file_size_ < 0) throw std::runtime_error("cannot open log '" + path + "': no such file");
+  log_ = std::make_unique<lcm::LogFile>(path, "r");
+  if (!log_->good()) throw std::runtime_error("cannot open log '" + path + "' for reading");
+  f_ = log_->getFilePtr();
 }
 
-}  // namespace
+LogScanner::~LogScanner() = default;
+
+void LogScanner::closeDamage(int64_t resume_at) {
+  if (!dmg_open_) return;
+  const int64_t skipped = resume_at - dmg_start_;
+  bytes_unreadable_ += skipped;
+  std::ostringstream s;
+  if (resume_at >= file_size_)
+    s << "log ends in a damaged or truncated event: the last " << skipped << " bytes from byte "
+      << dmg_start_ << " could not be read (" << events_read_ << " events read before)";
+  else
+    s << "damaged event at byte " << dmg_start_ << ": skipped " << skipped
+      << " bytes, resumed at byte " << resume_at;
+  if (issues_) issues_->push_back({dmg_event_index_, dmg_start_, s.str()});
+  dmg_open_ = false;
+}
+
+const lcm::LogEvent* LogScanner::next() {
+  while (true) {
+    const int64_t start = ftello(f_);
+    const lcm::LogEvent* ev = log_->readNextEvent();
+    if (!ev) {
+      if (start >= file_size_ && !dmg_open_) return nullptr;  // clean end of file
+      if (!dmg_open_) {
+        dmg_open_ = true;
+        dmg_event_index_ = events_read_;
+        dmg_start_ = std::max(start, expected_);
+      }
+      // Resynchronise on the next sync word after the failed event, if there is one.
+      const int64_t next = findSync(f_, start + 1);
+      if (next < 0) {
+        closeDamage(file_size_);
+        expected_ = file_size_;
+        return nullptr;
+      }
+      fseeko(f_, next, SEEK_SET);
+      continue;
+    }
+    const int64_t end = ftello(f_);
+    const int64_t event_start =
+        end - kEventHeaderBytes - static_cast<int64_t>(ev->channel.size()) - ev->datalen;
+    if (event_start > expected_ && !dmg_open_) {
+      dmg_open_ = true;
+      dmg_event_index_ = events_read_;
+      dmg_start_ = expected_;
+    }
+    closeDamage(event_start);
+    expected_ = end;
+    event_offset_ = event_start;
+    ++events_read_;
+    return ev;
+  }
+}
 
 LogData readLog(const std::string& path, const common::ChannelConfig& channels,
                 const std::atomic<bool>* stop) {
   LogData out;
   out.path = path;
-  out.file_size = fileSize(path);
-  if (out.file_size < 0) throw std::runtime_error("cannot open log '" + path + "': no such file");
-  lcm::LogFile log(path, "r");
-  if (!log.good()) throw std::runtime_error("cannot open log '" + path + "' for reading");
-  FILE* f = log.getFilePtr();
+  LogScanner scanner(path, &out.issues);
+  out.file_size = scanner.fileSize();
   Decoder decoder(channels, out);
-  Damage dmg;
-  int64_t expected = 0;  // where the next event should start if the file is intact
-
   while (!(stop && stop->load())) {
-    const int64_t start = ftello(f);
-    const lcm::LogEvent* ev = log.readNextEvent();
-    if (!ev) {
-      if (start >= out.file_size && !dmg.open) break;  // clean end of file
-      if (!dmg.open) dmg = {true, out.events_read, std::max(start, expected)};
-      // Resynchronise on the next sync word after the failed event, if there is one.
-      const int64_t next = findSync(f, start + 1);
-      if (next < 0) {
-        closeDamage(dmg, out.file_size, out);
-        break;
-      }
-      fseeko(f, next, SEEK_SET);
-      continue;
-    }
-    const int64_t end = ftello(f);
-    const int64_t event_start =
-        end - kEventHeaderBytes - static_cast<int64_t>(ev->channel.size()) - ev->datalen;
-    if (event_start > expected && !dmg.open) dmg = {true, out.events_read, expected};
-    closeDamage(dmg, event_start, out);
-    expected = end;
-    ++out.events_read;
+    const lcm::LogEvent* ev = scanner.next();
+    if (!ev) break;
+    out.events_read = scanner.eventsRead();
     ++out.channel_counts[ev->channel];
-    decoder.handle(*ev, event_start);
+    decoder.handle(*ev, scanner.eventOffset());
   }
+  out.events_read = scanner.eventsRead();
+  out.bytes_unreadable = scanner.bytesUnreadable();
   if (stop && stop->load()) out.interrupted = true;
   out.damaged = out.bytes_unreadable > 0;
   std::stable_sort(out.truth.begin(), out.truth.end(),

@@ -25,19 +25,17 @@ class TransportError : public std::runtime_error {
 /// Default URL: $LCM_DEFAULT_URL, else loopback-friendly udpm with a 4 MB receive buffer.
 std::string defaultLcmUrl();
 
-class Bus {
+/// Typed publish/subscribe over any raw message transport: LCM (Bus) live, a log file for the
+/// offline replay (lcmloc::replay::LogBus). Code written against MessageBus (the fusion daemon)
+/// therefore publishes byte-identical messages whichever transport carries them.
+class MessageBus {
  public:
   /// Raw handler: (channel, payload, size, recv_utime).
   using RawHandler = std::function<void(const std::string&, const uint8_t*, std::size_t, int64_t)>;
   /// Called for each undecodable message: (channel, reason).
   using ErrorHandler = std::function<void(const std::string&, const std::string&)>;
 
-  explicit Bus(const std::string& url);
-  ~Bus();
-  Bus(const Bus&) = delete;
-  Bus& operator=(const Bus&) = delete;
-
-  const std::string& url() const { return url_; }
+  virtual ~MessageBus() = default;
 
   /// Encodes and publishes; returns false (and counts/logs once) on failure.
   template <typename T>
@@ -46,7 +44,7 @@ class Bus {
     if (msg.encode(buf.data(), 0, static_cast<int>(buf.size())) < 0) return publishFailed(channel, "encode");
     return publishRaw(channel, buf.data(), buf.size());
   }
-  bool publishRaw(const std::string& channel, const void* data, std::size_t size);
+  virtual bool publishRaw(const std::string& channel, const void* data, std::size_t size) = 0;
 
   /// Typed subscription; channel is an LCM regex.
   template <typename T>
@@ -75,29 +73,47 @@ class Bus {
           if (on_error) on_error(ch, why);
         });
   }
-  void subscribeRaw(const std::string& channel, RawHandler handler);
-
-  /// Waits up to timeout_ms for messages and dispatches them. >0 handled, 0 timeout, <0 error
-  /// (e.g. interrupted by a signal).
-  int handle(int timeout_ms);
+  virtual void subscribeRaw(const std::string& channel, RawHandler handler) = 0;
 
   int64_t decodeErrors() const;
   int64_t decodeErrors(const std::string& channel) const;
   int64_t publishErrors() const { return publish_errors_; }
 
+ protected:
+  bool publishFailed(const std::string& channel, const char* what);
+  void decodeFailed(const std::string& channel, const std::string& why);
+
+ private:
+  std::map<std::string, int64_t> decode_errors_;
+  std::map<std::string, bool> publish_error_logged_;
+  int64_t publish_errors_ = 0;
+};
+
+/// The LCM transport.
+class Bus : public MessageBus {
+ public:
+  explicit Bus(const std::string& url);
+  ~Bus() override;
+  Bus(const Bus&) = delete;
+  Bus& operator=(const Bus&) = delete;
+
+  const std::string& url() const { return url_; }
+
+  bool publishRaw(const std::string& channel, const void* data, std::size_t size) override;
+  void subscribeRaw(const std::string& channel, RawHandler handler) override;
+
+  /// Waits up to timeout_ms for messages and dispatches them. >0 handled, 0 timeout, <0 error
+  /// (e.g. interrupted by a signal).
+  int handle(int timeout_ms);
+
   lcm::LCM& lcm() { return *lcm_; }
 
  private:
   struct Sub;
-  bool publishFailed(const std::string& channel, const char* what);
-  void decodeFailed(const std::string& channel, const std::string& why);
 
   std::string url_;
   std::unique_ptr<lcm::LCM> lcm_;
   std::vector<std::unique_ptr<Sub>> subs_;
-  std::map<std::string, int64_t> decode_errors_;
-  std::map<std::string, bool> publish_error_logged_;
-  int64_t publish_errors_ = 0;
 };
 
 /// Wall clock in microseconds since the epoch (heartbeats, log timestamps; never fusion logic).

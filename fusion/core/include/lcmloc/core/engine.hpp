@@ -59,6 +59,9 @@ class FusionEngine {
   bool push(EngineInput in);
   /// Processes everything still queued (end of log / shutdown).
   void flush();
+  /// Starts every filter (active and shadows) from state, mapped where the states differ
+  /// (process-level hand-over: the last POSE of a previous daemon, or a checkpoint).
+  void initialize(const FilterState& state);
   std::string activeFilter() const;
   FilterState activeState() const;
   struct Counters { int64_t processed = 0, too_old = 0, accepted = 0, rejected = 0; };

@@ -5,12 +5,19 @@
 // byte offset.
 #include <atomic>
 #include <cstdint>
+#include <cstdio>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/core/engine.hpp"
+
+namespace lcm {
+struct LogEvent;
+class LogFile;
+}  // namespace lcm
 
 namespace lcmloc::eval {
 
@@ -68,6 +75,36 @@ struct LogData {
 
   /// Something to evaluate: at least one sensor input.
   bool usable() const { return !inputs.empty(); }
+};
+
+/// Streams the intact events of a log file one at a time (lcm::LogFile, no network). Damage (a
+/// truncated tail, a corrupt event) is skipped by resynchronising on the next sync word, and each
+/// damaged stretch is appended to issues with the index of the event it precedes and its byte
+/// offset. readLog and the offline replay (lcmloc-replay) both read through it.
+class LogScanner {
+ public:
+  /// Throws std::runtime_error when the file cannot be opened. issues may be null.
+  LogScanner(const std::string& path, std::vector<LogIssue>* issues);
+  ~LogScanner();
+  LogScanner(const LogScanner&) = delete;
+  LogScanner& operator=(const LogScanner&) = delete;
+  /// The next intact event (valid until the next call), or nullptr at the end of the file.
+  const lcm::LogEvent* next();
+  int64_t eventOffset() const { return event_offset_; }   ///< byte offset of the last event returned
+  int64_t position() const { return expected_; }          ///< bytes consumed so far
+  int64_t fileSize() const { return file_size_; }
+  int64_t eventsRead() const { return events_read_; }     ///< intact events returned
+  int64_t bytesUnreadable() const { return bytes_unreadable_; }
+  bool damaged() const { return bytes_unreadable_ > 0; }
+
+ private:
+  void closeDamage(int64_t resume_at);
+  std::unique_ptr<lcm::LogFile> log_;
+  FILE* f_ = nullptr;
+  std::vector<LogIssue>* issues_;
+  int64_t file_size_ = 0, events_read_ = 0, bytes_unreadable_ = 0, expected_ = 0, event_offset_ = 0;
+  bool dmg_open_ = false;
+  int64_t dmg_event_index_ = 0, dmg_start_ = 0;
 };
 
 /// Reads the log at path. Throws std::runtime_error when the file cannot be opened.

@@ -1,0 +1,51 @@
+#include "checkpoint.hpp"
+
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
+#include <vector>
+
+#include "lcmloc/common/convert.hpp"
+#include "lcmloc/pose_t.hpp"
+
+namespace lcmloc::fusion {
+
+void writeCheckpoint(const std::string& path, const core::FilterState& state, const std::string& filter) {
+  const lcmloc::pose_t m = common::toLcm(state, filter, 0);
+  std::vector<uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
+  if (m.encode(buf.data(), 0, static_cast<int>(buf.size())) < 0)
+    throw std::runtime_error("checkpoint: cannot encode the state");
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(buf.data()), static_cast<std::streamsize>(buf.size()));
+    out.flush();
+    if (!out) throw std::runtime_error("checkpoint: cannot write '" + tmp + "'");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0)
+    throw std::runtime_error("checkpoint: cannot rename '" + tmp + "' to '" + path + "'");
+}
+
+std::optional<Checkpoint> readCheckpoint(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  const std::vector<char> buf((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  lcmloc::pose_t m;
+  bool ok = false;
+  try {
+    ok = m.decode(buf.data(), 0, static_cast<int>(buf.size())) == static_cast<int>(buf.size());
+  } catch (const std::exception&) {
+    ok = false;
+  }
+  if (!ok || m.dim < 3 || static_cast<int>(m.state.size()) != m.dim)
+    throw std::runtime_error("checkpoint '" + path + "' is not a valid checkpoint (an encoded pose_t)");
+  Checkpoint c;
+  c.state = common::toCore(m);
+  c.filter = m.filter;
+  if (!c.state.x.allFinite() || !c.state.P.allFinite())
+    throw std::runtime_error("checkpoint '" + path + "' holds a non-finite state");
+  return c;
+}
+
+}  // namespace lcmloc::fusion

@@ -1,0 +1,349 @@
+// Replay and hot swap over real processes (udpm on loopback, a unique port per test):
+// live == offline replay byte for byte (with control commands sent by lcmloc-ctl during the run
+// and a shadow filter), lcm-logplayer into a daemon == offline replay and drops reported,
+// process-level hand-over from the bus and from a checkpoint.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "child.hpp"
+#include "lcmloc/common/config.hpp"
+#include "lcmloc/common/transport.hpp"
+#include "lcmloc/fusion_status_t.hpp"
+#include "lcmloc/heartbeat_t.hpp"
+#include "lcmloc/odometry_t.hpp"
+#include "lcmloc/pose_t.hpp"
+#include "lcmloc/replay/replay.hpp"
+
+using namespace std::chrono_literals;
+namespace fs = std::filesystem;
+using lcmloc::common::Bus;
+
+namespace {
+
+std::string uniqueUrl() {
+  static int next = 0;
+  const int port = 36000 + (::getpid() % 3000) * 8 + (next++ % 8);
+  return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0&recv_buf_size=4194304";
+}
+
+struct Event {
+  int64_t timestamp = 0;
+  std::string channel;
+  std::vector<uint8_t> data;
+};
+
+std::vector<Event> readEvents(const std::string& path) {
+  std::vector<Event> out;
+  lcm::LogFile log(path, "r");
+  if (!log.good()) return out;
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    const auto* p = static_cast<const uint8_t*>(ev->data);
+    out.push_back({ev->timestamp, ev->channel, std::vector<uint8_t>(p, p + ev->datalen)});
+  }
+  return out;
+}
+
+/// Payloads per channel, in order.
+std::map<std::string, std::vector<std::vector<uint8_t>>> byChannel(const std::vector<Event>& events) {
+  std::map<std::string, std::vector<std::vector<uint8_t>>> out;
+  for (const auto& e : events) out[e.channel].push_back(e.data);
+  return out;
+}
+
+template <typename T>
+T decode(const std::vector<uint8_t>& d) {
+  T m;
+  EXPECT_GE(m.decode(d.data(), 0, static_cast<int>(d.size())), 0);
+  return m;
+}
+
+bool waitFor(Bus& bus, const std::function<bool()>& pred, std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (!pred() && std::chrono::steady_clock::now() < deadline) bus.handle(20);
+  return pred();
+}
+
+/// First index where two payload sequences differ (or the shorter length), -1 if identical.
+long firstDifference(const std::vector<std::vector<uint8_t>>& a, const std::vector<std::vector<uint8_t>>& b) {
+  for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i)
+    if (a[i] != b[i]) return static_cast<long>(i);
+  return a.size() == b.size() ? -1 : static_cast<long>(std::min(a.size(), b.size()));
+}
+
+class ReplayProcessTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() / ("lcmloc_rprocess_" + std::to_string(::getpid()) + "_" + info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    url_ = uniqueUrl();
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir_);
+  }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string writeFile(const std::string& name, const std::string& text) const {
+    std::ofstream(path(name)) << text;
+    return path(name);
+  }
+  /// Runs lcmloc-replay and returns its output log's events.
+  std::vector<Event> replay(const std::string& log, const std::string& config, const std::string& name) {
+    Child r(LCMLOC_REPLAY, {log, "-o", path(name), "--config", config}, path(name + ".out"));
+    const auto rc = r.wait(60s);
+    EXPECT_TRUE(rc.has_value());
+    EXPECT_EQ(rc.value_or(-1), 0) << r.output();
+    return readEvents(path(name));
+  }
+
+  fs::path dir_;
+  std::string url_;
+};
+
+/// A test-side daemon watcher: heartbeats, POSE/GATE payloads and FUSION_STATUS messages.
+struct Watch {
+  explicit Watch(Bus& bus) {
+    bus.subscribe<lcmloc::heartbeat_t>("HEARTBEAT", [this](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
+      if (m.process == "lcmloc-fusion") alive[m.pid] = m.state;
+    });
+    bus.subscribe<lcmloc::fusion_status_t>(
+        "FUSION_STATUS", [this](const std::string&, const lcmloc::fusion_status_t& m, int64_t) { status.push_back(m); });
+    bus.subscribeRaw("(POSE|GATE)", [this](const std::string& ch, const uint8_t* d, std::size_t n, int64_t) {
+      payloads[ch].emplace_back(d, d + n);
+      if (ch == "POSE") poses.push_back(decode<lcmloc::pose_t>(payloads[ch].back()));
+    });
+  }
+  bool has(const std::string& event, const std::string& what) const {
+    for (const auto& s : status)
+      if (s.event == event && s.detail.find(what) != std::string::npos) return true;
+    return false;
+  }
+  std::map<int, std::string> alive;
+  std::vector<lcmloc::fusion_status_t> status;
+  std::map<std::string, std::vector<std::vector<uint8_t>>> payloads;
+  std::vector<lcmloc::pose_t> poses;
+};
+
+lcmloc::odometry_t odo(int64_t seq, int64_t utime) {
+  lcmloc::odometry_t m{};
+  m.utime = utime;
+  m.seq = seq;
+  m.delta_s = 0.015;
+  m.ticks = 15;
+  m.steering = 0.01;
+  m.has_steering = true;
+  m.delta_theta = 0.015 * std::tan(0.01) / 2.5;
+  return m;
+}
+
+}  // namespace
+
+// The live system (launcher) with a shadow filter; lcmloc-ctl refuses an unknown filter and bad
+// parameters and switches the filter during the run. Offline replay of the recorded log with the
+// same config reproduces every POSE, POSE_DEAD_RECKONING, GATE and FUSION_STATUS byte for byte,
+// including the switch at the same point.
+TEST_F(ReplayProcessTest, LiveRunEqualsOfflineReplayByteForByteWithSwitchAndShadow) {
+  const std::string log = path("run.lcmlog");
+  const std::string scenario = writeFile(
+      "scenario.yaml", "scenario: {realtime_factor: 4}\nlogger: {output: " + log +
+                           "}\nfusion: {shadow: [dead_reckoning]}\n");
+  Bus bus(url_);
+  Watch w(bus);
+  Child launcher(LCMLOC_LAUNCHER, {"--system", LCMLOC_SYSTEM_YAML, "--config", scenario, "--lcm-url", url_},
+                 path("launcher.out"));
+  ASSERT_TRUE(waitFor(bus, [&] { return w.poses.size() > 300; }, 30s)) << launcher.output();
+
+  auto ctl = [&](std::vector<std::string> args, const std::string& name) {
+    std::vector<std::string> all{"--lcm-url", url_, "--config", scenario, "--timeout", "5"};
+    all.insert(all.end(), args.begin(), args.end());
+    auto c = std::make_unique<Child>(LCMLOC_CTL, all, path(name));
+    // Keep our own subscriptions drained while the ctl runs (its answer is on the bus too).
+    const auto deadline = std::chrono::steady_clock::now() + 15s;
+    std::optional<int> rc;
+    while (!(rc = c->wait(0ms)) && std::chrono::steady_clock::now() < deadline) bus.handle(20);
+    return std::make_pair(rc.value_or(-1), c->output());
+  };
+  const auto [rc_unknown, out_unknown] = ctl({"switch", "no_such_filter"}, "ctl1.out");
+  EXPECT_EQ(rc_unknown, 3) << out_unknown;
+  EXPECT_NE(out_unknown.find("refused: switch to 'no_such_filter'"), std::string::npos) << out_unknown;
+  EXPECT_NE(out_unknown.find("unknown filter type"), std::string::npos) << out_unknown;
+  const auto [rc_bad, out_bad] = ctl({"switch", "ukf", "--param", "pv_diag=[-1, 1]"}, "ctl2.out");
+  EXPECT_EQ(rc_bad, 3) << out_bad;
+  EXPECT_NE(out_bad.find("refused"), std::string::npos) << out_bad;
+  EXPECT_EQ(w.poses.back().filter, "ukf_gated") << "the running filter continues after a refusal";
+  const auto [rc_ok, out_ok] = ctl({"switch", "ukf_calib", "--param", "scale_std0=0.03"}, "ctl3.out");
+  EXPECT_EQ(rc_ok, 0) << out_ok;
+  EXPECT_NE(out_ok.find("ack: switched ukf_gated -> ukf_calib"), std::string::npos) << out_ok;
+
+  const auto rc = launcher.wait(90s);
+  ASSERT_TRUE(rc.has_value()) << launcher.output();
+  ASSERT_EQ(*rc, 0) << launcher.output();
+  auto live = byChannel(readEvents(log));
+  ASSERT_FALSE(live["POSE"].empty());
+  EXPECT_EQ(decode<lcmloc::pose_t>(live["POSE"].back()).filter, "ukf_calib");
+  ASSERT_EQ(live["FUSION_CONTROL"].size(), 3u) << "the logger records the commands";
+  auto offline = byChannel(replay(log, scenario, "replay.lcmlog"));
+  for (const char* ch : {"POSE", "POSE_DEAD_RECKONING", "GATE", "FUSION_STATUS"}) {
+    ASSERT_FALSE(live[ch].empty()) << ch;
+    EXPECT_EQ(firstDifference(live[ch], offline[ch]), -1)
+        << ch << ": live " << live[ch].size() << " vs replay " << offline[ch].size() << " messages";
+  }
+  const auto last = decode<lcmloc::fusion_status_t>(live["FUSION_STATUS"].back());
+  EXPECT_EQ(last.event, "stopped");
+  EXPECT_EQ(last.sequence_gaps, 0);
+  EXPECT_EQ(last.filter, "ukf_calib");
+}
+
+// lcm-logplayer into a running daemon gives the offline replay's estimates byte for byte when
+// nothing is lost; with events removed from the log, the daemon reports the gap on FUSION_STATUS
+// (and still equals the offline replay of the same damaged input).
+TEST_F(ReplayProcessTest, LogplayerIntoDaemonEqualsOfflineReplayAndDropsAreReported) {
+  auto cfg = lcmloc::common::loadSystemConfig(LCMLOC_PAPER_YAML);
+  cfg.scenario = lcmloc::replay::ovalScenario(cfg.scenario, lcmloc::replay::OvalTrack{}, 15.0);
+  // The daemon and the replay need the oval's marker map: a config file with that path.
+  std::string segs;
+  for (const auto& s : cfg.scenario.path.segments)
+    segs += (segs.empty() ? "" : ", ") + ("{length: " + std::to_string(s.length) + ", curvature: " +
+                                          std::to_string(s.curvature) + "}");
+  const std::string config = writeFile(
+      "oval.yaml", "path: {segments: [" + segs + "]}\nmarkers: {count: " + std::to_string(cfg.scenario.markers.count) +
+                       ", spacing: 2.0, first_at: 2.0}\nfusion: {shadow: []}\n");
+  const auto loaded = lcmloc::common::loadSystemConfig(config);
+  const std::string full = path("full.lcmlog");
+  lcmloc::replay::writeSyntheticLog(loaded.scenario, 15.0, full, loaded.channels);
+  // The same log with ODOMETRY seq 500..504 removed.
+  const std::string gapped = path("gapped.lcmlog");
+  {
+    lcm::LogFile out(gapped, "w");
+    for (const auto& e : readEvents(full)) {
+      if (e.channel == "ODOMETRY") {
+        const auto m = decode<lcmloc::odometry_t>(e.data);
+        if (m.seq >= 500 && m.seq < 505) continue;
+      }
+      lcm::LogEvent ev{0, e.timestamp, e.channel, static_cast<int32_t>(e.data.size()), const_cast<uint8_t*>(e.data.data())};
+      out.writeEvent(&ev);
+    }
+  }
+
+  for (const std::string& log : {full, gapped}) {
+    SCOPED_TRACE(log);
+    Bus bus(url_);
+    Watch w(bus);
+    Child daemon(LCMLOC_FUSION, {"--lcm-url", url_, "--config", config}, path("fusion.out"));
+    ASSERT_TRUE(waitFor(bus, [&] { return w.alive.count(daemon.pid()) > 0; }, 10s)) << daemon.output();
+    Child player("/usr/bin/lcm-logplayer", {"--lcm-url=" + url_, "-s", "5", log}, path("player.out"));
+    std::optional<int> prc;
+    const auto deadline = std::chrono::steady_clock::now() + 30s;
+    while (!(prc = player.wait(0ms)) && std::chrono::steady_clock::now() < deadline) bus.handle(20);
+    ASSERT_EQ(prc.value_or(-1), 0) << player.output();
+    daemon.signal(SIGTERM);
+    ASSERT_TRUE(waitFor(bus, [&] { return !w.status.empty() && w.status.back().event == "stopped"; }, 10s))
+        << daemon.output();
+    EXPECT_EQ(daemon.wait(10s).value_or(-1), 0) << daemon.output();
+
+    auto offline = byChannel(replay(log, config, "offline.lcmlog"));
+    for (const char* ch : {"POSE", "GATE"}) {
+      ASSERT_FALSE(offline[ch].empty());
+      EXPECT_EQ(firstDifference(w.payloads[ch], offline[ch]), -1)
+          << ch << ": live " << w.payloads[ch].size() << " vs replay " << offline[ch].size();
+    }
+    const auto offline_last = decode<lcmloc::fusion_status_t>(offline["FUSION_STATUS"].back());
+    if (log == full) {
+      EXPECT_EQ(w.status.back().sequence_gaps, 0);
+      EXPECT_FALSE(w.has("drop", ""));
+    } else {
+      EXPECT_EQ(w.status.back().sequence_gaps, 5);
+      EXPECT_TRUE(w.has("drop", "ODOMETRY: 5 message(s) missing before seq 505")) << daemon.output();
+      EXPECT_NE(daemon.output().find("ODOMETRY: 5 message(s) missing before seq 505"), std::string::npos);
+    }
+    EXPECT_EQ(offline_last.sequence_gaps, w.status.back().sequence_gaps);
+  }
+}
+
+// Process-level swap: a second daemon with another filter and --init-from-bus waits while the
+// first runs, takes its last POSE when it stops and continues without a gap or jump; then a
+// third daemon starts from the checkpoint the second wrote at exit.
+TEST_F(ReplayProcessTest, HandOverFromTheBusAndFromACheckpoint) {
+  Bus bus(url_);
+  Watch w(bus);
+  const std::string ck = path("fusion.ck");
+  Child a(LCMLOC_FUSION, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML, "--filter", "ukf_gated"}, path("a.out"));
+  ASSERT_TRUE(waitFor(bus, [&] { return w.alive.count(a.pid()) > 0; }, 10s)) << a.output();
+  const int64_t t0 = 1000000, dt = 10000;
+  int64_t seq = 0;
+  auto publish = [&](int n) {
+    for (int i = 0; i < n; ++i, ++seq) bus.publish("ODOMETRY", odo(seq, t0 + seq * dt));
+  };
+  publish(100);
+  ASSERT_TRUE(waitFor(bus, [&] { return !w.poses.empty() && w.poses.back().utime >= t0 + 80 * dt; }, 10s));
+
+  Child b(LCMLOC_FUSION, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML, "--filter", "ukf", "--init-from-bus",
+                          "20", "--checkpoint", ck},
+          path("b.out"));
+  ASSERT_TRUE(waitFor(bus, [&] { return w.alive.count(b.pid()) > 0; }, 10s)) << b.output();
+  publish(50);  // both receive these; only A publishes
+  ASSERT_TRUE(waitFor(bus, [&] { return w.poses.back().utime >= t0 + 140 * dt; }, 10s));
+  a.signal(SIGTERM);
+  ASSERT_EQ(a.wait(10s).value_or(-1), 0) << a.output();
+  ASSERT_TRUE(waitFor(bus, [&] { return w.has("started", "initialized from the last POSE"); }, 10s)) << b.output();
+  EXPECT_TRUE(w.has("started", "(filter ukf_gated)")) << b.output();
+  ASSERT_EQ(w.poses.back().filter, "ukf_gated");
+  const auto a_last = w.poses.back();
+  EXPECT_EQ(a_last.utime, t0 + 149 * dt) << "A flushed everything on SIGTERM";
+  const std::size_t a_count = w.poses.size();
+  publish(50);
+  ASSERT_TRUE(waitFor(bus, [&] { return w.poses.back().utime >= t0 + 190 * dt; }, 10s)) << b.output();
+  const auto& b_first = w.poses[a_count];
+  EXPECT_EQ(b_first.filter, "ukf");
+  EXPECT_EQ(b_first.utime, t0 + 150 * dt) << "no gap: B's first pose is the first input after A's last";
+  const double jump = std::hypot(b_first.state[0] - a_last.state[0], b_first.state[1] - a_last.state[1]);
+  EXPECT_LT(jump, 0.02) << "one 15 mm odometry step, no jump";
+  EXPECT_NEAR(b_first.covariance[0][0], a_last.covariance[0][0], 0.1 * a_last.covariance[0][0] + 1e-6);
+
+  // B stops and writes its checkpoint; C (dead reckoning) starts from it.
+  b.signal(SIGTERM);
+  ASSERT_EQ(b.wait(10s).value_or(-1), 0) << b.output();
+  ASSERT_TRUE(fs::exists(ck));
+  ASSERT_TRUE(waitFor(bus, [&] { return w.status.back().event == "stopped"; }, 5s));
+  const auto b_last = w.poses.back();
+  EXPECT_EQ(b_last.utime, t0 + 199 * dt);
+  Child c(LCMLOC_FUSION, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML, "--filter", "dead_reckoning",
+                          "--checkpoint", ck},
+          path("c.out"));
+  ASSERT_TRUE(waitFor(bus, [&] { return w.has("started", "initialized from checkpoint"); }, 10s)) << c.output();
+  ASSERT_TRUE(waitFor(bus, [&] { return w.alive.count(c.pid()) > 0; }, 10s)) << c.output();
+  const std::size_t b_count = w.poses.size();
+  publish(20);
+  ASSERT_TRUE(waitFor(bus, [&] { return w.poses.size() > b_count && w.poses.back().utime >= t0 + 210 * dt; }, 10s))
+      << c.output();
+  const auto& c_first = w.poses[b_count];
+  EXPECT_EQ(c_first.filter, "dead_reckoning");
+  EXPECT_EQ(c_first.utime, t0 + 200 * dt);
+  EXPECT_LT(std::hypot(c_first.state[0] - b_last.state[0], c_first.state[1] - b_last.state[1]), 0.02);
+  c.signal(SIGTERM);
+  EXPECT_EQ(c.wait(10s).value_or(-1), 0) << c.output();
+}
+
+TEST_F(ReplayProcessTest, HelpAndCtlWithoutDaemonOrWithBadArguments) {
+  for (const char* exe : {LCMLOC_REPLAY, LCMLOC_CTL}) {
+    Child c(exe, {"--help"}, path("help.out"));
+    EXPECT_EQ(c.wait(10s).value_or(-1), 0) << exe << c.output();
+    EXPECT_NE(c.output().find("--config"), std::string::npos) << c.output();
+  }
+  Child none(LCMLOC_CTL, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML, "--timeout", "0.5", "reset"},
+             path("none.out"));
+  EXPECT_EQ(none.wait(10s).value_or(-1), 1) << none.output();
+  EXPECT_NE(none.output().find("is lcmloc-fusion running"), std::string::npos) << none.output();
+  Child bad(LCMLOC_CTL, {"--lcm-url", url_, "switch", "ukf", "--param", "novalue"}, path("bad.out"));
+  EXPECT_NE(bad.wait(10s).value_or(0), 0) << bad.output();
+  EXPECT_NE(bad.output().find("KEY=VALUE"), std::string::npos) << bad.output();
+  Child noout(LCMLOC_REPLAY, {"in.lcmlog", "--config", LCMLOC_PAPER_YAML}, path("noout.out"));
+  EXPECT_EQ(noout.wait(10s).value_or(-1), 2) << noout.output();
+}

@@ -1,0 +1,305 @@
+// Offline replay: determinism, recorded hot swaps, damaged logs, checkpoints (in process, and the
+// lcmloc-replay executable on a damaged log).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "child.hpp"
+#include "daemon/checkpoint.hpp"
+#include "lcmloc/common/convert.hpp"
+#include "lcmloc/fusion_control_t.hpp"
+#include "lcmloc/fusion_status_t.hpp"
+#include "lcmloc/pose_t.hpp"
+#include "lcmloc/replay/replay.hpp"
+
+using namespace lcmloc;
+using namespace std::chrono_literals;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Event {
+  int64_t timestamp = 0;
+  std::string channel;
+  std::vector<uint8_t> data;
+};
+
+std::vector<Event> readEvents(const std::string& path) {
+  std::vector<Event> out;
+  lcm::LogFile log(path, "r");
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    const auto* p = static_cast<const uint8_t*>(ev->data);
+    out.push_back({ev->timestamp, ev->channel, std::vector<uint8_t>(p, p + ev->datalen)});
+  }
+  return out;
+}
+
+void writeEvents(const std::string& path, const std::vector<Event>& events) {
+  lcm::LogFile log(path, "w");
+  for (const auto& e : events) {
+    lcm::LogEvent ev;
+    ev.eventnum = 0;
+    ev.timestamp = e.timestamp;
+    ev.channel = e.channel;
+    ev.datalen = static_cast<int32_t>(e.data.size());
+    ev.data = const_cast<uint8_t*>(e.data.data());
+    log.writeEvent(&ev);
+  }
+}
+
+template <typename T>
+Event encode(const std::string& channel, const T& m) {
+  Event e{m.utime, channel, std::vector<uint8_t>(static_cast<std::size_t>(m.getEncodedSize()))};
+  m.encode(e.data.data(), 0, static_cast<int>(e.data.size()));
+  return e;
+}
+
+template <typename T>
+T decode(const Event& e) {
+  T m;
+  EXPECT_GE(m.decode(e.data.data(), 0, static_cast<int>(e.data.size())), 0);
+  return m;
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+class ReplayTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() / ("lcmloc_replay_" + std::to_string(::getpid()) + "_" + info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    cfg_ = common::loadSystemConfig(LCMLOC_PAPER_YAML);
+    cfg_.scenario = replay::ovalScenario(cfg_.scenario, replay::OvalTrack{}, 60.0);
+    cfg_.fusion.shadow.clear();
+    log_ = path("in.lcmlog");
+    stats_ = replay::writeSyntheticLog(cfg_.scenario, 60.0, log_, cfg_.channels);
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir_);
+  }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  replay::ReplayResult run(const std::string& in, const std::string& out, const common::SystemConfig& cfg) {
+    replay::ReplayOptions o;
+    o.input = in;
+    o.output = out;
+    o.progress_period_s = 0;
+    return replay::replayLog(cfg, o);
+  }
+
+  fs::path dir_;
+  common::SystemConfig cfg_;
+  std::string log_;
+  replay::SyntheticLogStats stats_;
+};
+
+}  // namespace
+
+TEST_F(ReplayTest, SameLogAndConfigGiveByteIdenticalOutput) {
+  ASSERT_GT(stats_.odometry, 5000);
+  ASSERT_GT(stats_.detections, 20);
+  cfg_.fusion.shadow = {"dead_reckoning"};
+  const auto a = run(log_, path("a.lcmlog"), cfg_);
+  const auto b = run(log_, path("b.lcmlog"), cfg_);
+  EXPECT_FALSE(a.damaged);
+  EXPECT_EQ(a.events_read, stats_.odometry + stats_.detections);
+  EXPECT_EQ(a.used, stats_.odometry + stats_.detections);
+  EXPECT_EQ(a.rejected, 0);
+  EXPECT_EQ(a.written_per_channel.at("POSE"), a.used);
+  EXPECT_EQ(a.written_per_channel.at("POSE_DEAD_RECKONING"), a.used);
+  EXPECT_EQ(a.written_per_channel.at("GATE"), 2 * stats_.detections);  // active + shadow decisions
+  const std::string fa = slurp(path("a.lcmlog")), fb = slurp(path("b.lcmlog"));
+  ASSERT_GT(fa.size(), 100000u);
+  EXPECT_TRUE(fa == fb) << "two replays of the same log differ";
+
+  // Message utime = measurement time, POSE seq counts 0, 1, 2, ...; event timestamps = utime.
+  int64_t seq = 0, last = -1;
+  int accepted = 0;
+  for (const auto& e : readEvents(path("a.lcmlog"))) {
+    if (e.channel == "POSE") {
+      const auto p = decode<lcmloc::pose_t>(e);
+      EXPECT_EQ(p.seq, seq++);
+      EXPECT_EQ(p.utime, e.timestamp);
+      EXPECT_GE(p.utime, last);
+      last = p.utime;
+    }
+    if (e.channel == "GATE") accepted += decode<lcmloc::gate_decision_t>(e).accepted;
+  }
+  EXPECT_GT(accepted, stats_.detections / 2) << "the gated UKF should accept most genuine markers";
+
+  // With the inputs copied, the output holds them too, each with its message time.
+  replay::ReplayOptions o;
+  o.input = log_;
+  o.output = path("c.lcmlog");
+  o.with_inputs = true;
+  o.progress_period_s = 0;
+  const auto c = replay::replayLog(cfg_, o);
+  EXPECT_EQ(c.copied, a.events_read);
+  EXPECT_EQ(c.written, a.written + a.events_read);
+}
+
+TEST_F(ReplayTest, RecordedSwitchesArePerformedAtTheSamePointWithoutGapOrJump) {
+  // Insert control commands at fixed message times into the log (as the logger records them).
+  auto events = readEvents(log_);
+  const int64_t t0 = events.front().timestamp;
+  struct Cmd { double at_s; std::string filter, params; };
+  const std::vector<Cmd> cmds{{10.0, "ukf_calib", ""},
+                              {20.0, "no_such_filter", ""},        // refused: unknown
+                              {25.0, "ukf", "{bogus: 1}"},         // refused: bad parameter
+                              {30.0, "dead_reckoning", ""},
+                              {40.0, "ukf_gated", "{gate: {value: 6.635}}"}};
+  std::vector<Event> with;
+  std::size_t next = 0;
+  for (const auto& e : events) {
+    while (next < cmds.size() && e.timestamp >= t0 + static_cast<int64_t>(cmds[next].at_s * 1e6)) {
+      lcmloc::fusion_control_t c{};
+      c.utime = e.timestamp - 3;  // between two odometry messages
+      c.seq = static_cast<int64_t>(next);
+      c.command = lcmloc::fusion_control_t::CMD_SWITCH_FILTER;
+      c.filter = cmds[next].filter;
+      c.parameters = cmds[next].params;
+      with.push_back(encode("FUSION_CONTROL", c));
+      ++next;
+    }
+    with.push_back(e);
+  }
+  ASSERT_EQ(next, cmds.size());
+  const std::string switched = path("switched.lcmlog");
+  writeEvents(switched, with);
+
+  const auto r1 = run(switched, path("out1.lcmlog"), cfg_);
+  const auto r2 = run(switched, path("out2.lcmlog"), cfg_);
+  EXPECT_TRUE(slurp(path("out1.lcmlog")) == slurp(path("out2.lcmlog")));
+  EXPECT_EQ(r1.final_filter, "ukf_gated");
+  EXPECT_EQ(r1.used, stats_.odometry + stats_.detections + static_cast<int64_t>(cmds.size()) - 2);
+
+  // Reference: the same log without switches (the gated UKF throughout).
+  const auto ref_events = (run(log_, path("ref.lcmlog"), cfg_), readEvents(path("ref.lcmlog")));
+  std::vector<lcmloc::pose_t> ref;
+  for (const auto& e : ref_events)
+    if (e.channel == "POSE") ref.push_back(decode<lcmloc::pose_t>(e));
+
+  std::vector<lcmloc::pose_t> poses;
+  std::vector<lcmloc::fusion_status_t> status;
+  for (const auto& e : readEvents(path("out1.lcmlog"))) {
+    if (e.channel == "POSE") poses.push_back(decode<lcmloc::pose_t>(e));
+    if (e.channel == "FUSION_STATUS") status.push_back(decode<lcmloc::fusion_status_t>(e));
+  }
+  // No gap: one POSE per odometry and ruler input, exactly at the times of the reference.
+  ASSERT_EQ(poses.size(), static_cast<std::size_t>(stats_.odometry + stats_.detections));
+  std::size_t switches = 0;
+  for (std::size_t i = 1; i < poses.size(); ++i) {
+    EXPECT_GE(poses[i].utime, poses[i - 1].utime);
+    EXPECT_LE(poses[i].utime - poses[i - 1].utime, 10000) << "gap in the pose output at " << poses[i].utime;
+    if (poses[i].filter == poses[i - 1].filter) continue;
+    ++switches;
+    // No jump beyond the covariance: the first pose of the new filter is where the old filter's
+    // state, moved by one odometry step, lies (well within 3 sigma of the old covariance).
+    const auto& a = poses[i - 1];
+    const auto& b = poses[i];
+    const double jump = std::hypot(b.state[0] - a.state[0], b.state[1] - a.state[1]);
+    const double sigma = std::sqrt(a.covariance[0][0] + a.covariance[1][1]);
+    EXPECT_LT(jump, 0.03 + 3 * sigma) << a.filter << " -> " << b.filter << " at " << b.utime;
+    EXPECT_LT(jump, 0.05) << a.filter << " -> " << b.filter;
+    EXPECT_NEAR(b.covariance[0][0], a.covariance[0][0], 0.5 * a.covariance[0][0] + 1e-4);
+  }
+  EXPECT_EQ(switches, 3u);
+  // Before the first switch the output equals the reference exactly.
+  ASSERT_EQ(ref.size(), poses.size());
+  std::size_t same = 0;
+  for (std::size_t i = 0; i < poses.size() && poses[i].utime < t0 + 10000000 - 3; ++i, ++same) {
+    EXPECT_EQ(poses[i].utime, ref[i].utime);
+    EXPECT_EQ(poses[i].state, ref[i].state);
+  }
+  EXPECT_GT(same, 900u);
+  auto has = [&](const std::string& ev, const std::string& what) {
+    for (const auto& s : status)
+      if (s.event == ev && s.detail.find(what) != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(has("ack", "switched ukf_gated -> ukf_calib"));
+  EXPECT_TRUE(has("refused", "unknown filter type 'no_such_filter'"));
+  EXPECT_TRUE(has("refused", "bogus: unknown key"));
+  EXPECT_TRUE(has("ack", "switched ukf_calib -> dead_reckoning"));
+  EXPECT_TRUE(has("ack", "switched dead_reckoning -> ukf_gated"));
+  EXPECT_EQ(status.back().event, "stopped");
+}
+
+TEST_F(ReplayTest, DamagedLogIsReplayedUpToTheDamageAndSaysWhere) {
+  auto events = readEvents(log_);
+  // Byte offsets of the events in the file.
+  std::vector<int64_t> offset{0};
+  for (const auto& e : events) offset.push_back(offset.back() + 28 + static_cast<int64_t>(e.channel.size() + e.data.size()));
+  std::string bytes = slurp(log_);
+  ASSERT_EQ(static_cast<int64_t>(bytes.size()), offset.back());
+  const std::size_t bad = 1000;
+  bytes[static_cast<std::size_t>(offset[bad])] = 'X';                        // corrupt sync word of event 1000
+  bytes.resize(static_cast<std::size_t>(offset[events.size() - 1] + 20));   // last event truncated
+  const std::string damaged = path("damaged.lcmlog");
+  std::ofstream(damaged, std::ios::binary) << bytes;
+
+  const auto r = run(damaged, path("out.lcmlog"), cfg_);
+  EXPECT_TRUE(r.damaged);
+  ASSERT_EQ(r.issues.size(), 2u);
+  // The damaged stretch holds the corrupt header. LCM's reader also refuses the event before a
+  // corrupt header (its length cannot be trusted), so the stretch starts one event early.
+  const auto& d = r.issues[0];
+  EXPECT_LE(d.byte_offset, offset[bad]);
+  EXPECT_GE(d.byte_offset, offset[bad - 1]);
+  EXPECT_EQ(d.event_index, d.byte_offset == offset[bad] ? static_cast<int64_t>(bad) : static_cast<int64_t>(bad - 1));
+  EXPECT_NE(d.what.find("resumed at byte " + std::to_string(offset[bad + 1])), std::string::npos) << d.what;
+  const int64_t lost = static_cast<int64_t>(bad) + 1 - d.event_index;
+  EXPECT_EQ(r.events_read, static_cast<int64_t>(events.size()) - 1 - lost);
+  EXPECT_EQ(r.issues[1].byte_offset, offset[events.size() - 1]);
+  EXPECT_EQ(r.issues[1].event_index, r.events_read);
+  EXPECT_NE(r.issues[1].what.find("truncated"), std::string::npos) << r.issues[1].what;
+  EXPECT_EQ(r.gaps, lost);  // the lost events show as sequence gaps (bad is an odometry event)
+
+  // The executable says the same, exits 3 and still writes the output.
+  Child exe(LCMLOC_REPLAY, {damaged, "-o", path("exe.lcmlog"), "--config", LCMLOC_PAPER_YAML, "--no-shadow"},
+            path("exe.out"));
+  const auto rc = exe.wait(60s);
+  ASSERT_TRUE(rc.has_value());
+  EXPECT_EQ(*rc, 3) << exe.output();
+  const std::string out = exe.output();
+  EXPECT_NE(out.find("damage: before event " + std::to_string(d.event_index) + " at byte " +
+                     std::to_string(d.byte_offset)),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("truncated"), std::string::npos) << out;
+  EXPECT_TRUE(fs::exists(path("exe.lcmlog")));
+
+  Child missing(LCMLOC_REPLAY, {path("nope.lcmlog"), "-o", path("x.lcmlog"), "--config", LCMLOC_PAPER_YAML},
+                path("missing.out"));
+  EXPECT_EQ(missing.wait(30s).value_or(-1), 1) << missing.output();
+  EXPECT_NE(missing.output().find("no such file"), std::string::npos) << missing.output();
+}
+
+TEST_F(ReplayTest, CheckpointRoundTripsExactlyAndRejectsGarbage) {
+  core::FilterState s;
+  s.utime = 123456789;
+  s.x = Eigen::VectorXd::LinSpaced(5, 0.1, 0.5);
+  s.P = Eigen::MatrixXd::Identity(5, 5) * 1e-3;
+  s.P(0, 1) = s.P(1, 0) = 1.0 / 3.0e4;
+  s.names = {"x", "y", "theta", "odo_scale", "steer_bias"};
+  fusion::writeCheckpoint(path("ck"), s, "ukf_calib");
+  const auto c = fusion::readCheckpoint(path("ck"));
+  ASSERT_TRUE(c.has_value());
+  EXPECT_EQ(c->filter, "ukf_calib");
+  EXPECT_EQ(c->state.utime, s.utime);
+  EXPECT_EQ(c->state.x, s.x);
+  EXPECT_EQ(c->state.P, s.P);
+  EXPECT_EQ(c->state.names, s.names);
+  EXPECT_FALSE(fusion::readCheckpoint(path("absent")).has_value());
+  std::ofstream(path("garbage")) << "not a checkpoint";
+  EXPECT_THROW(fusion::readCheckpoint(path("garbage")), std::runtime_error);
+}

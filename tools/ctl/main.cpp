@@ -1,0 +1,150 @@
+// lcmloc-ctl: sends one FUSION_CONTROL command to the fusion daemon and prints its answer
+// (the "ack" or "refused" event on FUSION_STATUS), waiting a bounded time.
+//
+// The daemon applies commands in message-time order (like every input), so a command carries a
+// utime: by default 1 us after the newest POSE / FUSION_STATUS seen on the bus, i.e. "now" in
+// the daemon's time. The command is recorded by the logger like any message, and an offline
+// replay of the log performs it at the same point.
+#include <chrono>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "lcmloc/common/config.hpp"
+#include "lcmloc/common/process.hpp"
+#include "lcmloc/common/transport.hpp"
+#include "lcmloc/fusion_control_t.hpp"
+#include "lcmloc/fusion_status_t.hpp"
+#include "lcmloc/pose_t.hpp"
+
+using namespace lcmloc;
+
+namespace {
+
+constexpr int kExitRefused = 3, kExitNoAnswer = 4;
+
+/// "a.b=v" items -> YAML flow map {a: {b: v}}; values are parsed as YAML (numbers, lists).
+std::string paramsToYaml(const std::vector<std::string>& items) {
+  YAML::Node root(YAML::NodeType::Map);
+  for (const auto& it : items) {
+    const auto eq = it.find('=');
+    if (eq == std::string::npos || eq == 0)
+      throw CLI::ValidationError("--param", "expected KEY=VALUE, got '" + it + "'");
+    const std::string key = it.substr(0, eq), value = it.substr(eq + 1);
+    std::vector<std::string> path;
+    std::size_t start = 0;
+    for (std::size_t dot; (dot = key.find('.', start)) != std::string::npos; start = dot + 1)
+      path.push_back(key.substr(start, dot - start));
+    path.push_back(key.substr(start));
+    // Walk down with fresh handles (yaml-cpp nodes are references).
+    std::vector<YAML::Node> chain{root};
+    for (std::size_t i = 0; i + 1 < path.size(); ++i) {
+      YAML::Node next = chain.back()[path[i]];
+      if (!next.IsMap()) next = YAML::Node(YAML::NodeType::Map);
+      chain.back()[path[i]] = next;
+      chain.push_back(chain.back()[path[i]]);
+    }
+    chain.back()[path.back()] = YAML::Load(value);
+  }
+  YAML::Emitter e;
+  e.SetMapFormat(YAML::Flow);
+  e.SetSeqFormat(YAML::Flow);
+  e << root;
+  return e.c_str();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"lcmloc-ctl: send a command to the fusion daemon (FUSION_CONTROL) and print its answer from "
+               "FUSION_STATUS. Exit: 0 acknowledged, 1 error (no daemon on the bus), 2 bad arguments, "
+               "3 refused, 4 no answer within --timeout."};
+  common::CommonOptions opts;
+  common::addCommonOptions(app, opts);
+  double timeout = 5.0;
+  int64_t utime = -1;
+  app.add_option("--timeout", timeout, "[s] to wait for the daemon (its time, then its answer)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--utime", utime, "message time of the command [us] (default: just after the newest POSE)");
+  app.require_subcommand(1);
+
+  std::string filter, params_yaml;
+  std::vector<std::string> params;
+  auto* sw = app.add_subcommand("switch", "switch the active filter: NAME [--param KEY=VALUE ...]");
+  sw->add_option("name", filter, "filter type (dead_reckoning, ukf, ukf_gated, ukf_calib)")->required();
+  sw->add_option("--param", params, "filter parameter KEY=VALUE (dotted keys for nesting: gate.value=6.635)");
+  sw->add_option("--params", params_yaml, "filter parameters as a YAML flow map, e.g. '{gate: {value: 6.635}}'");
+  auto* reset = app.add_subcommand("reset", "reset every filter to the configured initial state");
+  std::vector<double> pose, stddev{0.1, 0.1, 0.05};
+  auto* sp = app.add_subcommand("set-pose", "re-initialise x [m], y [m], theta [rad]: X Y THETA [--std SX SY STH]");
+  sp->add_option("pose", pose, "X Y THETA")->expected(3)->required();
+  sp->add_option("--std", stddev, "1-sigma of x [m], y [m], theta [rad]")->expected(3);
+  (void)reset;
+
+  return common::runProcess(app, argc, argv, opts, "lcmloc-ctl", [&]() -> int {
+    const auto cfg = common::loadSystemConfig(opts.config);
+    lcmloc::fusion_control_t cmd{};
+    if (app.got_subcommand(sw)) {
+      cmd.command = lcmloc::fusion_control_t::CMD_SWITCH_FILTER;
+      cmd.filter = filter;
+      if (!params_yaml.empty() && !params.empty())
+        throw CLI::ValidationError("--param", "give --param or --params, not both");
+      cmd.parameters = !params_yaml.empty() ? params_yaml : params.empty() ? "" : paramsToYaml(params);
+    } else if (app.got_subcommand(sp)) {
+      cmd.command = lcmloc::fusion_control_t::CMD_SET_POSE;
+      for (int i = 0; i < 3; ++i) {
+        cmd.pose[i] = pose[static_cast<std::size_t>(i)];
+        cmd.pose_std[i] = stddev[static_cast<std::size_t>(i)];
+      }
+    } else {
+      cmd.command = lcmloc::fusion_control_t::CMD_RESET;
+    }
+
+    common::Bus bus(opts.lcm_url);
+    int64_t newest = -1;
+    bool sent = false;
+    std::optional<lcmloc::fusion_status_t> answer;
+    bus.subscribe<lcmloc::pose_t>(cfg.channels.pose, [&](const std::string&, const lcmloc::pose_t& m, int64_t) {
+      newest = std::max(newest, m.utime);
+    });
+    bus.subscribe<lcmloc::fusion_status_t>(
+        cfg.channels.status, [&](const std::string&, const lcmloc::fusion_status_t& m, int64_t) {
+          if (!sent) {
+            newest = std::max(newest, m.utime);
+            return;
+          }
+          const bool mine = m.event == "ack" || m.event == "refused" ||
+                            (m.event == "rejected_input" && m.detail.find(cfg.channels.control) != std::string::npos);
+          if (mine && !answer) answer = m;
+        });
+    using Clock = std::chrono::steady_clock;
+    const auto deadline = Clock::now() + std::chrono::duration<double>(timeout);
+    if (utime < 0) {
+      while (newest < 0 && Clock::now() < deadline && !common::stopRequested()) bus.handle(50);
+      while (bus.handle(0) > 0) {}
+      if (newest < 0) {
+        spdlog::error("no {} or {} on the bus within {:.1f} s: is lcmloc-fusion running and receiving inputs? "
+                      "(or give --utime)", cfg.channels.pose, cfg.channels.status, timeout);
+        return common::kExitRuntimeError;
+      }
+      utime = newest + 1;
+    }
+    cmd.utime = utime;
+    cmd.seq = 0;
+    sent = true;
+    if (!bus.publish(cfg.channels.control, cmd)) return common::kExitRuntimeError;
+    spdlog::info("sent to {} at utime {}", cfg.channels.control, utime);
+    const auto answer_deadline = Clock::now() + std::chrono::duration<double>(timeout);
+    while (!answer && Clock::now() < answer_deadline && !common::stopRequested()) bus.handle(50);
+    if (!answer) {
+      std::cout << fmt::format("no answer within {:.1f} s (the daemon applies a command once its inputs are newer "
+                               "than the command by the reorder window)\n", timeout);
+      return kExitNoAnswer;
+    }
+    std::cout << fmt::format("{}: {} (filter {})\n", answer->event, answer->detail, answer->filter);
+    return answer->event == "ack" ? common::kExitOk : kExitRefused;
+  });
+}

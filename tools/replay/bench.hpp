@@ -1,0 +1,19 @@
+#pragma once
+#include <string>
+
+#include "lcmloc/common/config.hpp"
+
+namespace lcmloc::replay {
+
+struct BenchOptions {
+  double duration_s = 3600.0;  ///< message time of the synthetic log
+  int repetitions = 3;
+  std::string dir = "out/bench";
+  bool keep_log = false;       ///< reuse dir/synthetic.lcmlog if it exists
+};
+
+/// Generates the synthetic log, measures read+decode, dead_reckoning and ukf_gated replay
+/// (repetitions each, interleaved), prints medians and ratios, writes dir/bench.json.
+int runBench(const common::SystemConfig& cfg, const BenchOptions& opts);
+
+}  // namespace lcmloc::replay

@@ -1,0 +1,61 @@
+#pragma once
+// A common::MessageBus over log files: subscriptions are fed from the events of an input log
+// (dispatch), publications are written to an output log. The offline replay runs the fusion
+// daemon's own code (fusion::FusionDaemon) on it, so the bytes it writes are the bytes the daemon
+// publishes live.
+//
+// Output event timestamps are the message's own utime (the first field of every lcmloc type,
+// bytes 8..15 of the payload after the 8-byte type fingerprint), so the output file depends on
+// the messages alone: the same input and config give the same file, byte for byte.
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "lcmloc/common/transport.hpp"
+
+namespace lcmloc::replay {
+
+/// The utime of an lcmloc message (big-endian int64 after the fingerprint); fallback if shorter.
+int64_t messageUtime(const void* data, std::size_t size, int64_t fallback);
+
+class LogBus : public common::MessageBus {
+ public:
+  /// output empty: publications are counted and dropped. Throws std::runtime_error when the
+  /// output cannot be created.
+  explicit LogBus(const std::string& output);
+  ~LogBus() override;
+
+  bool publishRaw(const std::string& channel, const void* data, std::size_t size) override;
+  void subscribeRaw(const std::string& channel, RawHandler handler) override;
+
+  /// Hands one input event to every subscription whose regex matches the channel. Returns the
+  /// number of handlers called (0: nobody subscribes to this channel).
+  int dispatch(const std::string& channel, const void* data, std::size_t size, int64_t recv_utime);
+  /// Copies an input event to the output unchanged (timestamp: the message's utime).
+  bool copy(const std::string& channel, const void* data, std::size_t size, int64_t fallback_utime);
+  /// Channels with at least one subscription among those seen so far.
+  bool subscribed(const std::string& channel);
+
+  int64_t written() const { return written_; }
+  const std::map<std::string, int64_t>& writtenPerChannel() const { return per_channel_; }
+  void close();
+
+ private:
+  bool write(const std::string& channel, const void* data, std::size_t size, int64_t timestamp);
+  const std::vector<std::size_t>& handlersFor(const std::string& channel);
+
+  struct Sub {
+    std::regex re;
+    RawHandler handler;
+  };
+  std::vector<Sub> subs_;
+  std::map<std::string, std::vector<std::size_t>> route_;  ///< channel -> matching subs (cached)
+  std::unique_ptr<class LogWriter> writer_;
+  int64_t written_ = 0;
+  std::map<std::string, int64_t> per_channel_;
+};
+
+}  // namespace lcmloc::replay

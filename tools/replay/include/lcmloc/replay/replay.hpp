@@ -1,0 +1,76 @@
+#pragma once
+// Offline replay: reads an LCM log directly (eval::LogScanner over lcm::LogFile, no network),
+// feeds every event through the fusion daemon's own code (fusion::FusionDaemon over a LogBus):
+// the sensor channels and the recorded FUSION_CONTROL commands, in canonical order by message
+// time (core::FusionEngine). The daemon's publications (POSE, POSE_<TYPE>, GATE, FUSION_STATUS)
+// are written to an output log, byte for byte as the daemon publishes them live.
+#include <functional>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "lcmloc/common/config.hpp"
+#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/models/scenario_config.hpp"
+
+namespace lcmloc::replay {
+
+struct ReplayOptions {
+  std::string input;
+  std::string output;              ///< "" = count only, write nothing
+  /// Also copy the input events to the output (all channels except the daemon's outputs, the
+  /// heartbeats and LCM_SELF_TEST), so the output log is complete for lcmloc-eval.
+  bool with_inputs = false;
+  double progress_period_s = 2.0;  ///< [s, wall] between progress lines (<= 0: none)
+  std::function<bool()> stop;      ///< polled between events: true ends the replay early
+};
+
+struct ReplayResult {
+  int64_t file_size = 0;
+  int64_t events_read = 0;         ///< intact events in the input log
+  int64_t old_outputs = 0;         ///< recorded daemon outputs in the input (ignored)
+  int64_t dispatched = 0;          ///< events handed to the daemon (its input channels)
+  int64_t messages_in = 0;         ///< as the daemon counts them (FUSION_STATUS.messages_in)
+  int64_t used = 0;                ///< processed by the filter (FUSION_STATUS.messages_used)
+  int64_t rejected = 0;            ///< refused inputs (too old, invalid, undecodable)
+  int64_t gaps = 0;                ///< messages missing according to seq gaps
+  int64_t written = 0;             ///< events written (outputs + copied inputs)
+  int64_t copied = 0;              ///< of those, copied inputs
+  std::map<std::string, int64_t> written_per_channel;
+  std::string final_filter;
+  bool damaged = false, interrupted = false;
+  int64_t bytes_unreadable = 0;
+  std::vector<eval::LogIssue> issues;  ///< damage of the input, with event index and byte offset
+  double seconds = 0;              ///< wall time of the replay
+};
+
+/// Replays opts.input with cfg (filter, shadows, channels, reorder window). Throws
+/// std::runtime_error when the input cannot be opened or the output cannot be created,
+/// std::invalid_argument / common::ConfigError on a bad filter configuration.
+ReplayResult replayLog(const common::SystemConfig& cfg, const ReplayOptions& opts);
+
+/// Output channels of the daemon under cfg: POSE, POSE_<TYPE> of each shadow, GATE, FUSION_STATUS.
+bool isDaemonOutput(const common::ChannelConfig& ch, const std::string& channel);
+
+/// A synthetic log (for the benchmark and tests): the vehicle drives laps of an oval track
+/// (two straights joined by half circles) with markers along the first lap, for duration_s of
+/// message time; the simulator's own models (drivers/models) produce ODOMETRY at the odometry
+/// rate and MAGRULER detections. Event timestamps are message times.
+struct SyntheticLogStats {
+  int64_t odometry = 0, detections = 0, markers = 0;
+  double distance_m = 0;
+  int64_t first_utime = 0, last_utime = 0;
+};
+struct OvalTrack {
+  double straight = 40.0;   ///< [m]
+  double radius = 25.0;     ///< [m] (gentle enough for the path follower to stay on the markers)
+  double marker_spacing = 2.0;  ///< [m]
+};
+/// The scenario of the synthetic log (path, markers) from base: the same oval for the replay's
+/// marker map. laps is chosen so that the track is long enough for duration_s.
+models::ScenarioConfig ovalScenario(const models::ScenarioConfig& base, const OvalTrack& track, double duration_s);
+SyntheticLogStats writeSyntheticLog(const models::ScenarioConfig& scenario, double duration_s, const std::string& path,
+                                    const common::ChannelConfig& channels);
+
+}  // namespace lcmloc::replay

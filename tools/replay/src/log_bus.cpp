@@ -1,0 +1,78 @@
+#include "lcmloc/replay/log_bus.hpp"
+
+#include <stdexcept>
+
+#include <lcm/lcm-cpp.hpp>
+
+namespace lcmloc::replay {
+
+class LogWriter {
+ public:
+  explicit LogWriter(const std::string& path) : log(path, "w") {
+    if (!log.good()) throw std::runtime_error("cannot create output log '" + path + "'");
+  }
+  lcm::LogFile log;
+};
+
+int64_t messageUtime(const void* data, std::size_t size, int64_t fallback) {
+  if (size < 16) return fallback;
+  const auto* p = static_cast<const uint8_t*>(data) + 8;
+  uint64_t v = 0;
+  for (int i = 0; i < 8; ++i) v = (v << 8) | p[i];
+  return static_cast<int64_t>(v);
+}
+
+LogBus::LogBus(const std::string& output) {
+  if (!output.empty()) writer_ = std::make_unique<LogWriter>(output);
+}
+
+LogBus::~LogBus() = default;
+
+void LogBus::close() { writer_.reset(); }
+
+bool LogBus::write(const std::string& channel, const void* data, std::size_t size, int64_t timestamp) {
+  ++written_;
+  ++per_channel_[channel];
+  if (!writer_) return true;
+  lcm::LogEvent ev;
+  ev.eventnum = 0;  // numbered by the writer
+  ev.timestamp = timestamp;
+  ev.channel = channel;
+  ev.datalen = static_cast<int32_t>(size);
+  ev.data = const_cast<void*>(data);
+  if (writer_->log.writeEvent(&ev) != 0) return publishFailed(channel, "write to the output log");
+  return true;
+}
+
+bool LogBus::publishRaw(const std::string& channel, const void* data, std::size_t size) {
+  return write(channel, data, size, messageUtime(data, size, 0));
+}
+
+bool LogBus::copy(const std::string& channel, const void* data, std::size_t size, int64_t fallback_utime) {
+  return write(channel, data, size, messageUtime(data, size, fallback_utime));
+}
+
+void LogBus::subscribeRaw(const std::string& channel, RawHandler handler) {
+  // LCM channel regexes are POSIX extended and match the whole channel name.
+  subs_.push_back({std::regex("^(" + channel + ")$", std::regex::extended), std::move(handler)});
+  route_.clear();
+}
+
+const std::vector<std::size_t>& LogBus::handlersFor(const std::string& channel) {
+  auto it = route_.find(channel);
+  if (it != route_.end()) return it->second;
+  std::vector<std::size_t> idx;
+  for (std::size_t i = 0; i < subs_.size(); ++i)
+    if (std::regex_match(channel, subs_[i].re)) idx.push_back(i);
+  return route_.emplace(channel, std::move(idx)).first->second;
+}
+
+bool LogBus::subscribed(const std::string& channel) { return !handlersFor(channel).empty(); }
+
+int LogBus::dispatch(const std::string& channel, const void* data, std::size_t size, int64_t recv_utime) {
+  const auto& idx = handlersFor(channel);
+  for (std::size_t i : idx) subs_[i].handler(channel, static_cast<const uint8_t*>(data), size, recv_utime);
+  return static_cast<int>(idx.size());
+}
+
+}  // namespace lcmloc::replay

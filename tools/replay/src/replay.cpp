@@ -1,0 +1,79 @@
+#include "lcmloc/replay/replay.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+
+#include <lcm/lcm-cpp.hpp>
+#include <spdlog/spdlog.h>
+
+#include "daemon/daemon.hpp"
+#include "lcmloc/replay/log_bus.hpp"
+
+namespace lcmloc::replay {
+
+bool isDaemonOutput(const common::ChannelConfig& ch, const std::string& c) {
+  if (c == ch.pose || c == ch.gate || c == ch.status) return true;
+  // shadow filters: POSE_<TYPE>
+  if (c.size() > ch.pose.size() + 1 && c.compare(0, ch.pose.size() + 1, ch.pose + "_") == 0) return true;
+  return false;
+}
+
+ReplayResult replayLog(const common::SystemConfig& cfg, const ReplayOptions& opts) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  ReplayResult r;
+  eval::LogScanner scanner(opts.input, &r.issues);
+  r.file_size = scanner.fileSize();
+  LogBus bus(opts.output);
+  fusion::FusionDaemon daemon(cfg, bus);
+
+  auto next_progress = t0 + std::chrono::duration<double>(opts.progress_period_s);
+  std::size_t issues_reported = 0;
+  while (true) {
+    if (opts.stop && opts.stop()) {
+      r.interrupted = true;
+      break;
+    }
+    const lcm::LogEvent* ev = scanner.next();
+    for (; issues_reported < r.issues.size(); ++issues_reported) {
+      const auto& is = r.issues[issues_reported];
+      spdlog::warn("input log damaged: event {} at byte {}: {}", is.event_index, is.byte_offset, is.what);
+    }
+    if (!ev) break;
+    if (isDaemonOutput(cfg.channels, ev->channel)) {
+      ++r.old_outputs;  // the recorded run's estimates: never fed back, never copied
+      continue;
+    }
+    if (opts.with_inputs && ev->channel != cfg.channels.heartbeat && ev->channel != "LCM_SELF_TEST") {
+      bus.copy(ev->channel, ev->data, static_cast<std::size_t>(ev->datalen), ev->timestamp);
+      ++r.copied;
+    }
+    if (bus.dispatch(ev->channel, ev->data, static_cast<std::size_t>(ev->datalen), ev->timestamp) > 0)
+      ++r.dispatched;
+    if (opts.progress_period_s > 0 && (scanner.eventsRead() & 1023) == 0 && Clock::now() >= next_progress) {
+      next_progress = Clock::now() + std::chrono::duration<double>(opts.progress_period_s);
+      const double pct = r.file_size > 0 ? 100.0 * static_cast<double>(scanner.position()) / r.file_size : 100.0;
+      const double secs = std::chrono::duration<double>(Clock::now() - t0).count();
+      spdlog::info("{:5.1f} %: {} events read, {} used, {} written ({:.0f} events/s)", pct, scanner.eventsRead(),
+                   daemon.processed(), bus.written(), scanner.eventsRead() / std::max(secs, 1e-9));
+    }
+  }
+  daemon.shutdown();
+  bus.close();
+  r.events_read = scanner.eventsRead();
+  r.bytes_unreadable = scanner.bytesUnreadable();
+  r.damaged = scanner.damaged();
+  r.messages_in = daemon.messagesIn();
+  r.used = daemon.processed();
+  r.rejected = daemon.rejected();
+  r.gaps = daemon.gaps();
+  r.written = bus.written();
+  r.written_per_channel = bus.writtenPerChannel();
+  r.final_filter = daemon.activeFilter();
+  r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  return r;
+}
+
+}  // namespace lcmloc::replay
