@@ -9,10 +9,13 @@
 #include <string>
 
 #include "lcmloc/common/config.hpp"
+#include "lcmloc/common/geodesy.hpp"
 #include "lcmloc/common/process.hpp"
 #include "lcmloc/common/transport.hpp"
 #include "lcmloc/core/engine.hpp"
 #include "lcmloc/fusion_control_t.hpp"
+#include "lcmloc/gps_fix_t.hpp"
+#include "lcmloc/imu_t.hpp"
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 
@@ -29,6 +32,8 @@ class FusionDaemon {
   void onOdometry(const std::string& ch, const lcmloc::odometry_t& m);
   void onRuler(const std::string& ch, const lcmloc::magruler_t& m);
   void onControl(const std::string& ch, const lcmloc::fusion_control_t& m);
+  void onImu(const std::string& ch, const lcmloc::imu_t& m);
+  void onGps(const std::string& ch, const lcmloc::gps_fix_t& m);
   void onDecodeError(const std::string& ch, const std::string& why);
 
   bool received(const std::string& ch, int64_t seq);     ///< counts and checks the seq gap
@@ -42,6 +47,7 @@ class FusionDaemon {
   common::Bus& bus_;
   std::unique_ptr<core::FusionEngine> engine_;
   common::SeqTracker gaps_;
+  common::LocalFrame frame_;  ///< lat/lon of GPS fixes -> local metric frame (cfg.datum)
   std::map<std::string, int64_t> out_seq_;  ///< per output channel
   std::map<std::string, int64_t> log_count_;
   int64_t messages_in_ = 0, rejected_ = 0, last_utime_ = 0, next_status_utime_ = INT64_MIN;

@@ -6,11 +6,11 @@
 using namespace lcmloc;
 
 int main(int argc, char** argv) {
-  CLI::App app{"lcmloc-fusion: fusion daemon, ODOMETRY + MAGRULER* + FUSION_CONTROL -> POSE, GATE, FUSION_STATUS"};
+  CLI::App app{"lcmloc-fusion: fusion daemon, ODOMETRY + MAGRULER* + IMU + GPS + FUSION_CONTROL -> POSE, GATE, FUSION_STATUS"};
   common::CommonOptions opts;
   common::addCommonOptions(app, opts);
   std::string filter;
-  app.add_option("--filter", filter, "override fusion.filter.type (dead_reckoning, ukf, ukf_gated, ukf_calib)");
+  app.add_option("--filter", filter, "override fusion.filter.type (dead_reckoning, ukf, ukf_gated, ukf_calib, tvekf, ukf_gps)");
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-fusion", [&] {
     auto cfg = common::loadSystemConfig(opts.config);

@@ -148,6 +148,7 @@ class GnssFilterBase : public Filter {
     acc_sum_ = 0;
     acc_n_ = 0;
     have_fix_ = false;
+    last_position_utime_ = from.utime;
     gps_lock_ = Lockout(g_.gps_lockout_rejections);
     mag_lock_ = Lockout(g_.mag_lockout_rejections);
   }
@@ -180,6 +181,7 @@ class GnssFilterBase : public Filter {
     st.psi = odo.steering;
     st.delta_theta = odo.delta_theta;
     timeUpdate(st);
+    last_position_utime_ = std::max(last_position_utime_, odo.utime);
   }
 
   std::optional<GateDecision> update(const ImuInput& m) override {
@@ -217,6 +219,12 @@ class GnssFilterBase : public Filter {
     }
     const double sd = std::isfinite(gps.position_std) && gps.position_std > 0 ? gps.position_std
                                                                                 : g_.gps_std;
+    // Position random walk over the time no odometry step covered (none at all for a GPS-only
+    // run; at most one odometry period otherwise).
+    if (gps.utime > last_position_utime_) {
+      if (last_position_utime_ > 0) growPosition(static_cast<double>(gps.utime - last_position_utime_) * 1e-6);
+      last_position_utime_ = gps.utime;
+    }
     positionUpdate(Vec2(gps.x, gps.y), sd * sd, d);
     if (d.reason == "gate" && gps_lock_.reject()) inflatePosition();
     if (d.accepted) {
@@ -273,6 +281,8 @@ class GnssFilterBase : public Filter {
   virtual void positionUpdate(const Vec2& z, double r, GateDecision& d) = 0;
   virtual void inflateHeading() = 0;
   virtual void inflatePosition() = 0;
+  /// Adds the position random walk of dt seconds to the position covariance.
+  virtual void growPosition(double dt) = 0;
 
   FilterConfig cfg_;
   GnssConfig g_;
@@ -288,6 +298,7 @@ class GnssFilterBase : public Filter {
   int64_t saturated_ = 0;
   bool have_fix_ = false;
   int64_t last_fix_utime_ = 0;
+  int64_t last_position_utime_ = 0;  ///< time the position prediction has reached
   Lockout gps_lock_, mag_lock_;
 };
 
@@ -394,6 +405,9 @@ class TvEkf final : public GnssFilterBase {
 
   void inflateHeading() override { Pth_ *= cfg_.lockout_inflation; }
   void inflatePosition() override { Pp_ *= cfg_.lockout_inflation; }
+  void growPosition(double dt) override {
+    Pp_.diagonal().array() += g_.position_rw * g_.position_rw * dt;
+  }
 
  private:
   Vec2 p_;
@@ -487,6 +501,12 @@ class GpsUkf final : public GnssFilterBase {
 
   void inflateHeading() override { inflateStates({kTheta}); }
   void inflatePosition() override { inflateStates({kX, kY}); }
+  void growPosition(double dt) override {
+    U::Matrix P = ukf_.P();
+    P(kX, kX) += g_.position_rw * g_.position_rw * dt;
+    P(kY, kY) += g_.position_rw * g_.position_rw * dt;
+    ukf_.reset(ukf_.x(), P);
+  }
 
  private:
   template <int M>
