@@ -15,6 +15,7 @@ LCMLOC_PACKAGES=(
   libgtest-dev googletest libbenchmark-dev
   default-jdk-headless libjchart2d-java
   gnuplot-nox iproute2
+  gpsd gpsd-clients libgps-dev libgeographiclib-dev
 )
 
 lcmloc_log() { echo "[lcmloc] $*" >&2; }

@@ -113,6 +113,88 @@ void parseMagRuler(KeyReader& root, models::MagRulerConfig& m) {
   r.finish();
 }
 
+void parseImu(KeyReader& root, models::ImuSensorConfig& m) {
+  KeyReader r(root.child("imu"), root.file(), "imu");
+  r.get("enabled", m.enabled);
+  r.get("rate_hz", m.rate_hz, 0.1, 10000.0);
+  r.get("gravity", m.gravity, 0.0, 100.0);
+  r.get("accel_std", m.accel_std, 0.0, 100.0);
+  r.get("accel_bias", m.accel_bias, 0.0, 100.0);
+  r.get("accel_bias_rw", m.accel_bias_rw, 0.0, 100.0);
+  r.get("accel_range", m.accel_range, 0.0, 1e4, "0 = no saturation");
+  r.get("gyro_std", m.gyro_std, 0.0, 100.0);
+  r.get("gyro_bias", m.gyro_bias, 0.0, 100.0);
+  r.get("gyro_bias_rw", m.gyro_bias_rw, 0.0, 100.0);
+  r.get("gyro_range", m.gyro_range, 0.0, 1e4, "0 = no saturation");
+  r.get("mag_horizontal", m.mag_horizontal, 1e-6, 10.0);
+  r.get("mag_vertical", m.mag_vertical, -10.0, 10.0);
+  r.get("declination", m.declination, -kPi, kPi);
+  r.get("mag_std", m.mag_std, 0.0, 10.0);
+  r.get("mag_disturbance_std", m.mag_disturbance_std, 0.0, 10.0);
+  r.get("mag_disturbance_tau", m.mag_disturbance_tau, 1e-3, 1e6);
+  r.finish();
+}
+
+void parseGps(KeyReader& root, models::GpsSensorConfig& g, GpsDriverConfig& d) {
+  KeyReader r(root.child("gps"), root.file(), "gps");
+  r.get("enabled", g.enabled);
+  r.get("source", d.source);
+  if (d.source != "sim" && d.source != "gpsd")
+    throw ConfigError(root.file(), "gps.source", "unknown source '" + d.source + "' (valid: sim, gpsd)");
+  r.get("gpsd_host", d.gpsd_host);
+  r.get("gpsd_port", d.gpsd_port);
+  r.get("time_source", d.time_source);
+  if (d.time_source != "fix" && d.time_source != "receive")
+    throw ConfigError(root.file(), "gps.time_source",
+                      "unknown time source '" + d.time_source + "' (valid: fix, receive)");
+  r.get("rate_hz", g.rate_hz, 0.01, 1000.0);
+  r.get("error_model", g.error_model);
+  if (g.error_model != "uniform" && g.error_model != "gaussian")
+    throw ConfigError(root.file(), "gps.error_model",
+                      "unknown error model '" + g.error_model + "' (valid: uniform, gaussian)");
+  r.get("error", g.error, 0.0, 1e4);
+  r.get("reported_std", g.reported_std, 0.0, 1e4, "0 = the model's own 1 sigma");
+  r.get("satellites", g.satellites, 0, 100);
+  r.get("hdop", g.hdop, 0.0, 100.0);
+  YAML::Node outages = r.child("outages");
+  if (outages && !outages.IsNull()) {
+    if (!outages.IsSequence()) throw ConfigError(root.file(), "gps.outages", "expected a list of {start, duration}");
+    g.outages.clear();
+    for (std::size_t i = 0; i < outages.size(); ++i) {
+      models::GpsOutage o;
+      KeyReader orr(outages[i], root.file(), "gps.outages[" + std::to_string(i) + "]");
+      orr.get("start", o.start, 0.0, 1e7);
+      orr.get("duration", o.duration, 0.0, 1e7);
+      orr.finish();
+      g.outages.push_back(o);
+    }
+  }
+  YAML::Node jumps = r.child("jumps");
+  if (jumps && !jumps.IsNull()) {
+    if (!jumps.IsSequence()) throw ConfigError(root.file(), "gps.jumps", "expected a list of {at, duration, dx, dy}");
+    g.jumps.clear();
+    for (std::size_t i = 0; i < jumps.size(); ++i) {
+      models::GpsJump j;
+      KeyReader jr(jumps[i], root.file(), "gps.jumps[" + std::to_string(i) + "]");
+      jr.get("at", j.at, 0.0, 1e7);
+      jr.get("duration", j.duration, 0.0, 1e7);
+      jr.get("dx", j.dx, -1e6, 1e6);
+      jr.get("dy", j.dy, -1e6, 1e6);
+      jr.finish();
+      g.jumps.push_back(j);
+    }
+  }
+  r.finish();
+}
+
+void parseDatum(KeyReader& root, Datum& d) {
+  KeyReader r(root.child("datum"), root.file(), "datum");
+  r.get("latitude", d.latitude, -90.0, 90.0);
+  r.get("longitude", d.longitude, -180.0, 180.0);
+  r.get("altitude", d.altitude, -1e4, 1e5);
+  r.finish();
+}
+
 void parseFaults(KeyReader& root, std::vector<models::FaultConfig>& faults) {
   YAML::Node n = root.child("faults");
   if (!n) return;
@@ -146,6 +228,8 @@ void parseChannels(KeyReader& root, ChannelConfig& c) {
   r.get("control", c.control);
   r.get("status", c.status);
   r.get("heartbeat", c.heartbeat);
+  r.get("imu", c.imu);
+  r.get("gps", c.gps);
   r.finish();
 }
 
@@ -229,6 +313,26 @@ core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterC
   r.get("steer_bias_std0", c.steer_bias_std0, 0.0, 1.0);
   r.get("scale_rw", c.scale_rw, 0.0, 1.0);
   r.get("steer_bias_rw", c.steer_bias_rw, 0.0, 1.0);
+  {
+    auto& g = c.gnss;
+    KeyReader n(r.child("gnss"), file, r.keyPath("gnss"));
+    n.get("accel_std", g.accel_std, 1e-9, 100.0);
+    n.get("accel_saturation", g.accel_saturation, 0.0, 1e4, "0 = no check");
+    n.get("accel_unknown_std", g.accel_unknown_std, 1e-9, 100.0);
+    n.get("encoder_std", g.encoder_std, 1e-9, 100.0);
+    n.get("steering_std", g.steering_std, 0.0, 1.0);
+    n.get("heading_rw", g.heading_rw, 0.0, 10.0);
+    n.get("position_rw", g.position_rw, 0.0, 100.0);
+    n.get("mag_std", g.mag_std, 1e-9, 10.0);
+    n.get("declination", g.declination, -kPi, kPi);
+    n.get("use_magnetometer", g.use_magnetometer);
+    n.get("gps_std", g.gps_std, 1e-6, 1e4);
+    n.get("speed_std0", g.speed_std0, 1e-9, 100.0);
+    n.get("gps_lockout_rejections", g.gps_lockout_rejections, 0, 1000000);
+    n.get("mag_lockout_rejections", g.mag_lockout_rejections, 0, 1000000);
+    n.get("coast_timeout", g.coast_timeout, 0.0, 1e6);
+    n.finish();
+  }
   r.finish();
   return c;
 }
@@ -251,6 +355,9 @@ SystemConfig parseSystemConfig(const std::string& yaml_text, const std::string& 
   parseOdometry(root, cfg.scenario.odometry);
   parseMagRuler(root, cfg.scenario.magruler);
   parseFaults(root, cfg.scenario.faults);
+  parseImu(root, cfg.scenario.imu);
+  parseGps(root, cfg.scenario.gps, cfg.gps_driver);
+  parseDatum(root, cfg.datum);
   parseChannels(root, cfg.channels);
   parseFusion(root, cfg.fusion);
   parseLogger(root, cfg.logger);

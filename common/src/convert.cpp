@@ -186,4 +186,74 @@ core::FilterState toCore(const lcmloc::pose_t& m) {
   return s;
 }
 
+std::optional<core::ImuInput> toCore(const lcmloc::imu_t& m, const std::string& channel,
+                                     std::string* why) {
+  if (!validUtime(m.utime, why)) return std::nullopt;
+  static const char* const kAccel[] = {"accel[0]", "accel[1]", "accel[2]"};
+  static const char* const kGyro[] = {"gyro[0]", "gyro[1]", "gyro[2]"};
+  static const char* const kMag[] = {"mag[0]", "mag[1]", "mag[2]"};
+  for (int i = 0; i < 3; ++i)
+    if (!finiteField(m.accel[i], kAccel[i], why) || !finiteField(m.gyro[i], kGyro[i], why) ||
+        !finiteField(m.mag[i], kMag[i], why))
+      return std::nullopt;
+  core::ImuInput in;
+  in.utime = m.utime;
+  in.accel = core::Vec3(m.accel[0], m.accel[1], m.accel[2]);
+  in.gyro = core::Vec3(m.gyro[0], m.gyro[1], m.gyro[2]);
+  in.mag = core::Vec3(m.mag[0], m.mag[1], m.mag[2]);
+  in.sensor = channel;
+  in.seq = m.seq;
+  return in;
+}
+
+std::optional<core::GpsInput> toCore(const lcmloc::gps_fix_t& m, const std::string& channel,
+                                     const LocalFrame& frame, std::string* why) {
+  if (!validUtime(m.utime, why)) return std::nullopt;
+  core::GpsInput in;
+  in.utime = m.utime;
+  in.sensor = channel;
+  in.seq = m.seq;
+  in.has_fix = m.fix_type >= 2;
+  if (!in.has_fix) return in;
+  if (!finiteField(m.latitude, "latitude", why) || !finiteField(m.longitude, "longitude", why))
+    return std::nullopt;
+  if (std::abs(m.latitude) > 90.0 || std::abs(m.longitude) > 180.0) {
+    fail(why, "latitude/longitude out of range");
+    return std::nullopt;
+  }
+  const double h = std::isfinite(m.altitude) ? m.altitude : frame.datum().altitude;
+  double z = 0.0;
+  frame.toLocal(m.latitude, m.longitude, h, in.x, in.y, z);
+  in.position_std = std::isfinite(m.position_std) ? m.position_std : 0.0;
+  return in;
+}
+
+lcmloc::imu_t toLcm(const models::ImuSample& s, int64_t seq) {
+  lcmloc::imu_t m;
+  m.utime = s.utime;
+  m.seq = seq;
+  for (int i = 0; i < 3; ++i) {
+    m.accel[i] = s.accel[i];
+    m.gyro[i] = s.gyro[i];
+    m.mag[i] = s.mag[i];
+  }
+  return m;
+}
+
+lcmloc::gps_fix_t toLcm(const models::GpsFixSample& f, const LocalFrame& frame, int64_t seq) {
+  lcmloc::gps_fix_t m{};
+  m.utime = f.utime;
+  m.seq = seq;
+  m.fix_type = f.has_fix ? 2 : 1;
+  m.satellites = static_cast<int16_t>(f.satellites);
+  m.hdop = f.hdop;
+  m.position_std = f.position_std;
+  if (f.has_fix) {
+    frame.toGeodetic(f.x, f.y, 0.0, m.latitude, m.longitude, m.altitude);
+  } else {
+    m.latitude = m.longitude = m.altitude = 0.0;
+  }
+  return m;
+}
+
 }  // namespace lcmloc::common

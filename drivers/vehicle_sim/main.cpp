@@ -23,10 +23,8 @@ int main(int argc, char** argv) {
     const double factor = rtf >= 0.0 ? rtf : sc.realtime_factor;
 
     const models::Path path(sc.path);
-    const double last_marker =
-        sc.markers.count > 0 ? sc.markers.first_at + (sc.markers.count - 1) * sc.markers.spacing : 0.0;
-    models::VehicleSim vehicle(sc.vehicle, path, last_marker + sc.vehicle.end_margin,
-                               models::componentSeed(sc.seed, "vehicle"));
+    const double stop_at = models::stopArcLength(sc, path.length());
+    models::VehicleSim vehicle(sc.vehicle, path, stop_at, models::componentSeed(sc.seed, "vehicle"));
 
     common::Bus bus(opts.lcm_url);
     int64_t seq = 0;
@@ -34,7 +32,7 @@ int main(int argc, char** argv) {
                          [&] { return common::Heartbeat::Counters{{"published", seq}}; });
     hb.tick();
     spdlog::info("scenario '{}' seed {}: {:.1f} m of path at {:.1f} m/s, real-time factor {}",
-                 sc.name, sc.seed, last_marker + sc.vehicle.end_margin, sc.vehicle.speed, factor);
+                 sc.name, sc.seed, stop_at, sc.vehicle.speed, factor);
 
     common::Pacer pacer(factor);
     auto publish = [&](const models::TruthState& s) {

@@ -31,7 +31,7 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
     : FusionDaemon(cfg, bus, Options{}) {}
 
 FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& bus, Options opts)
-    : cfg_(cfg), bus_(bus), hold_(opts.hold) {
+    : cfg_(cfg), bus_(bus), hold_(opts.hold), frame_(cfg.datum) {
   core::EngineConfig ec;
   ec.filter = cfg.fusion.filter;
   ec.shadow = cfg.fusion.shadow;
@@ -66,14 +66,18 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
   for (const auto& r : ch.magruler)
     bus_.subscribe<lcmloc::magruler_t>(
         r, [this](const std::string& c, const lcmloc::magruler_t& m, int64_t) { onRuler(c, m); }, err);
+  bus_.subscribe<lcmloc::imu_t>(
+      ch.imu, [this](const std::string& c, const lcmloc::imu_t& m, int64_t) { onImu(c, m); }, err);
+  bus_.subscribe<lcmloc::gps_fix_t>(
+      ch.gps, [this](const std::string& c, const lcmloc::gps_fix_t& m, int64_t) { onGps(c, m); }, err);
   bus_.subscribe<lcmloc::fusion_control_t>(
       ch.control, [this](const std::string& c, const lcmloc::fusion_control_t& m, int64_t) { onControl(c, m); },
       err);
 
-  spdlog::info("filter {} (shadow: {}), {} markers, reorder window {:.3f} s; in: {}, {}, {}; out: {}, {}, {}",
+  spdlog::info("filter {} (shadow: {}), {} markers, reorder window {:.3f} s; in: {}, {}, {}, {}, {}; out: {}, {}, {}",
                cfg.fusion.filter.type, cfg.fusion.shadow.empty() ? "none" : fmt::format("{}", fmt::join(cfg.fusion.shadow, ", ")),
                map.size(), cfg.fusion.reorder_window, ch.odometry, fmt::format("{}", fmt::join(ch.magruler, ", ")),
-               ch.control, ch.pose, ch.gate, ch.status);
+               ch.imu, ch.gps, ch.control, ch.pose, ch.gate, ch.status);
   if (!hold_) publishStatus("started", "filter " + engine_->activeFilter(), 0);
 }
 
@@ -158,6 +162,22 @@ void FusionDaemon::onRuler(const std::string& ch, const lcmloc::magruler_t& m) {
     return;  // a raw reading without detection: nothing for the filter
   }
   push({ch, m.seq, m.utime, *det});
+}
+
+void FusionDaemon::onImu(const std::string& ch, const lcmloc::imu_t& m) {
+  received(ch, m.seq);
+  std::string why;
+  auto in = common::toCore(m, ch, &why);
+  if (!in) return reject(ch, m.seq, m.utime, why);
+  push({ch, m.seq, m.utime, *in});
+}
+
+void FusionDaemon::onGps(const std::string& ch, const lcmloc::gps_fix_t& m) {
+  received(ch, m.seq);
+  std::string why;
+  auto in = common::toCore(m, ch, frame_, &why);
+  if (!in) return reject(ch, m.seq, m.utime, why);
+  push({ch, m.seq, m.utime, *in});
 }
 
 void FusionDaemon::onControl(const std::string& ch, const lcmloc::fusion_control_t& m) {

@@ -11,10 +11,13 @@
 #include <vector>
 
 #include "lcmloc/common/config.hpp"
+#include "lcmloc/common/geodesy.hpp"
 #include "lcmloc/common/process.hpp"
 #include "lcmloc/common/transport.hpp"
 #include "lcmloc/core/engine.hpp"
 #include "lcmloc/fusion_control_t.hpp"
+#include "lcmloc/gps_fix_t.hpp"
+#include "lcmloc/imu_t.hpp"
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 
@@ -53,6 +56,8 @@ class FusionDaemon {
   void onOdometry(const std::string& ch, const lcmloc::odometry_t& m);
   void onRuler(const std::string& ch, const lcmloc::magruler_t& m);
   void onControl(const std::string& ch, const lcmloc::fusion_control_t& m);
+  void onImu(const std::string& ch, const lcmloc::imu_t& m);
+  void onGps(const std::string& ch, const lcmloc::gps_fix_t& m);
   void onDecodeError(const std::string& ch, const std::string& why);
 
   bool received(const std::string& ch, int64_t seq);     ///< counts and checks the seq gap
@@ -72,6 +77,7 @@ class FusionDaemon {
   core::FilterStatus last_status_ = core::FilterStatus::Uninitialized;
   bool event_seen_ = false;
   bool hold_ = false;
+  common::LocalFrame frame_;  ///< lat/lon of GPS fixes -> local metric frame (cfg.datum)
   std::vector<core::EngineInput> held_;
   std::optional<int64_t> init_utime_;  ///< inputs at or before this were covered by the init state
   int64_t covered_ = 0;

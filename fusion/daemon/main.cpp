@@ -47,12 +47,12 @@ std::optional<core::FilterState> lastPoseOnBus(common::Bus& bus, const common::S
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"lcmloc-fusion: fusion daemon, ODOMETRY + MAGRULER* + FUSION_CONTROL -> POSE, GATE, FUSION_STATUS"};
+  CLI::App app{"lcmloc-fusion: fusion daemon, ODOMETRY + MAGRULER* + IMU + GPS + FUSION_CONTROL -> POSE, GATE, FUSION_STATUS"};
   common::CommonOptions opts;
   common::addCommonOptions(app, opts);
   std::string filter, checkpoint;
   double init_from_bus = 0.0, checkpoint_period = 1.0;
-  app.add_option("--filter", filter, "override fusion.filter.type (dead_reckoning, ukf, ukf_gated, ukf_calib)");
+  app.add_option("--filter", filter, "override fusion.filter.type (dead_reckoning, ukf, ukf_gated, ukf_calib, tvekf, ukf_gps)");
   app.add_option("--init-from-bus", init_from_bus,
                  "hand-over from a running daemon: wait up to SECONDS for its POSE, until it reports stopped, "
                  "and start from its last POSE (inputs are queued meanwhile); 0 = off")

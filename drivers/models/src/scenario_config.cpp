@@ -25,4 +25,9 @@ uint64_t componentSeed(uint64_t master, const std::string& component) {
   return splitmix64(master ^ fnv1a64(component));
 }
 
+double stopArcLength(const ScenarioConfig& sc, double path_length) {
+  if (sc.markers.count <= 0) return path_length;
+  return sc.markers.first_at + (sc.markers.count - 1) * sc.markers.spacing + sc.vehicle.end_margin;
+}
+
 }  // namespace lcmloc::models

@@ -15,6 +15,8 @@ namespace {
 const char* const kOdometryChannel = "ODOMETRY";
 const char* const kRulerChannel = "MAGRULER";
 const char* const kFaultChannel = "MAGRULER_FAULT";
+const char* const kImuChannel = "IMU";
+const char* const kGpsChannel = "GPS";
 constexpr long kMaxSteps = 10'000'000;  // guards against a vehicle that never arrives
 
 struct FilterRun {
@@ -37,7 +39,7 @@ core::EngineOutputs outputsFor(FilterRun* run) {
   out.on_decision = [run](const std::string&, bool is_active, const core::GateDecision& d) {
     if (!is_active) return;
     run->result.decisions.push_back(d);
-    run->result.decision_is_fault.push_back(d.sensor == kFaultChannel);
+    run->result.decision_is_fault.push_back(d.sensor == kFaultChannel);  // GPS/IMU: never a fault
   };
   out.on_event = [run](const std::string& event, const std::string&, int64_t) {
     if (event == "lockout") ++run->result.lockout_events;
@@ -101,10 +103,10 @@ ScenarioResult runScenario(const ScenarioConfig& sc, const std::vector<core::Fil
   ScenarioResult res;
   const Path path(sc.path);
   res.map = makeMarkerMap(path, sc.markers);
-  const double last_marker =
-      sc.markers.count > 0 ? sc.markers.first_at + (sc.markers.count - 1) * sc.markers.spacing : 0.0;
-  VehicleSim vehicle(sc.vehicle, path, last_marker + sc.vehicle.end_margin,
-                     componentSeed(sc.seed, "vehicle"));
+  const double stop_at = stopArcLength(sc, path.length());
+  VehicleSim vehicle(sc.vehicle, path, stop_at, componentSeed(sc.seed, "vehicle"));
+  ImuSensor imu(sc.imu, sc.vehicle.wheelbase, componentSeed(sc.seed, "imu"));
+  GpsSensor gps(sc.gps, componentSeed(sc.seed, "gps"));
   OdometrySensor odometry(sc.odometry, sc.vehicle.wheelbase, componentSeed(sc.seed, "odometry"));
   MagneticRuler ruler(sc.magruler, res.map, componentSeed(sc.seed, "magruler"));
   FaultInjector faults(sc.faults, sc.magruler, componentSeed(sc.seed, "faults"));
@@ -122,7 +124,7 @@ ScenarioResult runScenario(const ScenarioConfig& sc, const std::vector<core::Fil
     for (auto& run : runs) run->engine->push(in);
   };
 
-  int64_t odo_seq = 0, ruler_seq = 0, fault_seq = 0;
+  int64_t odo_seq = 0, ruler_seq = 0, fault_seq = 0, imu_seq = 0, gps_seq = 0;
   auto process = [&](const TruthState& t) {
     res.truth.push_back(t);
     if (auto o = odometry.sample(t)) feed({kOdometryChannel, odo_seq++, o->input.utime, o->input});
@@ -132,6 +134,19 @@ ScenarioResult runScenario(const ScenarioConfig& sc, const std::vector<core::Fil
         feed({kRulerChannel, seq, r->utime,
               core::RulerDetection{r->utime, r->lateral_offset, r->quality, kRulerChannel, seq}});
     }
+    if (sc.imu.enabled)
+      if (auto m = imu.sample(t)) {
+        const int64_t seq = imu_seq++;
+        feed({kImuChannel, seq, m->utime,
+              core::ImuInput{m->utime, m->accel, m->gyro, m->mag, kImuChannel, seq}});
+      }
+    if (sc.gps.enabled)
+      if (auto g = gps.sample(t)) {
+        const int64_t seq = gps_seq++;
+        res.gps.push_back(*g);
+        feed({kGpsChannel, seq, g->utime,
+              core::GpsInput{g->utime, g->has_fix, g->x, g->y, g->position_std, kGpsChannel, seq}});
+      }
     if (auto f = faults.sample(t)) {
       const int64_t seq = fault_seq++;
       const RulerReading& r = f->reading;

@@ -20,7 +20,9 @@ int typeRank(const EngineInput& in) {
   switch (in.payload.index()) {
     case 2: return 0;  // control
     case 0: return 1;  // odometry
-    default: return 2; // ruler
+    case 1: return 2;  // ruler
+    case 3: return 3;  // imu
+    default: return 4; // gps
   }
 }
 
@@ -31,6 +33,13 @@ OrderKey orderKey(const EngineInput& in) {
 
 bool isFinite(const OdometryInput& o) {
   return std::isfinite(o.delta_s) && std::isfinite(o.steering) && std::isfinite(o.delta_theta);
+}
+bool isFinite(const ImuInput& m) {
+  return m.accel.allFinite() && m.gyro.allFinite() && m.mag.allFinite();
+}
+/// A fix without a fix carries no position: it is handed on (the filter reports "no_fix").
+bool isFinite(const GpsInput& g) {
+  return !g.has_fix || (std::isfinite(g.x) && std::isfinite(g.y));
 }
 
 }  // namespace
@@ -96,11 +105,37 @@ struct FusionEngine::Impl {
 
   void handle(const EngineInput&, const RulerDetection& det) {
     forEachFilter([&](Filter& f, bool is_active) {
+      if (!f.uses(Measurement::Ruler)) return;
       const GateDecision d = f.update(det);
       if (is_active) ++(d.accepted ? counters.accepted : counters.rejected);
       if (out.on_decision) out.on_decision(f.name(), is_active, d);
       if (out.on_state) out.on_state(f.name(), is_active, f.state());
     });
+  }
+
+  /// IMU samples and GPS fixes: only filters that use them see them; a decision (and the
+  /// state after it) is published only when the filter used the measurement.
+  template <typename M>
+  void handleAbsolute(const EngineInput& in, const M& m, Measurement kind, const char* what) {
+    if (!isFinite(m)) {
+      event("bad_input", in.channel + " seq " + std::to_string(in.seq) + ": non-finite " + what,
+            in.utime);
+      return;
+    }
+    forEachFilter([&](Filter& f, bool is_active) {
+      if (!f.uses(kind)) return;
+      const std::optional<GateDecision> d = f.update(m);
+      if (!d) return;
+      if (is_active) ++(d->accepted ? counters.accepted : counters.rejected);
+      if (out.on_decision) out.on_decision(f.name(), is_active, *d);
+      if (out.on_state) out.on_state(f.name(), is_active, f.state());
+    });
+  }
+  void handle(const EngineInput& in, const ImuInput& m) {
+    handleAbsolute(in, m, Measurement::Imu, "IMU sample");
+  }
+  void handle(const EngineInput& in, const GpsInput& m) {
+    handleAbsolute(in, m, Measurement::Gps, "GPS fix");
   }
 
   void handle(const EngineInput& in, const ControlCommand& cmd) {

@@ -7,6 +7,7 @@
 
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/chi2.hpp"
+#include "filter_internal.hpp"
 #include "lcmloc/core/ruler_model.hpp"
 #include "lcmloc/core/vehicle_model.hpp"
 
@@ -82,10 +83,12 @@ void initialState(const FilterConfig& c, const std::vector<std::string>& names,
                                       : c.steer_bias_std0 * c.steer_bias_std0;
 }
 
+}  // namespace
+
 /// Hot swap: starts from the filter's initial values and copies every state of `from` that has
 /// the same name (x, y, theta always: a source without names is read as x, y, theta, ...),
 /// with the covariance among copied states; cross-covariances to other states are zero.
-void copyMatching(const FilterState& from, const std::vector<std::string>& names,
+void detail::copyMatching(const FilterState& from, const std::vector<std::string>& names,
                   Eigen::VectorXd& x, Eigen::MatrixXd& P) {
   const auto n_from = from.x.size();
   if (n_from < 3 || from.P.rows() != n_from || from.P.cols() != n_from)
@@ -111,6 +114,9 @@ void copyMatching(const FilterState& from, const std::vector<std::string>& names
   }
   x[2] = wrapAngle(x[2]);
 }
+
+namespace {
+using detail::copyMatching;
 
 GateDecision makeDecision(const RulerDetection& det) {
   GateDecision d;
@@ -340,7 +346,9 @@ class RulerUkf final : public Filter {
 
 }  // namespace
 
-std::vector<std::string> filterTypes() { return {"dead_reckoning", "ukf", "ukf_gated", "ukf_calib"}; }
+std::vector<std::string> filterTypes() {
+  return {"dead_reckoning", "ukf", "ukf_gated", "ukf_calib", "tvekf", "ukf_gps"};
+}
 
 std::unique_ptr<Filter> makeFilter(const FilterConfig& cfg, const MarkerMap& map) {
   validate(cfg);
@@ -348,8 +356,9 @@ std::unique_ptr<Filter> makeFilter(const FilterConfig& cfg, const MarkerMap& map
   if (cfg.type == "ukf") return std::make_unique<RulerUkf<3>>(cfg.type, cfg, map, false);
   if (cfg.type == "ukf_gated") return std::make_unique<RulerUkf<3>>(cfg.type, cfg, map, true);
   if (cfg.type == "ukf_calib") return std::make_unique<RulerUkf<5>>(cfg.type, cfg, map, true);
+  if (auto f = detail::makeGnssFilter(cfg)) return f;
   throw std::invalid_argument("filter config: unknown type '" + cfg.type +
-                              "' (known: dead_reckoning, ukf, ukf_gated, ukf_calib)");
+                              "' (known: dead_reckoning, ukf, ukf_gated, ukf_calib, tvekf, ukf_gps)");
 }
 
 }  // namespace lcmloc::core

@@ -8,6 +8,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "lcmloc/common/geodesy.hpp"
 #include "lcmloc/core/filter.hpp"
 #include "lcmloc/models/scenario_config.hpp"
 
@@ -30,6 +31,17 @@ struct ChannelConfig {
   std::string control = "FUSION_CONTROL";
   std::string status = "FUSION_STATUS";
   std::string heartbeat = "HEARTBEAT";
+  std::string imu = "IMU";
+  std::string gps = "GPS";
+};
+
+/// Where lcmloc-gps takes its fixes from (the `gps` section; the simulated receiver's model is
+/// models::GpsSensorConfig in the same section).
+struct GpsDriverConfig {
+  std::string source = "sim";         ///< "sim" (from GROUND_TRUTH) or "gpsd"
+  std::string gpsd_host = "localhost";
+  std::string gpsd_port = "2947";
+  std::string time_source = "fix";    ///< gpsd: utime from the fix's time ("fix") or on receipt ("receive")
 };
 
 struct FusionConfig {
@@ -51,6 +63,8 @@ struct SystemConfig {
   ChannelConfig channels;
   FusionConfig fusion;
   LoggerConfig logger;
+  Datum datum;                        ///< origin of the local frame for lat/lon conversions
+  GpsDriverConfig gps_driver;
 };
 
 /// Reads a system config file. Missing sections take defaults; throws ConfigError.

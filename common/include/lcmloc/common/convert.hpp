@@ -3,11 +3,15 @@
 #include <optional>
 #include <string>
 
+#include "lcmloc/common/geodesy.hpp"
 #include "lcmloc/core/types.hpp"
+#include "lcmloc/models/gnss_sensors.hpp"
 #include "lcmloc/models/world.hpp"
 #include "lcmloc/fault_event_t.hpp"
 #include "lcmloc/gate_decision_t.hpp"
+#include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"
+#include "lcmloc/imu_t.hpp"
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
@@ -20,10 +24,20 @@ std::optional<core::OdometryInput> toCore(const lcmloc::odometry_t& m, std::stri
 std::optional<core::RulerDetection> toCore(const lcmloc::magruler_t& m, const std::string& channel,
                                            std::string* why = nullptr);
 models::TruthState toCore(const lcmloc::ground_truth_t& m);
+/// IMU sample; nullopt (why set) when a field is NaN/Inf or utime is negative.
+std::optional<core::ImuInput> toCore(const lcmloc::imu_t& m, const std::string& channel,
+                                     std::string* why = nullptr);
+/// GPS fix -> local frame. A fix with fix_type < 2 converts with has_fix = false (the filters
+/// report it as "no_fix"); a fix with NaN/Inf or out-of-range lat/lon returns nullopt.
+std::optional<core::GpsInput> toCore(const lcmloc::gps_fix_t& m, const std::string& channel,
+                                     const LocalFrame& frame, std::string* why = nullptr);
 
 lcmloc::ground_truth_t toLcm(const models::TruthState& s, int64_t seq);
 lcmloc::odometry_t toLcm(const models::OdometrySample& s, int64_t seq);
 lcmloc::magruler_t toLcm(const models::RulerReading& r, int64_t seq);
+lcmloc::imu_t toLcm(const models::ImuSample& s, int64_t seq);
+/// Local fix -> gps_fix_t (lat/lon about the frame's datum, altitude = datum altitude).
+lcmloc::gps_fix_t toLcm(const models::GpsFixSample& f, const LocalFrame& frame, int64_t seq);
 lcmloc::pose_t toLcm(const core::FilterState& s, const std::string& filter, int64_t seq);
 lcmloc::gate_decision_t toLcm(const core::GateDecision& d, const std::string& filter, int64_t seq);
 core::FilterState toCore(const lcmloc::pose_t& m);

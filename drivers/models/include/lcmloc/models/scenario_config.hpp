@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "lcmloc/core/types.hpp"
+#include "lcmloc/models/gnss_sensors.hpp"
 
 namespace lcmloc::models {
 
@@ -84,8 +85,14 @@ struct ScenarioConfig {
   VehicleConfig vehicle;
   OdometrySensorConfig odometry;
   MagRulerConfig magruler;
+  ImuSensorConfig imu;              ///< GPS + IMU method (seeds/002)
+  GpsSensorConfig gps;
   std::vector<FaultConfig> faults{{"phantom_marker", 12.9, 0.10}, {"wrong_offset", 24.5, 0.35}};
 };
+
+/// Arc length at which the vehicle stops: end_margin past the last marker, or the end of the
+/// path when there are no markers (the GPS scenarios).
+double stopArcLength(const ScenarioConfig& sc, double path_length);
 
 /// Derives the seed of a named component from the master seed (deterministic, stable).
 uint64_t componentSeed(uint64_t master, const std::string& component);

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "lcmloc/core/engine.hpp"
+#include "lcmloc/models/gnss_sensors.hpp"
 #include "lcmloc/models/world.hpp"
 
 namespace lcmloc::models {
@@ -32,6 +33,7 @@ struct ScenarioFilterResult {
 struct ScenarioResult {
   core::MarkerMap map;
   std::vector<TruthState> truth;
+  std::vector<GpsFixSample> gps;               ///< fixes fed to the filters (when gps.enabled)
   std::vector<ScenarioFilterResult> filters;   ///< in the order requested
 };
 

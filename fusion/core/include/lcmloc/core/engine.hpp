@@ -24,17 +24,19 @@ struct EngineInput {
   std::string channel;
   int64_t seq = 0;
   int64_t utime = 0;
-  std::variant<OdometryInput, RulerDetection, ControlCommand> payload;
+  /// Alternatives are only ever appended (the index is part of the canonical tie-break).
+  std::variant<OdometryInput, RulerDetection, ControlCommand, ImuInput, GpsInput> payload;
 };
 
 /// Outputs are delivered through callbacks, in processing order.
 struct EngineOutputs {
-  /// (filter name, state) after every processed odometry or ruler input, for the active filter
-  /// (is_active = true) and each shadow filter.
+  /// (filter name, state) after every processed odometry or ruler input, and after every IMU
+  /// or GPS input a filter used, for the active filter (is_active = true) and each shadow.
   std::function<void(const std::string& filter, bool is_active, const FilterState&)> on_state;
   std::function<void(const std::string& filter, bool is_active, const GateDecision&)> on_decision;
   /// Events worth a human's attention: ("ack"|"refused"|"lockout"|"recovered"|"too_old"|
-  /// "bad_input", detail). "bad_input": an odometry increment with a NaN/Inf field (skipped).
+  /// "bad_input", detail). "bad_input": an odometry increment, IMU sample or GPS fix (with a fix) with a NaN/Inf field
+  /// (skipped).
   std::function<void(const std::string& event, const std::string& detail, int64_t utime)> on_event;
 };
 
@@ -42,7 +44,7 @@ struct EngineConfig {
   FilterConfig filter;                 ///< initial active filter
   std::vector<std::string> shadow;     ///< shadow filter types (same parameters otherwise)
   int64_t reorder_window_us = 50000;
-  /// Canonical tie-break rank at equal utime: control < odometry < ruler (by payload type);
+  /// Canonical tie-break rank at equal utime: control < odometry < ruler < imu < gps (by payload type);
   /// inputs of one type on different channels are ordered by a stable hash of the channel name,
   /// then by seq.
 };

@@ -23,6 +23,31 @@ struct GateConfig {
   double threshold(int innovation_dim) const;  ///< the sigma of eq. 19 in force
 };
 
+/// Parameters of the GNSS filters (tvekf, ukf_gps): GPS + IMU + encoder + steering, the
+/// time-varying EKF of Choi and Kong (seeds/002) and a UKF over the same sensors.
+/// See docs/tvekf.md for the derivations.
+struct GnssConfig {
+  double accel_std = 0.1;          ///< forward accelerometer noise, 1 sigma [m/s^2]
+  double accel_saturation = 0.0;   ///< |accel x| >= this is a saturated sample, not used [m/s^2]; 0 = no check
+  double accel_unknown_std = 3.0;  ///< acceleration 1 sigma when no valid IMU sample arrived [m/s^2]
+  double encoder_std = 0.02;       ///< encoder travelled-distance measurement, 1 sigma [m]
+  double steering_std = 0.01;      ///< steering potentiometer, 1 sigma [rad]
+  double heading_rw = 0.01;        ///< heading process noise [rad/sqrt(s)]
+  double position_rw = 0.1;        ///< position process noise [m/sqrt(s)]
+  double mag_std = 0.05;           ///< magnetometer heading, 1 sigma [rad]
+  double declination = 0.0;        ///< magnetic declination, east positive [rad]
+  bool use_magnetometer = true;    ///< fuse the magnetometer heading (§2.2)
+  double gps_std = 2.9;            ///< GPS 1 sigma per axis when the fix carries none [m]
+  double speed_std0 = 0.5;         ///< initial 1 sigma of the speed [m/s]
+  /// Lock-out of the GPS gate: this many consecutive GPS gate rejections declare a lock-out
+  /// (status LOCKOUT) and inflate the position covariance by FilterConfig::lockout_inflation,
+  /// again after every further gps_lockout_rejections rejections, until a fix is accepted.
+  int gps_lockout_rejections = 5;
+  /// Same for the magnetometer heading gate (samples).
+  int mag_lockout_rejections = 50;
+  double coast_timeout = 3.0;      ///< no accepted fix for this long: status DEAD_RECKONING [s]
+};
+
 /// Parameters shared by every filter of the magnetic-ruler family (defaults: the paper, §4,
 /// as read in docs/paper_000_reading.md).
 struct FilterConfig {
@@ -57,7 +82,13 @@ struct FilterConfig {
   double steer_bias_std0 = 0.02;   ///< initial 1-sigma of b [rad]
   double scale_rw = 1e-4;          ///< random walk of k per metre travelled [1/sqrt(m)]
   double steer_bias_rw = 1e-4;     ///< random walk of b per metre travelled [rad/sqrt(m)]
+  /// "tvekf" and "ukf_gps" only (they also use wheelbase, initial_pose, p0_diag, sigma, gate,
+  /// lockout_inflation).
+  GnssConfig gnss;
 };
+
+/// Measurement kinds a filter may use (Filter::uses).
+enum class Measurement { Ruler, Imu, Gps };
 
 class Filter {
  public:
@@ -71,9 +102,18 @@ class Filter {
   virtual void initialize(const FilterState& from) = 0;
   /// Time update with one odometry increment.
   virtual void predict(const OdometryInput& odo) = 0;
+  /// Whether the filter uses this kind of measurement. The engine hands a filter only the
+  /// measurements it uses and publishes decisions for those only. Default: the ruler (the
+  /// magnetic-ruler family, including dead reckoning, which reports "dead_reckoning").
+  virtual bool uses(Measurement m) const { return m == Measurement::Ruler; }
   /// Measurement update with one ruler detection; returns the gate decision (dead reckoning
   /// returns a decision with accepted = false, reason "dead_reckoning").
   virtual GateDecision update(const RulerDetection& det) = 0;
+  /// One IMU sample. Returns the decision on the measurement it carries (the magnetometer
+  /// heading) when the filter used one; nullopt when nothing was gated (default: ignored).
+  virtual std::optional<GateDecision> update(const ImuInput&) { return std::nullopt; }
+  /// One GPS fix; returns the gate decision when the filter uses GPS (default: ignored).
+  virtual std::optional<GateDecision> update(const GpsInput&) { return std::nullopt; }
 };
 
 /// Builds a filter of cfg.type over the marker map. Throws std::invalid_argument for an unknown

@@ -34,6 +34,27 @@ struct RulerDetection {
   int64_t seq = 0;                  ///< seq of the measurement on its channel
 };
 
+/// One inertial sample (body frame: x forward, y left, z up). Consumed by the GNSS filters
+/// (tvekf, ukf_gps): accel[0] is the forward acceleration of §2.1, mag gives the heading of §2.2.
+struct ImuInput {
+  int64_t utime = 0;
+  Vec3 accel = Vec3::Zero();  ///< specific force [m/s^2]
+  Vec3 gyro = Vec3::Zero();   ///< angular rate [rad/s]
+  Vec3 mag = Vec3::Zero();    ///< magnetic field [gauss]
+  std::string sensor = "IMU"; ///< input channel (for gate decisions)
+  int64_t seq = 0;
+};
+
+/// A GNSS fix already converted to the local metric frame (x east, y north) by the adapter.
+struct GpsInput {
+  int64_t utime = 0;
+  bool has_fix = true;         ///< false: the receiver reported no fix (x, y meaningless)
+  double x = 0.0, y = 0.0;     ///< [m]
+  double position_std = 0.0;   ///< 1-sigma horizontal error [m]; <= 0 or NaN: use the filter's default
+  std::string sensor = "GPS";
+  int64_t seq = 0;
+};
+
 /// A magnetic marker of the map.
 struct Marker {
   int id = 0;

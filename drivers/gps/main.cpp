@@ -1,0 +1,94 @@
+// lcmloc-gps: GNSS fixes on the GPS channel from one of two sources (gps.source):
+//   sim   GROUND_TRUTH -> GpsSensor (drivers/models: error, outages, jumps) -> lat/lon about
+//         the datum (GeographicLib LocalCartesian) -> GPS
+//   gpsd  a real receiver (or gpsfake) through libgps -> GPS
+#include <spdlog/spdlog.h>
+
+#include "gpsd_source.hpp"
+#include "lcmloc/common/config.hpp"
+#include "lcmloc/common/convert.hpp"
+#include "lcmloc/common/geodesy.hpp"
+#include "lcmloc/common/process.hpp"
+#include "lcmloc/models/gnss_sensors.hpp"
+#include "lcmloc/models/world.hpp"
+
+using namespace lcmloc;
+
+namespace {
+
+int runSim(const common::SystemConfig& cfg, common::Bus& bus) {
+  const auto& sc = cfg.scenario;
+  models::GpsSensor sensor(sc.gps, models::componentSeed(sc.seed, "gps"));
+  const common::LocalFrame frame(cfg.datum);
+  common::SeqTracker gaps;
+  int64_t received = 0, seq = 0, no_fix = 0;
+  bus.subscribe<lcmloc::ground_truth_t>(
+      cfg.channels.ground_truth, [&](const std::string& ch, const lcmloc::ground_truth_t& m, int64_t) {
+        ++received;
+        if (int64_t missing = gaps.observe(ch, m.seq))
+          spdlog::warn("{}: {} message(s) missing before seq {}", ch, missing, m.seq);
+        if (auto f = sensor.sample(common::toCore(m))) {
+          if (!f->has_fix && no_fix++ == 0) spdlog::info("outage: no fix from utime {}", f->utime);
+          bus.publish(cfg.channels.gps, common::toLcm(*f, frame, seq++));
+        }
+      });
+  common::Heartbeat hb(bus, cfg.channels.heartbeat, "lcmloc-gps", [&] {
+    return common::Heartbeat::Counters{{"received", received}, {"published", seq}, {"no_fix", no_fix},
+                                       {"gaps", gaps.gaps()}};
+  });
+  spdlog::info("simulated receiver: {} -> {} at {} Hz, {} error {} m, {} outage(s), {} jump(s), datum ({}, {})",
+               cfg.channels.ground_truth, cfg.channels.gps, sc.gps.rate_hz, sc.gps.error_model, sc.gps.error,
+               sc.gps.outages.size(), sc.gps.jumps.size(), cfg.datum.latitude, cfg.datum.longitude);
+  while (!common::stopRequested()) {
+    hb.tick();
+    bus.handle(100);
+  }
+  spdlog::info("stopping: {} ground-truth samples in, {} fixes out ({} without a fix)", received, seq, no_fix);
+  hb.publish("stopping");
+  return common::kExitOk;
+}
+
+int runGpsd(const common::SystemConfig& cfg, common::Bus& bus) {
+  const auto& g = cfg.gps_driver;
+  gps::GpsdSource src(g.gpsd_host, g.gpsd_port, g.time_source == "fix");
+  int64_t seq = 0, no_fix = 0;
+  common::Heartbeat hb(bus, cfg.channels.heartbeat, "lcmloc-gps", [&] {
+    return common::Heartbeat::Counters{{"reports", src.reports()}, {"published", seq}, {"no_fix", no_fix}};
+  });
+  spdlog::info("gpsd at {}:{} -> {} (utime from {})", g.gpsd_host, g.gpsd_port, cfg.channels.gps,
+               g.time_source);
+  while (!common::stopRequested()) {
+    hb.tick();
+    auto fix = src.poll(100);
+    if (!fix) continue;
+    fix->seq = seq++;
+    if (fix->fix_type < 2) ++no_fix;
+    if (seq == 1)
+      spdlog::info("first report: fix type {}, ({:.7f}, {:.7f})", fix->fix_type, fix->latitude, fix->longitude);
+    bus.publish(cfg.channels.gps, *fix);
+  }
+  spdlog::info("stopping: {} gpsd reports, {} fixes out ({} without a fix)", src.reports(), seq, no_fix);
+  hb.publish("stopping");
+  return common::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"lcmloc-gps: GNSS fixes on GPS, simulated (from GROUND_TRUTH) or from gpsd"};
+  common::CommonOptions opts;
+  common::addCommonOptions(app, opts);
+  std::string source, host, port;
+  app.add_option("--source", source, "override gps.source (sim, gpsd)")->check(CLI::IsMember({"sim", "gpsd"}));
+  app.add_option("--gpsd-host", host, "override gps.gpsd_host");
+  app.add_option("--gpsd-port", port, "override gps.gpsd_port");
+
+  return common::runProcess(app, argc, argv, opts, "lcmloc-gps", [&] {
+    auto cfg = common::loadSystemConfig(opts.config);
+    if (!source.empty()) cfg.gps_driver.source = source;
+    if (!host.empty()) cfg.gps_driver.gpsd_host = host;
+    if (!port.empty()) cfg.gps_driver.gpsd_port = port;
+    common::Bus bus(opts.lcm_url);
+    return cfg.gps_driver.source == "gpsd" ? runGpsd(cfg, bus) : runSim(cfg, bus);
+  });
+}

@@ -1,0 +1,211 @@
+// GNSS process tests: gpsfake -> gpsd -> lcmloc-gps -> GPS -> lcmloc-fusion (tvekf), and the
+// simulated GPS + IMU pipeline, over udpm on loopback with a unique port per test.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <set>
+
+#include "child.hpp"
+#include "lcmloc/common/geodesy.hpp"
+#include "lcmloc/common/transport.hpp"
+#include "lcmloc/gate_decision_t.hpp"
+#include "lcmloc/gps_fix_t.hpp"
+#include "lcmloc/heartbeat_t.hpp"
+#include "lcmloc/ground_truth_t.hpp"
+#include "lcmloc/imu_t.hpp"
+#include "lcmloc/pose_t.hpp"
+
+using namespace std::chrono_literals;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string uniqueUrl() {
+  static int next = 0;
+  const int port = 40000 + (::getpid() % 3000) * 4 + (next++ % 4);
+  return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0&recv_buf_size=4194304";
+}
+
+bool waitFor(lcmloc::common::Bus& bus, const std::function<bool()>& pred, std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (!pred() && std::chrono::steady_clock::now() < deadline) bus.handle(50);
+  return pred();
+}
+
+std::string findInPath(const std::string& exe) {
+  for (const char* dir : {"/usr/bin", "/usr/sbin", "/usr/local/bin", "/bin", "/sbin"}) {
+    const std::string p = std::string(dir) + "/" + exe;
+    if (::access(p.c_str(), X_OK) == 0) return p;
+  }
+  return "";
+}
+
+class GnssProcess : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() / ("lcmloc_gnss_" + std::to_string(::getpid()) + "_" + info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    url_ = uniqueUrl();
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir_);
+  }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string writeFile(const std::string& name, const std::string& text) const {
+    std::ofstream(path(name)) << text;
+    return path(name);
+  }
+  fs::path dir_;
+  std::string url_;
+};
+
+}  // namespace
+
+TEST_F(GnssProcess, GpsfakeGpsdDriverFusionEndToEnd) {
+  const std::string gpsfake = findInPath("gpsfake"), gpsd = findInPath("gpsd");
+  if (gpsfake.empty() || gpsd.empty())
+    GTEST_SKIP() << "gpsfake/gpsd not installed (Debian gpsd, gpsd-clients): the gpsd path is not tested";
+  const int port = 29500 + ::getpid() % 400;
+  const std::string cfg = writeFile("gnss.yaml", R"(
+datum: {latitude: -33.883, longitude: 151.195, altitude: 0.0}
+gps: {source: gpsd, gpsd_host: localhost, gpsd_port: ")" + std::to_string(port) + R"("}
+fusion:
+  filter:
+    type: tvekf
+    initial_pose: [0.0, 0.0, 0.0]
+    p0_diag: [1.0e5, 1.0e5, 1.0]
+    gnss: {position_rw: 5.0}   # GPS only (no odometry here): let the estimate follow the fixes
+)");
+  lcmloc::common::Bus bus(url_);
+  std::vector<lcmloc::gps_fix_t> fixes;
+  std::vector<lcmloc::gate_decision_t> decisions;
+  std::vector<lcmloc::pose_t> poses;
+  bus.subscribe<lcmloc::gps_fix_t>("GPS", [&](const std::string&, const lcmloc::gps_fix_t& m, int64_t) { fixes.push_back(m); });
+  bus.subscribe<lcmloc::gate_decision_t>("GATE", [&](const std::string&, const lcmloc::gate_decision_t& m, int64_t) { decisions.push_back(m); });
+  bus.subscribe<lcmloc::pose_t>("POSE", [&](const std::string&, const lcmloc::pose_t& m, int64_t) { poses.push_back(m); });
+
+  Child fusion(LCMLOC_FUSION, {"--config", cfg, "--lcm-url", url_}, path("fusion.log"));
+  // gpsfake starts its own gpsd on the port and feeds it once the driver connects.
+  Child fake(gpsfake, {"-1", "-q", "-c", "0.1", "-P", std::to_string(port), LCMLOC_NMEA_FILE}, path("gpsfake.log"));
+  std::unique_ptr<Child> driver;
+  const auto deadline = std::chrono::steady_clock::now() + 20s;
+  // gpsd may take a moment to listen: restart the driver until it connects.
+  while (std::chrono::steady_clock::now() < deadline && fixes.empty()) {
+    if (!driver || !driver->running()) {
+      if (driver && !fake.running()) break;
+      driver = std::make_unique<Child>(LCMLOC_GPS, std::vector<std::string>{"--config", cfg, "--lcm-url", url_},
+                                       path("gps.log"));
+    }
+    bus.handle(200);
+    driver->wait(1ms);
+  }
+  if (fixes.empty() && fake.running() == false && fake.output().find("Traceback") != std::string::npos)
+    GTEST_SKIP() << "gpsfake cannot run here: " << fake.output();
+  ASSERT_TRUE(waitFor(bus, [&] { return fixes.size() >= 14; }, 30s))
+      << fixes.size() << " fixes\n" << driver->output() << fake.output();
+  ASSERT_TRUE(waitFor(bus, [&] { return decisions.size() + 1 >= fixes.size(); }, 5s)) << fusion.output();
+
+  // The NMEA log drives east at 5 m/s from (100, 50) m; no fix at 12:00:12 and 12:00:13.
+  const lcmloc::common::LocalFrame frame({-33.883, 151.195, 0.0});
+  int with_fix = 0, without = 0;
+  for (const auto& f : fixes) {
+    if (f.fix_type < 2) { ++without; continue; }
+    ++with_fix;
+    double x, y, z;
+    frame.toLocal(f.latitude, f.longitude, f.altitude, x, y, z);
+    const double k = static_cast<double>((f.utime / 1000000) % 60);  // seconds of the minute
+    // The log was written with a spherical Earth and 1e-4 arc-minute resolution (~0.2 m).
+    EXPECT_NEAR(x, 100.0 + 5.0 * k, 0.5) << "utime " << f.utime;
+    EXPECT_NEAR(y, 50.0, 0.5);
+    EXPECT_GE(f.position_std, 0.0);
+  }
+  EXPECT_GE(with_fix, 12);
+  EXPECT_EQ(without, 2);
+  int accepted = 0, no_fix = 0;
+  for (const auto& d : decisions) {
+    EXPECT_EQ(d.sensor, "GPS");
+    EXPECT_EQ(d.filter, "tvekf");
+    accepted += d.accepted;
+    no_fix += d.reason == "no_fix";
+  }
+  EXPECT_EQ(no_fix, 2);
+  EXPECT_GE(accepted, 10);
+  ASSERT_FALSE(poses.empty());
+  // From (0, 0) with a wide prior, the first fix pulls the estimate to within metres of it.
+  EXPECT_NEAR(poses.front().state[0], 100.0 + 5.0 * ((fixes.front().utime / 1000000) % 60), 5.0);
+  EXPECT_NEAR(poses.back().state[1], 50.0, 10.0);
+  driver->signal(SIGINT);
+  fusion.signal(SIGINT);
+  EXPECT_EQ(driver->wait(5s).value_or(-1), 0) << driver->output();
+  EXPECT_EQ(fusion.wait(5s).value_or(-1), 0) << fusion.output();
+}
+
+TEST_F(GnssProcess, GpsdUnreachableIsAClearError) {
+  const std::string cfg = writeFile("gnss.yaml", "gps: {source: gpsd, gpsd_port: \"1\"}\n");
+  Child driver(LCMLOC_GPS, {"--config", cfg, "--lcm-url", url_}, path("gps.log"));
+  EXPECT_EQ(driver.wait(10s).value_or(-1), 1);
+  EXPECT_NE(driver.output().find("cannot connect to gpsd"), std::string::npos) << driver.output();
+}
+
+TEST_F(GnssProcess, HelpAndBadConfig) {
+  for (const char* exe : {LCMLOC_GPS, LCMLOC_IMU}) {
+    Child help(exe, {"--help"}, path("help.log"));
+    EXPECT_EQ(help.wait(5s).value_or(-1), 0);
+    EXPECT_NE(help.output().find("--config"), std::string::npos);
+    const std::string bad = writeFile("bad.yaml", "gps: {error_model: cauchy}\n");
+    Child b(exe, {"--config", bad, "--lcm-url", url_}, path("bad.log"));
+    EXPECT_EQ(b.wait(5s).value_or(-1), 2) << b.output();
+    EXPECT_NE(b.output().find("gps.error_model"), std::string::npos) << b.output();
+  }
+}
+
+TEST_F(GnssProcess, SimulatedImuAndGpsDriversFeedTheFusion) {
+  // A 60 m straight drive at 20x real time: sim -> odometry, imu, gps (sim) -> fusion tvekf.
+  const std::string cfg = writeFile("sim.yaml", R"(
+scenario: {realtime_factor: 20.0}
+path: {x0: 0.0, y0: 0.0, theta0: 0.0, segments: [{length: 60.0, curvature: 0.0}]}
+markers: {count: 0}
+vehicle: {speed: 5.0, accel: 2.0, weave_amplitude: 0.0}
+gps: {rate_hz: 2.0, error: 2.0}
+fusion: {filter: {type: tvekf, initial_pose: [0.0, 0.0, 0.0], p0_diag: [1.0, 1.0, 0.01]}}
+)");
+  lcmloc::common::Bus bus(url_);
+  lcmloc::ground_truth_t last_truth{};
+  lcmloc::pose_t last_pose{};
+  int imu = 0, gps = 0, gate_gps = 0, gate_imu = 0;
+  bus.subscribe<lcmloc::ground_truth_t>("GROUND_TRUTH", [&](const std::string&, const lcmloc::ground_truth_t& m, int64_t) { last_truth = m; });
+  bus.subscribe<lcmloc::pose_t>("POSE", [&](const std::string&, const lcmloc::pose_t& m, int64_t) { last_pose = m; });
+  bus.subscribe<lcmloc::imu_t>("IMU", [&](const std::string&, const lcmloc::imu_t&, int64_t) { ++imu; });
+  bus.subscribe<lcmloc::gps_fix_t>("GPS", [&](const std::string&, const lcmloc::gps_fix_t&, int64_t) { ++gps; });
+  bus.subscribe<lcmloc::gate_decision_t>("GATE", [&](const std::string&, const lcmloc::gate_decision_t& m, int64_t) {
+    (m.sensor == "GPS" ? gate_gps : gate_imu) += m.accepted;
+  });
+  std::vector<std::string> common{"--config", cfg, "--lcm-url", url_};
+  Child fusion(LCMLOC_FUSION, common, path("fusion.log"));
+  Child odo(LCMLOC_ODOMETRY, common, path("odo.log"));
+  Child imud(LCMLOC_IMU, common, path("imu.log"));
+  Child gpsd(LCMLOC_GPS, common, path("gps.log"));
+  std::set<std::string> up;  // every process heartbeats once it has subscribed
+  bus.subscribe<lcmloc::heartbeat_t>("HEARTBEAT", [&](const std::string&, const lcmloc::heartbeat_t& m, int64_t) { up.insert(m.process); });
+  ASSERT_TRUE(waitFor(bus, [&] { return up.size() >= 4; }, 10s)) << up.size();
+  Child sim(LCMLOC_SIM, common, path("sim.log"));
+  ASSERT_TRUE(waitFor(bus, [&] { return sim.wait(0ms).has_value(); }, 30s));
+  ASSERT_EQ(sim.wait(1s).value_or(-1), 0) << sim.output();
+  ASSERT_TRUE(waitFor(bus, [&] { return last_pose.utime >= last_truth.utime - 100000; }, 5s)) << fusion.output();
+  for (Child* c : {&fusion, &odo, &imud, &gpsd}) c->signal(SIGINT);
+  for (Child* c : {&fusion, &odo, &imud, &gpsd}) EXPECT_EQ(c->wait(5s).value_or(-1), 0) << c->output();
+  EXPECT_GT(imu, 500);
+  EXPECT_GT(gps, 10);
+  EXPECT_GT(gate_gps, 10);
+  EXPECT_GT(gate_imu, 500);
+  EXPECT_NEAR(last_truth.x, 60.0, 1.0);
+  EXPECT_LT(std::hypot(last_pose.state[0] - last_truth.x, last_pose.state[1] - last_truth.y), 2.0)
+      << last_pose.state[0] << ", " << last_pose.state[1] << " truth " << last_truth.x << ", " << last_truth.y
+      << " theta " << last_pose.state[2] << " speed " << last_pose.state[3];
+}
