@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <memory>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -59,12 +60,12 @@ class Decoder {
     out_.issues.push_back({out_.events_read - 1, offset, what});
   }
   void truth(const lcm::LogEvent& ev, int64_t offset) {
-    lcmloc::ground_truth_t m;
+    lcmloc::ground_truth_t m{};
     if (!decode(ev, m, out_, offset)) return;
     out_.truth.push_back({m.utime, m.x, m.y, m.heading, m.distance});
   }
   void odometry(const lcm::LogEvent& ev, int64_t offset) {
-    lcmloc::odometry_t m;
+    lcmloc::odometry_t m{};
     if (!decode(ev, m, out_, offset)) return;
     ++out_.odometry_messages;
     std::string why;
@@ -73,7 +74,7 @@ class Decoder {
     out_.inputs.push_back({ev.channel, m.seq, m.utime, *in});
   }
   void ruler(const lcm::LogEvent& ev, int64_t offset) {
-    lcmloc::magruler_t m;
+    lcmloc::magruler_t m{};
     if (!decode(ev, m, out_, offset)) return;
     ++out_.ruler_messages;
     std::string why;
@@ -87,19 +88,19 @@ class Decoder {
     out_.inputs.push_back({ev.channel, m.seq, m.utime, *det});
   }
   void fault(const lcm::LogEvent& ev, int64_t offset) {
-    lcmloc::fault_event_t m;
+    lcmloc::fault_event_t m{};
     if (!decode(ev, m, out_, offset)) return;
     out_.faults.push_back({m.utime, m.kind, m.channel, m.measurement_seq, m.x, m.y, m.lateral_offset});
   }
   void pose(const lcm::LogEvent& ev, int64_t offset) {
-    lcmloc::pose_t m;
+    lcmloc::pose_t m{};
     if (!decode(ev, m, out_, offset)) return;
     if (m.dim < 3 || static_cast<int>(m.state.size()) < 3)
       return invalid(offset, "pose with fewer than 3 states");
     out_.live_poses.push_back({m.utime, m.filter, m.state[0], m.state[1], m.state[2], m.status});
   }
   void gate(const lcm::LogEvent& ev, int64_t offset) {
-    lcmloc::gate_decision_t m;
+    lcmloc::gate_decision_t m{};
     if (!decode(ev, m, out_, offset)) return;
     core::GateDecision d;
     d.utime = m.utime;
@@ -147,7 +148,7 @@ int64_t findSync(FILE* f, int64_t from) {
   }
 }
 
-void closeDamage(Damage& dmg, int64_t resume_at, LogData& out) {
+void closeDamage(Damage& dmg, int64_t resume_at, ScanSummary& out) {
   if (!dmg.open) return;
   const int64_t skipped = resume_at - dmg.start;
   out.bytes_unreadable += skipped;
@@ -164,46 +165,97 @@ void closeDamage(Damage& dmg, int64_t resume_at, LogData& out) {
 
 }  // namespace
 
-LogData readLog(const std::string& path, const common::ChannelConfig& channels,
-                const std::atomic<bool>* stop) {
-  LogData out;
-  out.path = path;
+ScanSummary scanLog(const std::string& path, const std::function<void(const RawEvent&)>& on_event,
+                    const std::atomic<bool>* stop) {
+  // Parsed here rather than with lcm::LogFile: LCM 1.3.1's reader also rejects an intact event
+  // when the sync word after it is damaged, and cannot say where an event starts.
+  ScanSummary out;
   out.file_size = fileSize(path);
   if (out.file_size < 0) throw std::runtime_error("cannot open log '" + path + "': no such file");
-  lcm::LogFile log(path, "r");
-  if (!log.good()) throw std::runtime_error("cannot open log '" + path + "' for reading");
-  FILE* f = log.getFilePtr();
-  Decoder decoder(channels, out);
+  std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!file) throw std::runtime_error("cannot open log '" + path + "' for reading");
+  FILE* f = file.get();
+  std::vector<char> iobuf(1 << 20);
+  std::setvbuf(f, iobuf.data(), _IOFBF, iobuf.size());
   Damage dmg;
-  int64_t expected = 0;  // where the next event should start if the file is intact
+  std::string channel;
+  std::vector<uint8_t> data;
+  int64_t pos = 0;
+  auto be = [](const unsigned char* p, int n) {
+    uint64_t v = 0;
+    for (int i = 0; i < n; ++i) v = (v << 8) | p[i];
+    return v;
+  };
 
-  while (!(stop && stop->load())) {
-    const int64_t start = ftello(f);
-    const lcm::LogEvent* ev = log.readNextEvent();
-    if (!ev) {
-      if (start >= out.file_size && !dmg.open) break;  // clean end of file
-      if (!dmg.open) dmg = {true, out.events_read, std::max(start, expected)};
-      // Resynchronise on the next sync word after the failed event, if there is one.
-      const int64_t next = findSync(f, start + 1);
+  while (pos < out.file_size && !(stop && stop->load())) {
+    unsigned char h[kEventHeaderBytes];
+    bool ok = fseeko(f, pos, SEEK_SET) == 0 && std::fread(h, 1, sizeof h, f) == sizeof h &&
+              be(h, 4) == 0xEDA1DA01u;
+    int64_t channel_len = 0, data_len = 0;
+    if (ok) {
+      channel_len = static_cast<int64_t>(be(h + 20, 4));
+      data_len = static_cast<int64_t>(be(h + 24, 4));
+      ok = channel_len > 0 && channel_len < 1000 && data_len < (int64_t{1} << 31) &&
+           pos + kEventHeaderBytes + channel_len + data_len <= out.file_size;
+    }
+    if (ok) {
+      channel.resize(static_cast<std::size_t>(channel_len));
+      data.resize(static_cast<std::size_t>(data_len));
+      ok = std::fread(channel.data(), 1, channel.size(), f) == channel.size() &&
+           (data.empty() || std::fread(data.data(), 1, data.size(), f) == data.size());
+    }
+    if (!ok) {
+      if (!dmg.open) dmg = {true, out.events_read, pos};
+      const int64_t next = findSync(f, pos + 1);  // resynchronise on the next sync word
       if (next < 0) {
         closeDamage(dmg, out.file_size, out);
         break;
       }
-      fseeko(f, next, SEEK_SET);
+      pos = next;
       continue;
     }
-    const int64_t end = ftello(f);
-    const int64_t event_start =
-        end - kEventHeaderBytes - static_cast<int64_t>(ev->channel.size()) - ev->datalen;
-    if (event_start > expected && !dmg.open) dmg = {true, out.events_read, expected};
-    closeDamage(dmg, event_start, out);
-    expected = end;
-    ++out.events_read;
-    ++out.channel_counts[ev->channel];
-    decoder.handle(*ev, event_start);
+    closeDamage(dmg, pos, out);
+    RawEvent raw;
+    raw.index = out.events_read++;
+    raw.offset = pos;
+    raw.eventnum = static_cast<int64_t>(be(h + 4, 8));
+    raw.utime = static_cast<int64_t>(be(h + 12, 8));
+    raw.channel = &channel;
+    raw.data = data.data();
+    raw.size = static_cast<int32_t>(data_len);
+    on_event(raw);
+    pos += kEventHeaderBytes + channel_len + data_len;
   }
   if (stop && stop->load()) out.interrupted = true;
   out.damaged = out.bytes_unreadable > 0;
+  return out;
+}
+
+LogData readLog(const std::string& path, const common::ChannelConfig& channels,
+                const std::atomic<bool>* stop) {
+  LogData out;
+  out.path = path;
+  Decoder decoder(channels, out);
+  const ScanSummary scan = scanLog(path, [&](const RawEvent& raw) {
+    out.events_read = raw.index + 1;
+    ++out.channel_counts[*raw.channel];
+    lcm::LogEvent ev;
+    ev.eventnum = raw.eventnum;
+    ev.timestamp = raw.utime;
+    ev.channel = *raw.channel;
+    ev.datalen = raw.size;
+    ev.data = const_cast<uint8_t*>(raw.data);
+    decoder.handle(ev, raw.offset);
+  }, stop);
+  out.file_size = scan.file_size;
+  out.events_read = scan.events_read;
+  out.bytes_unreadable = scan.bytes_unreadable;
+  out.damaged = scan.damaged;
+  out.interrupted = scan.interrupted;
+  // Damage and bad messages in file order.
+  out.issues.insert(out.issues.end(), scan.issues.begin(), scan.issues.end());
+  std::stable_sort(out.issues.begin(), out.issues.end(),
+                   [](const LogIssue& a, const LogIssue& b) { return a.byte_offset < b.byte_offset; });
   std::stable_sort(out.truth.begin(), out.truth.end(),
                    [](const TruthSample& a, const TruthSample& b) { return a.utime < b.utime; });
   return out;

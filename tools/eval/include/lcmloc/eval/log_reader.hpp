@@ -5,6 +5,7 @@
 // byte offset.
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -69,6 +70,33 @@ struct LogData {
   /// Something to evaluate: at least one sensor input.
   bool usable() const { return !inputs.empty(); }
 };
+
+/// One intact event, as scanLog hands it out (data valid during the callback only).
+struct RawEvent {
+  int64_t index = 0;       ///< 0-based among intact events
+  int64_t offset = 0;      ///< byte offset of its header
+  int64_t eventnum = 0;    ///< event number stored in the file
+  int64_t utime = 0;       ///< log timestamp (receive time) [us]
+  const std::string* channel = nullptr;
+  const uint8_t* data = nullptr;
+  int32_t size = 0;
+};
+
+/// What scanLog found about the file itself.
+struct ScanSummary {
+  int64_t file_size = 0;
+  int64_t events_read = 0;
+  int64_t bytes_unreadable = 0;
+  bool damaged = false;
+  bool interrupted = false;
+  std::vector<LogIssue> issues;  ///< damaged stretches: where (event index, byte) and how long
+};
+
+/// Reads every intact event of any LCM log (ours, lcm-logger's) in file order, resynchronising
+/// past damage on the next sync word; each damaged stretch is recorded with its position.
+/// Throws std::runtime_error when the file cannot be opened. stop is polled between events.
+ScanSummary scanLog(const std::string& path, const std::function<void(const RawEvent&)>& on_event,
+                    const std::atomic<bool>* stop = nullptr);
 
 /// Reads the log at path. Throws std::runtime_error when the file cannot be opened.
 /// stop (optional) is polled between events; when set, reading ends early.
