@@ -4,9 +4,11 @@
 // error and exit 1 when the disk fills up. Per-channel accounting from the messages' seq:
 // upstream gaps apart from the logger's own drops, periodically on LOGGER_STATUS and at exit.
 #include <signal.h>
+#include <sys/socket.h>
 
 #include <atomic>
 #include <csignal>
+#include <filesystem>
 #include <fstream>
 
 #include <spdlog/spdlog.h>
@@ -39,21 +41,42 @@ std::string withReceiveBuffer(const std::string& url, int bytes) {
   return url + (url.find('?') == std::string::npos ? "?" : "&") + "recv_buf_size=" + std::to_string(bytes);
 }
 
-void reportReceiveBuffer(const std::string& url) {
-  const auto pos = url.find("recv_buf_size=");
-  if (pos == std::string::npos) {
-    spdlog::info("receive buffer: transport '{}' has no UDP receive buffer setting", url);
+/// Sizes the receive buffer of every UDP socket LCM opened (LCM 1.3.1 hides its socket, so they
+/// are found among our file descriptors) to at least bytes: SO_RCVBUF (capped by the kernel at
+/// net.core.rmem_max), then SO_RCVBUFFORCE (allowed with CAP_NET_ADMIN). Says what it got.
+void sizeReceiveBuffer(const std::string& url, int bytes) {
+  if (url.rfind("udpm://", 0) != 0) {
+    spdlog::info("receive buffer: transport '{}' has no UDP receive buffer to size", url);
     return;
   }
-  const long long requested = std::atoll(url.c_str() + pos + 14);
   long long rmem_max = -1;
   std::ifstream("/proc/sys/net/core/rmem_max") >> rmem_max;
-  if (rmem_max > 0 && requested > rmem_max)
-    spdlog::warn("receive buffer: {} bytes requested but the kernel caps it at net.core.rmem_max = {} bytes; "
-                 "raise it (sysctl -w net.core.rmem_max={}) or bursts may be lost", requested, rmem_max, requested);
+  int best = 0;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator("/proc/self/fd", ec)) {
+    const int fd = std::atoi(e.path().filename().c_str());
+    int type = 0, have = 0;
+    socklen_t len = sizeof type;
+    if (::getsockopt(fd, SOL_SOCKET, SO_TYPE, &type, &len) != 0 || type != SOCK_DGRAM) continue;
+    len = sizeof have;
+    ::getsockopt(fd, SOL_SOCKET, SO_RCVBUF, &have, &len);
+    if (have / 2 < bytes) {  // Linux reports twice the size set (bookkeeping overhead)
+      ::setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &bytes, sizeof bytes);
+      len = sizeof have;
+      ::getsockopt(fd, SOL_SOCKET, SO_RCVBUF, &have, &len);
+      if (have / 2 < bytes) ::setsockopt(fd, SOL_SOCKET, SO_RCVBUFFORCE, &bytes, sizeof bytes);
+      len = sizeof have;
+      ::getsockopt(fd, SOL_SOCKET, SO_RCVBUF, &have, &len);
+    }
+    best = std::max(best, have / 2);
+  }
+  if (best >= bytes)
+    spdlog::info("receive buffer: {} bytes for bursts (logger.recv_buf_size; kernel net.core.rmem_max = {})", best,
+                 rmem_max);
   else
-    spdlog::info("receive buffer: {} bytes for bursts (recv_buf_size in the LCM URL; kernel net.core.rmem_max = {})",
-                 requested, rmem_max);
+    spdlog::warn("receive buffer: {} bytes, less than the {} asked for: the kernel caps it at net.core.rmem_max = {} "
+                 "without CAP_NET_ADMIN; raise it (sysctl -w net.core.rmem_max={}) or bursts may be lost",
+                 best, bytes, rmem_max, bytes);
 }
 
 struct ChannelStats { int64_t received = 0, gaps = 0; };
@@ -99,7 +122,7 @@ int main(int argc, char** argv) {
     const std::string url = withReceiveBuffer(opts.lcm_url, cfg.logger.recv_buf_size);
 
     common::Bus bus(url);
-    reportReceiveBuffer(url);
+    sizeReceiveBuffer(url, cfg.logger.recv_buf_size);
     logger::LogWriter writer(wo);
     std::map<std::string, ChannelStats> stats;
     common::SeqTracker gaps;  // keyed by channel (HEARTBEAT: by channel and process)

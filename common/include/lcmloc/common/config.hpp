@@ -49,7 +49,7 @@ struct LoggerConfig {
   double flush_period = 0.2;          ///< fsync period [s, wall]
   std::string status_channel = "LOGGER_STATUS";  ///< logger_status_t channel ("" = none)
   double status_period = 1.0;         ///< status period [s, wall]
-  int recv_buf_size = 4194304;        ///< UDP receive buffer added to a udpm URL without one [bytes]
+  int recv_buf_size = 67108864;       ///< UDP receive buffer the logger sizes its sockets to [bytes]
 };
 
 struct SystemConfig {
