@@ -141,7 +141,7 @@ int main(int argc, char** argv) {
         }
         if (int64_t missing = gaps.observe(key, seq)) {
           s.gaps += missing;
-          spdlog::warn("{}: {} message(s) missing upstream before seq {}", key, missing, seq);
+          spdlog::warn("{}: {} message(s) missing before seq {} (lost upstream, not by the logger)", key, missing, seq);
         }
       }
       writer.push({ch, std::vector<uint8_t>(data, data + size), recv});

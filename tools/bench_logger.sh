@@ -46,7 +46,7 @@ for run in $(seq "$RUNS"); do
   /usr/bin/time -f "%U %S" -o "$dir/lcm.time" lcm-logger -q --lcm-url="$URL" -c 'BURST_.*' "$dir/lcm.lcmlog" &
   lcm_pid=$!
   /usr/bin/time -f "%U %S" -o "$dir/ours.time" "$BIN/lcmloc-logger" --lcm-url "$URL" --channel 'BURST_.*' \
-    --output "$dir/ours.lcmlog" --log-level warn 2>"$dir/ours.err" &
+    --output "$dir/ours.lcmlog" 2>"$dir/ours.err" &
   ours_pid=$!
   sleep 1  # both subscribed
   "$BIN/lcmloc-burst" --lcm-url "$URL" -n $SMALL_N -s $SMALL_B -c BURST_SMALL --log-level warn
@@ -61,6 +61,7 @@ for run in $(seq "$RUNS"); do
   printf 'run %d: lcm-logger %s/%d small %s/%d large, %.2f s CPU | lcmloc-logger %s/%d small %s/%d large, %.2f s CPU\n' \
     "$run" "${lcm_small:-0}" $SMALL_N "${lcm_large:-0}" $LARGE_N "$lcm_cpu" "${our_small:-0}" $SMALL_N \
     "${our_large:-0}" $LARGE_N "$our_cpu"
+  echo "       lcmloc-logger: $(grep -o 'recorded .*' "$dir/ours.err" | sed 's/ to [0-9]* file(s) ([^)]*)//')"
   results+=("${lcm_small:-0} ${lcm_large:-0} $lcm_cpu ${our_small:-0} ${our_large:-0} $our_cpu")
   rm -rf "$dir"
 done

@@ -15,6 +15,7 @@ LCMLOC_PACKAGES=(
   libgtest-dev googletest libbenchmark-dev
   default-jdk-headless libjchart2d-java
   gnuplot-nox iproute2
+  util-linux time bc procps
 )
 
 lcmloc_log() { echo "[lcmloc] $*" >&2; }
