@@ -49,34 +49,36 @@ for run in $(seq "$RUNS"); do
     --output "$dir/ours.lcmlog" 2>"$dir/ours.err" &
   ours_pid=$!
   sleep 1  # both subscribed
-  "$BIN/lcmloc-burst" --lcm-url "$URL" -n $SMALL_N -s $SMALL_B -c BURST_SMALL --log-level warn
-  "$BIN/lcmloc-burst" --lcm-url "$URL" -n $LARGE_N -s $LARGE_B -c BURST_LARGE --log-level warn
-  t_pub=$(date +%s.%N)
+  "$BIN/lcmloc-burst" --lcm-url "$URL" -n $SMALL_N -s $SMALL_B -c BURST_SMALL 2>"$dir/small.pub"
+  "$BIN/lcmloc-burst" --lcm-url "$URL" -n $LARGE_N -s $LARGE_B -c BURST_LARGE 2>"$dir/large.pub"
+  small_rate=$(grep -o '([0-9]* msg/s)' "$dir/small.pub" | tr -dc 0-9)
+  large_rate=$(grep -o '([0-9]* msg/s)' "$dir/large.pub" | tr -dc 0-9)
   settle "$dir/ours.lcmlog"; settle "$dir/lcm.lcmlog"
   stop $lcm_pid; stop $ours_pid
   read -r lu ls < "$dir/lcm.time"; read -r ou os < "$dir/ours.time"
   lcm_small=$(count "$dir/lcm.lcmlog" BURST_SMALL); lcm_large=$(count "$dir/lcm.lcmlog" BURST_LARGE)
   our_small=$(count "$dir/ours.lcmlog" BURST_SMALL); our_large=$(count "$dir/ours.lcmlog" BURST_LARGE)
   lcm_cpu=$(echo "$lu + $ls" | bc -l); our_cpu=$(echo "$ou + $os" | bc -l)
+  echo "       published: 100 B at ${small_rate} msg/s, 10 KB at ${large_rate} msg/s"
   printf 'run %d: lcm-logger %s/%d small %s/%d large, %.2f s CPU | lcmloc-logger %s/%d small %s/%d large, %.2f s CPU\n' \
     "$run" "${lcm_small:-0}" $SMALL_N "${lcm_large:-0}" $LARGE_N "$lcm_cpu" "${our_small:-0}" $SMALL_N \
     "${our_large:-0}" $LARGE_N "$our_cpu"
   echo "       lcmloc-logger: $(grep -o 'recorded .*' "$dir/ours.err" | sed 's/ to [0-9]* file(s) ([^)]*)//')"
-  results+=("${lcm_small:-0} ${lcm_large:-0} $lcm_cpu ${our_small:-0} ${our_large:-0} $our_cpu")
+  results+=("${lcm_small:-0} ${lcm_large:-0} $lcm_cpu ${our_small:-0} ${our_large:-0} $our_cpu ${small_rate:-0} ${large_rate:-0}")
   rm -rf "$dir"
 done
 
 printf '%s\n' "${results[@]}" | python3 -c '
 import json, statistics, sys
 rows = [list(map(float, l.split())) for l in sys.stdin if l.strip()]
-cols = ["lcm_small", "lcm_large", "lcm_cpu_s", "ours_small", "ours_large", "ours_cpu_s"]
+cols = ["lcm_small", "lcm_large", "lcm_cpu_s", "ours_small", "ours_large", "ours_cpu_s", "publish_small_msg_s", "publish_large_msg_s"]
 med = {c: statistics.median(r[i] for r in rows) for i, c in enumerate(cols)}
 rep = {"published": {"small": {"count": '$SMALL_N', "bytes": '$SMALL_B'}, "large": {"count": '$LARGE_N', "bytes": '$LARGE_B'}},
        "runs": [dict(zip(cols, r)) for r in rows], "median": med,
        "cpu_ratio_ours_over_lcm": med["ours_cpu_s"] / med["lcm_cpu_s"] if med["lcm_cpu_s"] else None}
 json.dump(rep, open("'"$OUT"'/bench_logger.json", "w"), indent=2)
 n = '$SMALL_N' + '$LARGE_N'
-print("median of %d runs:" % len(rows))
+print("median of %d runs (published: 100 B at %d msg/s, 10 KB at %d msg/s):" % (len(rows), med["publish_small_msg_s"], med["publish_large_msg_s"]))
 print("  %-14s %12s %12s %10s %16s" % ("logger", "100 B", "10 KB", "CPU [s]", "CPU/msg [us]"))
 for name, p in (("lcm-logger", "lcm"), ("lcmloc-logger", "ours")):
   rec = med[p + "_small"] + med[p + "_large"]
