@@ -1,6 +1,7 @@
 #include "lcmloc/logger/log_writer.hpp"
 
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <stdexcept>
@@ -64,6 +65,7 @@ void LogWriter::requestRotate() {
   {
     std::lock_guard<std::mutex> lock(mu_);
     rotate_requested_ = true;
+    rotate_at_ = queue_.size();  // after what is queued now
   }
   cv_.notify_one();
 }
@@ -122,13 +124,21 @@ void LogWriter::run() {
     cv_.wait_until(lock, next_flush, [this] { return closing_ || rotate_requested_ || !queue_.empty(); });
     batch.swap(queue_);
     queued_bytes_ = 0;
-    const bool rotate = rotate_requested_, closing = closing_;
+    const bool closing = closing_;
+    const std::size_t rotate_at = rotate_requested_ ? rotate_at_ : SIZE_MAX;  // index in batch
     rotate_requested_ = false;
     bool failed = stats_.failed;
     lock.unlock();
 
     int64_t lost = 0;
-    for (auto& ev : batch) {
+    auto rotateNow = [&] {
+      finishFile();
+      if (!stats_.failed) openNext();
+      failed = !file_;
+    };
+    for (std::size_t k = 0; k < batch.size(); ++k) {
+      auto& ev = batch[k];
+      if (k == rotate_at && !failed && file_) rotateNow();
       if (failed || !file_) { ++lost; continue; }
       const int64_t size = 28 + static_cast<int64_t>(ev.channel.size() + ev.data.size());
       if (file_->events() > 0 &&
@@ -145,12 +155,9 @@ void LogWriter::run() {
         failed = true;
       }
     }
+    if (rotate_at != SIZE_MAX && rotate_at >= batch.size() && !failed && file_) rotateNow();
     batch.clear();
     if (!failed && file_) {
-      if (rotate) {
-        finishFile();
-        if (!stats_.failed) openNext();
-      }
       const bool sync = clock::now() >= next_flush || closing;
       if (file_) {
         if (const int err = file_->flush(sync)) fail(err, "writing " + file_->path());

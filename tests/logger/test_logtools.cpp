@@ -349,3 +349,34 @@ TEST(FileName, ExpandsStrftimeAndIndexAndNeverReusesATakenName) {
   EXPECT_EQ(fileName(pattern, 1, t), (dir / "run-002.lcmlog").string());
   fs::remove_all(dir);
 }
+
+TEST(LogWriter, AFullQueueDropsAreCountedPerChannelAndEverythingElseIsWritten) {
+  const auto dir = fs::temp_directory_path() / ("lcmloc_logwriter_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  lcmloc::logger::WriterOptions o;
+  o.pattern = (dir / "w-{index}.lcmlog").string();
+  o.queue_bytes = 4096;  // a 5000-byte message can never be queued: a deterministic drop
+  lcmloc::logger::LogWriter w(o);
+  for (int i = 0; i < 50; ++i) EXPECT_TRUE(w.push({"SMALL", std::vector<uint8_t>(10, static_cast<uint8_t>(i)), i}));
+  EXPECT_FALSE(w.push({"BIG", std::vector<uint8_t>(5000, 0), 50}));
+  w.requestRotate();
+  for (int i = 51; i < 60; ++i) EXPECT_TRUE(w.push({"SMALL", std::vector<uint8_t>(10, 0), i}));
+  w.close();
+  const auto s = w.stats();
+  EXPECT_EQ(s.written, 59);
+  EXPECT_EQ(s.dropped, 1);
+  EXPECT_EQ(s.write_lost, 0);
+  EXPECT_EQ(s.flushed_events, 59);
+  EXPECT_FALSE(s.failed);
+  EXPECT_EQ(w.droppedByChannel(), (std::map<std::string, int64_t>{{"BIG", 1}}));
+  ASSERT_EQ(w.files().size(), 2u);
+  int64_t total = 0;
+  for (const auto& f : w.files()) {
+    const auto r = lcmloc::eval::scanLog(f, [](const lcmloc::eval::RawEvent& ev) { EXPECT_EQ(*ev.channel, "SMALL"); });
+    EXPECT_FALSE(r.damaged);
+    total += r.events_read;
+  }
+  EXPECT_EQ(total, 59);
+  EXPECT_EQ(w.files()[1], (dir / "w-001.lcmlog").string());
+  fs::remove_all(dir);
+}

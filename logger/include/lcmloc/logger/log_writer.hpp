@@ -92,6 +92,7 @@ class LogWriter {
   std::deque<Event> queue_;
   int64_t queued_bytes_ = 0;
   bool closing_ = false, rotate_requested_ = false;
+  std::size_t rotate_at_ = 0;  // queue position of the requested new file
   WriterStats stats_;
   std::vector<std::string> paths_;
   std::map<std::string, int64_t> dropped_by_channel_;
