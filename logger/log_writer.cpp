@@ -1,5 +1,8 @@
-#include "log_writer.hpp"
+#include "lcmloc/logger/log_writer.hpp"
 
+#include <cerrno>
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <stdexcept>
 
@@ -7,12 +10,35 @@
 
 namespace lcmloc::logger {
 
-LogWriter::LogWriter(const std::string& path, std::size_t capacity) : capacity_(capacity) {
-  const auto parent = std::filesystem::path(path).parent_path();
-  std::error_code ec;
-  if (!parent.empty()) std::filesystem::create_directories(parent, ec);
-  log_ = std::make_unique<lcm::LogFile>(path, "w");
-  if (!log_->good()) throw std::runtime_error("cannot open log file '" + path + "' for writing");
+std::string fileName(const std::string& pattern, int index, std::time_t t) {
+  char idx[16];
+  std::snprintf(idx, sizeof idx, "%03d", index);
+  std::string p = pattern;
+  bool has_index = false;
+  for (std::size_t pos; (pos = p.find("{index}")) != std::string::npos;) {
+    p.replace(pos, 7, idx);
+    has_index = true;
+  }
+  std::tm tm{};
+  localtime_r(&t, &tm);
+  std::vector<char> buf(p.size() * 4 + 256);
+  const std::size_t n = std::strftime(buf.data(), buf.size(), p.c_str(), &tm);
+  std::string name = (n == 0 && !p.empty()) ? p : std::string(buf.data(), n);
+  if (has_index || index == 0 || !std::filesystem::exists(name)) return name;
+  // Taken: insert -NNN before the extension (of the file name, not of a directory).
+  const std::filesystem::path path(name);
+  const std::string stem = (path.parent_path() / path.stem()).string();
+  const std::string ext = path.extension().string();
+  for (int i = index;; ++i) {
+    std::snprintf(idx, sizeof idx, "-%03d", i);
+    std::string candidate = stem + idx + ext;
+    if (!std::filesystem::exists(candidate)) return candidate;
+  }
+}
+
+LogWriter::LogWriter(WriterOptions opts) : opts_(std::move(opts)) {
+  openNext();
+  if (stats_.failed) throw std::runtime_error(stats_.error);
   thread_ = std::thread([this] { run(); });
 }
 
@@ -21,40 +47,139 @@ LogWriter::~LogWriter() { close(); }
 bool LogWriter::push(Event ev) {
   {
     std::lock_guard<std::mutex> lock(mu_);
-    if (closing_ || queue_.size() >= capacity_) {
-      ++dropped_;
+    const auto bytes = static_cast<int64_t>(ev.data.size() + ev.channel.size());
+    if (closing_ || stats_.failed || queue_.size() >= opts_.capacity ||
+        queued_bytes_ + bytes > opts_.queue_bytes) {
+      ++stats_.dropped;
       ++dropped_by_channel_[ev.channel];
       return false;
     }
+    queued_bytes_ += bytes;
     queue_.push_back(std::move(ev));
   }
   cv_.notify_one();
   return true;
 }
 
+void LogWriter::requestRotate() {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    rotate_requested_ = true;
+    rotate_at_ = queue_.size();  // after what is queued now
+  }
+  cv_.notify_one();
+}
+
+void LogWriter::fail(int err, const std::string& what) {
+  std::string why = std::strerror(err);
+  if (err == ENOSPC) why = "disk full (ENOSPC)";
+  else if (err == EFBIG) why = "file size limit reached (EFBIG)";
+  else if (err == EDQUOT) why = "disk quota exceeded (EDQUOT)";
+  std::lock_guard<std::mutex> lock(mu_);
+  stats_.failed = true;
+  stats_.error = what + ": " + why;
+}
+
+void LogWriter::finishFile() {
+  if (!file_) return;
+  const int err = file_->close();
+  closed_bytes_ += file_->fileBytes();
+  closed_events_ += file_->eventsWritten();
+  if (err) fail(err, "writing " + file_->path());
+  file_.reset();
+}
+
+void LogWriter::openNext() {
+  int index = 0;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    index = static_cast<int>(paths_.size());
+  }
+  const std::string name = fileName(opts_.pattern, index, std::time(nullptr));
+  try {
+    file_ = std::make_unique<EventFile>(name);
+  } catch (const std::exception& e) {
+    std::lock_guard<std::mutex> lock(mu_);
+    stats_.failed = true;
+    stats_.error = e.what();
+    return;
+  }
+  file_opened_ = std::chrono::steady_clock::now();
+  std::lock_guard<std::mutex> lock(mu_);
+  paths_.push_back(name);
+  stats_.files = static_cast<int32_t>(paths_.size());
+  stats_.file = name;
+  if (index > 0) spdlog::info("new log file {}", name);
+}
+
 void LogWriter::run() {
+  using clock = std::chrono::steady_clock;
+  const auto period = std::chrono::duration_cast<clock::duration>(std::chrono::duration<double>(opts_.flush_period));
+  const auto max_age = std::chrono::duration_cast<clock::duration>(std::chrono::duration<double>(opts_.max_file_seconds));
+  auto next_flush = clock::now() + period;
+  int64_t flushed = 0;
+  std::deque<Event> batch;
   std::unique_lock<std::mutex> lock(mu_);
   for (;;) {
-    cv_.wait(lock, [this] { return closing_ || !queue_.empty(); });
-    if (queue_.empty() && closing_) break;
-    std::deque<Event> batch;
+    cv_.wait_until(lock, next_flush, [this] { return closing_ || rotate_requested_ || !queue_.empty(); });
     batch.swap(queue_);
+    queued_bytes_ = 0;
+    const bool closing = closing_;
+    const std::size_t rotate_at = rotate_requested_ ? rotate_at_ : SIZE_MAX;  // index in batch
+    rotate_requested_ = false;
+    bool failed = stats_.failed;
     lock.unlock();
-    int64_t ok = 0, bad = 0;
-    for (auto& ev : batch) {
-      lcm::LogEvent le;
-      le.eventnum = 0;  // assigned by LCM
-      le.timestamp = ev.recv_utime;
-      le.channel = ev.channel;
-      le.datalen = static_cast<int32_t>(ev.data.size());
-      le.data = ev.data.data();
-      (log_->writeEvent(&le) == 0 ? ok : bad)++;
+
+    int64_t lost = 0;
+    auto rotateNow = [&] {
+      finishFile();
+      if (!stats_.failed) openNext();
+      failed = !file_;
+    };
+    for (std::size_t k = 0; k < batch.size(); ++k) {
+      auto& ev = batch[k];
+      if (k == rotate_at && !failed && file_) rotateNow();
+      if (failed || !file_) { ++lost; continue; }
+      const int64_t size = 28 + static_cast<int64_t>(ev.channel.size() + ev.data.size());
+      if (file_->events() > 0 &&
+          ((opts_.max_file_bytes > 0 && file_->size() + size > opts_.max_file_bytes) ||
+           (opts_.max_file_seconds > 0 && clock::now() - file_opened_ >= max_age))) {
+        finishFile();
+        if (!stats_.failed) openNext();
+        failed = !file_;
+        if (failed) { ++lost; continue; }
+      }
+      ++appended_;
+      if (const int err = file_->append(ev.recv_utime, ev.channel, ev.data.data(), ev.data.size())) {
+        fail(err, "writing " + file_->path());
+        failed = true;
+      }
     }
-    std::fflush(log_->getFilePtr());
+    if (rotate_at != SIZE_MAX && rotate_at >= batch.size() && !failed && file_) rotateNow();
+    batch.clear();
+    if (!failed && file_) {
+      const bool sync = clock::now() >= next_flush || closing;
+      if (file_) {
+        if (const int err = file_->flush(sync)) fail(err, "writing " + file_->path());
+        else if (sync) flushed = closed_events_ + file_->eventsWritten();
+      }
+      if (sync) next_flush = clock::now() + period;
+    }
+
     lock.lock();
-    written_ += ok;
-    write_errors_ += bad;
+    const int64_t written = closed_events_ + (file_ ? file_->eventsWritten() : 0);
+    stats_.written = written;
+    stats_.bytes_written = closed_bytes_ + (file_ ? file_->fileBytes() : 0);
+    stats_.write_lost = (appended_ - written) + lost;
+    stats_.flushed_events = flushed;
+    if (closing && queue_.empty()) break;
   }
+  lock.unlock();
+  finishFile();  // fsync + close
+  lock.lock();
+  stats_.written = closed_events_;
+  stats_.bytes_written = closed_bytes_;
+  if (!stats_.failed) stats_.flushed_events = closed_events_;
 }
 
 void LogWriter::close() {
@@ -65,23 +190,22 @@ void LogWriter::close() {
   }
   cv_.notify_one();
   if (thread_.joinable()) thread_.join();
-  log_.reset();  // closes the file
 }
 
-int64_t LogWriter::written() const { std::lock_guard<std::mutex> l(mu_); return written_; }
-int64_t LogWriter::writeErrors() const { std::lock_guard<std::mutex> l(mu_); return write_errors_; }
-int64_t LogWriter::dropped() const { std::lock_guard<std::mutex> l(mu_); return dropped_; }
+WriterStats LogWriter::stats() const {
+  std::lock_guard<std::mutex> l(mu_);
+  WriterStats s = stats_;
+  s.queue_depth = static_cast<int32_t>(queue_.size());
+  return s;
+}
+bool LogWriter::failed() const { std::lock_guard<std::mutex> l(mu_); return stats_.failed; }
 std::map<std::string, int64_t> LogWriter::droppedByChannel() const {
   std::lock_guard<std::mutex> l(mu_);
   return dropped_by_channel_;
 }
-
-bool readSeq(const uint8_t* data, std::size_t size, int64_t* seq) {
-  if (size < 24) return false;
-  uint64_t v = 0;
-  for (int i = 16; i < 24; ++i) v = (v << 8) | data[i];
-  *seq = static_cast<int64_t>(v);
-  return true;
+std::vector<std::string> LogWriter::files() const {
+  std::lock_guard<std::mutex> l(mu_);
+  return paths_;
 }
 
 }  // namespace lcmloc::logger

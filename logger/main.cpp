@@ -1,16 +1,31 @@
-// lcmloc-logger: records channels to a standard LCM log (lcm-logplayer plays it). The LCM
-// thread only enqueues; a writer thread writes. At exit: per-channel counts, sequence gaps and
-// queue drops. Flushes and closes cleanly on SIGINT/SIGTERM.
+// lcmloc-logger: records channels to standard LCM log files (lcm-logplayer plays them). The LCM
+// thread only enqueues; a writer thread writes (see log_writer.hpp). Rotation by size and time,
+// SIGHUP starts a new file, fsync every flush period, clean close on SIGINT/SIGTERM, a clear
+// error and exit 1 when the disk fills up. Per-channel accounting from the messages' seq:
+// upstream gaps apart from the logger's own drops, periodically on LOGGER_STATUS and at exit.
+#include <signal.h>
+#include <sys/socket.h>
+
+#include <atomic>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+
 #include <spdlog/spdlog.h>
 
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/process.hpp"
 #include "lcmloc/heartbeat_t.hpp"
-#include "log_writer.hpp"
+#include "lcmloc/logger/log_writer.hpp"
+#include "lcmloc/logger/types.hpp"
+#include "lcmloc/logger_status_t.hpp"
 
 using namespace lcmloc;
 
 namespace {
+
+std::atomic<bool> g_hup{false};
+extern "C" void onHup(int) { g_hup.store(true); }
 
 /// One regex for LCM (which anchors it): empty = every channel.
 std::string channelRegex(const std::vector<std::string>& regexes) {
@@ -20,68 +35,196 @@ std::string channelRegex(const std::vector<std::string>& regexes) {
   return r;
 }
 
-struct ChannelStats { int64_t count = 0, gaps = 0; };
+/// A udpm URL without recv_buf_size gets one: the kernel default drops bursts.
+std::string withReceiveBuffer(const std::string& url, int bytes) {
+  if (url.rfind("udpm://", 0) != 0 || url.find("recv_buf_size=") != std::string::npos) return url;
+  return url + (url.find('?') == std::string::npos ? "?" : "&") + "recv_buf_size=" + std::to_string(bytes);
+}
+
+/// Sizes the receive buffer of every UDP socket LCM opened (LCM 1.3.1 hides its socket, so they
+/// are found among our file descriptors) to at least bytes: SO_RCVBUF (capped by the kernel at
+/// net.core.rmem_max), then SO_RCVBUFFORCE (allowed with CAP_NET_ADMIN). Says what it got.
+void sizeReceiveBuffer(const std::string& url, int bytes) {
+  if (url.rfind("udpm://", 0) != 0) {
+    spdlog::info("receive buffer: transport '{}' has no UDP receive buffer to size", url);
+    return;
+  }
+  long long rmem_max = -1;
+  std::ifstream("/proc/sys/net/core/rmem_max") >> rmem_max;
+  int best = 0;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator("/proc/self/fd", ec)) {
+    const int fd = std::atoi(e.path().filename().c_str());
+    int type = 0, have = 0;
+    socklen_t len = sizeof type;
+    if (::getsockopt(fd, SOL_SOCKET, SO_TYPE, &type, &len) != 0 || type != SOCK_DGRAM) continue;
+    len = sizeof have;
+    ::getsockopt(fd, SOL_SOCKET, SO_RCVBUF, &have, &len);
+    if (have / 2 < bytes) {  // Linux reports twice the size set (bookkeeping overhead)
+      ::setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &bytes, sizeof bytes);
+      len = sizeof have;
+      ::getsockopt(fd, SOL_SOCKET, SO_RCVBUF, &have, &len);
+      if (have / 2 < bytes) ::setsockopt(fd, SOL_SOCKET, SO_RCVBUFFORCE, &bytes, sizeof bytes);
+      len = sizeof have;
+      ::getsockopt(fd, SOL_SOCKET, SO_RCVBUF, &have, &len);
+    }
+    best = std::max(best, have / 2);
+  }
+  if (best >= bytes)
+    spdlog::info("receive buffer: {} bytes for bursts (logger.recv_buf_size; kernel net.core.rmem_max = {})", best,
+                 rmem_max);
+  else
+    spdlog::warn("receive buffer: {} bytes, less than the {} asked for: the kernel caps it at net.core.rmem_max = {} "
+                 "without CAP_NET_ADMIN; raise it (sysctl -w net.core.rmem_max={}) or bursts may be lost",
+                 best, bytes, rmem_max, bytes);
+}
+
+struct ChannelStats { int64_t received = 0, gaps = 0; };
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"lcmloc-logger: records LCM channels to a log file that lcm-logplayer plays"};
+  CLI::App app{"lcmloc-logger: records LCM channels to log files that lcm-logplayer plays.\n"
+               "SIGINT/SIGTERM: write what is queued, close and exit; SIGHUP: start a new file."};
   common::CommonOptions opts;
   common::addCommonOptions(app, opts);
   std::string output;
   std::vector<std::string> channels;
-  app.add_option("--output,-o", output, "log file (overrides logger.output)");
+  double max_mb = -1, max_seconds = -1, flush_period = -1;
+  app.add_option("--output,-o", output,
+                 "log file name pattern: strftime codes (%Y%m%d-%H%M%S) and {index} (overrides logger.output)");
   app.add_option("--channel", channels, "channel regex to record (repeatable; overrides logger.channels)");
+  app.add_option("--max-file-mb", max_mb, "start a new file before one exceeds this many MB (overrides logger.max_file_bytes)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--max-file-seconds", max_seconds, "start a new file after this many seconds (overrides logger.max_file_seconds)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--flush-period", flush_period, "fsync period in seconds (overrides logger.flush_period)")
+      ->check(CLI::PositiveNumber);
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-logger", [&] {
     const auto cfg = common::loadSystemConfig(opts.config);
-    const std::string path = output.empty() ? cfg.logger.output : output;
+    struct sigaction sa {};
+    sa.sa_handler = onHup;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGHUP, &sa, nullptr);  // no SA_RESTART: the LCM wait returns at once
+    std::signal(SIGXFSZ, SIG_IGN);     // a file size limit becomes EFBIG, handled like a full disk
+
+    logger::WriterOptions wo;
+    wo.pattern = output.empty() ? cfg.logger.output : output;
+    wo.capacity = static_cast<std::size_t>(cfg.logger.queue_capacity);
+    wo.queue_bytes = cfg.logger.queue_bytes;
+    wo.max_file_bytes = max_mb >= 0 ? static_cast<int64_t>(max_mb * 1e6) : cfg.logger.max_file_bytes;
+    wo.max_file_seconds = max_seconds >= 0 ? max_seconds : cfg.logger.max_file_seconds;
+    wo.flush_period = flush_period > 0 ? flush_period : cfg.logger.flush_period;
     const std::string regex = channelRegex(channels.empty() ? cfg.logger.channels : channels);
     const std::string hb_channel = cfg.channels.heartbeat;
+    const std::string status_channel = cfg.logger.status_channel;
+    const std::string url = withReceiveBuffer(opts.lcm_url, cfg.logger.recv_buf_size);
 
-    logger::LogWriter writer(path, static_cast<std::size_t>(cfg.logger.queue_capacity));
-    common::Bus bus(opts.lcm_url);
+    common::Bus bus(url);
+    sizeReceiveBuffer(url, cfg.logger.recv_buf_size);
+    logger::LogWriter writer(wo);
     std::map<std::string, ChannelStats> stats;
     common::SeqTracker gaps;  // keyed by channel (HEARTBEAT: by channel and process)
     int64_t received = 0;
     bus.subscribeRaw(regex, [&](const std::string& ch, const uint8_t* data, std::size_t size, int64_t recv) {
       ++received;
-      ++stats[ch].count;
+      auto& s = stats[ch];
+      ++s.received;
       int64_t seq = 0;
-      if (logger::readSeq(data, size, &seq)) {
+      const logger::TypeInfo* type = logger::findType(data, size);
+      if (type && logger::readSeq(data, size, &seq)) {  // seq is only known for lcmloc types
         std::string key = ch;
-        if (ch == hb_channel) {  // many publishers share HEARTBEAT: track each one
+        if (type->hash == lcmloc::heartbeat_t::getHash()) {  // many publishers share HEARTBEAT
           lcmloc::heartbeat_t hb;
           if (hb.decode(data, 0, static_cast<int>(size)) >= 0) key = ch + "[" + hb.process + "]";
         }
         if (int64_t missing = gaps.observe(key, seq)) {
-          stats[ch].gaps += missing;
-          spdlog::warn("{}: {} message(s) missing before seq {}", key, missing, seq);
+          s.gaps += missing;
+          spdlog::warn("{}: {} message(s) missing before seq {} (lost upstream, not by the logger)", key, missing, seq);
         }
       }
       writer.push({ch, std::vector<uint8_t>(data, data + size), recv});
     });
+
+    int64_t status_seq = 0;
+    auto publishStatus = [&](const std::string& state) {
+      if (status_channel.empty()) return;
+      const auto w = writer.stats();
+      const auto drops = writer.droppedByChannel();
+      lcmloc::logger_status_t m;
+      m.utime = common::wallMicros();
+      m.seq = status_seq++;
+      m.state = state;
+      m.file = w.file;
+      m.files = w.files;
+      m.bytes_written = w.bytes_written;
+      m.received = received;
+      m.written = w.written;
+      m.dropped = w.dropped;
+      m.write_lost = w.write_lost;
+      m.gaps = gaps.gaps();
+      m.flushed_events = w.flushed_events;
+      m.queue_depth = w.queue_depth;
+      m.queue_capacity = static_cast<int32_t>(wo.capacity);
+      for (const auto& [ch, s] : stats) {
+        m.channels.push_back(ch);
+        m.channel_received.push_back(s.received);
+        m.channel_dropped.push_back(drops.count(ch) ? drops.at(ch) : 0);
+        m.channel_gaps.push_back(s.gaps);
+      }
+      m.num_channels = static_cast<int32_t>(m.channels.size());
+      bus.publish(status_channel, m);
+    };
+
     common::Heartbeat hb(bus, hb_channel, "lcmloc-logger", [&] {
-      return common::Heartbeat::Counters{{"received", received}, {"written", writer.written()},
-                                         {"dropped", writer.dropped()}, {"gaps", gaps.gaps()}};
+      const auto w = writer.stats();
+      return common::Heartbeat::Counters{{"received", received}, {"written", w.written},
+                                         {"dropped", w.dropped + w.write_lost}, {"gaps", gaps.gaps()}};
     });
-    spdlog::info("recording '{}' to {}", regex, path);
-    while (!common::stopRequested()) {
+    spdlog::info("recording '{}' to {} (queue {} messages / {} MB; new file at {}; fsync every {} s)", regex,
+                 writer.stats().file, wo.capacity, wo.queue_bytes >> 20,
+                 wo.max_file_bytes > 0 || wo.max_file_seconds > 0
+                     ? fmt::format("{} bytes / {} s", wo.max_file_bytes, wo.max_file_seconds)
+                     : std::string("SIGHUP only"),
+                 wo.flush_period);
+    const auto status_period = std::chrono::duration<double>(cfg.logger.status_period);
+    auto next_status = std::chrono::steady_clock::now();
+    while (!common::stopRequested() && !writer.failed()) {
+      if (g_hup.exchange(false)) {
+        spdlog::info("SIGHUP: starting a new file");
+        writer.requestRotate();
+      }
       hb.tick();
+      if (std::chrono::steady_clock::now() >= next_status) {
+        publishStatus("running");
+        next_status += std::chrono::duration_cast<std::chrono::steady_clock::duration>(status_period);
+      }
       bus.handle(100);
     }
+    const bool write_error = writer.failed();
     while (bus.handle(0) > 0) {}  // take what already arrived
     hb.publish("stopping");
-    while (bus.handle(0) > 0) {}  // (our own last heartbeat included)
+    publishStatus(write_error ? "write_error" : "stopping");
+    while (bus.handle(0) > 0) {}  // (our own last heartbeat and status included)
     writer.close();
 
+    const auto w = writer.stats();
     const auto drops = writer.droppedByChannel();
     for (const auto& [ch, s] : stats) {
       const auto d = drops.count(ch) ? drops.at(ch) : 0;
-      spdlog::info("  {:<24} {:>8} messages, {} sequence gaps, {} dropped", ch, s.count, s.gaps, d);
+      spdlog::info("  {:<24} {:>8} messages, {} sequence gaps, {} dropped", ch, s.received, s.gaps, d);
     }
-    spdlog::info("recorded {} of {} messages on {} channels to {}; {} sequence gaps, {} dropped, {} write errors",
-                 writer.written(), received, stats.size(), path, gaps.gaps(), writer.dropped(), writer.writeErrors());
-    return writer.writeErrors() > 0 ? common::kExitRuntimeError : common::kExitOk;
+    const auto files = writer.files();
+    spdlog::info("recorded {} of {} messages on {} channels to {} file(s) ({} .. {}); {} sequence gaps upstream, "
+                 "{} dropped by the logger, {} lost to write errors",
+                 w.written, received, stats.size(), files.size(), files.empty() ? "" : files.front(),
+                 files.empty() ? "" : files.back(), gaps.gaps(), w.dropped, w.write_lost);
+    if (w.failed) {
+      spdlog::error("{}; stopped recording. {} holds {} whole events up to byte {} and stays readable",
+                    w.error, w.file, w.written, w.bytes_written);
+      return common::kExitRuntimeError;
+    }
+    return common::kExitOk;
   });
 }

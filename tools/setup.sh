@@ -16,6 +16,7 @@ LCMLOC_PACKAGES=(
   default-jdk-headless libjchart2d-java
   gnuplot-nox iproute2
   gpsd gpsd-clients libgps-dev libgeographiclib-dev
+  util-linux time bc procps
 )
 
 lcmloc_log() { echo "[lcmloc] $*" >&2; }

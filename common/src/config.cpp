@@ -257,6 +257,13 @@ void parseLogger(KeyReader& root, LoggerConfig& l) {
   if (l.output.empty()) throw ConfigError(root.file(), "logger.output", "must not be empty");
   r.getStrings("channels", l.channels);
   r.get("queue_capacity", l.queue_capacity, 1, 100000000);
+  r.get("queue_bytes", l.queue_bytes, int64_t{1} << 20, int64_t{1} << 40);
+  r.get("max_file_bytes", l.max_file_bytes, int64_t{0}, int64_t{1} << 50);
+  r.get("max_file_seconds", l.max_file_seconds, 0.0, 1e9);
+  r.get("flush_period", l.flush_period, 0.001, 3600.0);
+  r.get("status_channel", l.status_channel);
+  r.get("status_period", l.status_period, 0.01, 3600.0);
+  r.get("recv_buf_size", l.recv_buf_size, 65536, 1 << 30);
   r.finish();
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <memory>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -59,12 +60,12 @@ class Decoder {
     out_.issues.push_back({out_.events_read - 1, offset, what});
   }
   void truth(const lcm::LogEvent& ev, int64_t offset) {
-    lcmloc::ground_truth_t m;
+    lcmloc::ground_truth_t m{};
     if (!decode(ev, m, out_, offset)) return;
     out_.truth.push_back({m.utime, m.x, m.y, m.heading, m.distance});
   }
   void odometry(const lcm::LogEvent& ev, int64_t offset) {
-    lcmloc::odometry_t m;
+    lcmloc::odometry_t m{};
     if (!decode(ev, m, out_, offset)) return;
     ++out_.odometry_messages;
     std::string why;
@@ -73,7 +74,7 @@ class Decoder {
     out_.inputs.push_back({ev.channel, m.seq, m.utime, *in});
   }
   void ruler(const lcm::LogEvent& ev, int64_t offset) {
-    lcmloc::magruler_t m;
+    lcmloc::magruler_t m{};
     if (!decode(ev, m, out_, offset)) return;
     ++out_.ruler_messages;
     std::string why;
@@ -87,19 +88,19 @@ class Decoder {
     out_.inputs.push_back({ev.channel, m.seq, m.utime, *det});
   }
   void fault(const lcm::LogEvent& ev, int64_t offset) {
-    lcmloc::fault_event_t m;
+    lcmloc::fault_event_t m{};
     if (!decode(ev, m, out_, offset)) return;
     out_.faults.push_back({m.utime, m.kind, m.channel, m.measurement_seq, m.x, m.y, m.lateral_offset});
   }
   void pose(const lcm::LogEvent& ev, int64_t offset) {
-    lcmloc::pose_t m;
+    lcmloc::pose_t m{};
     if (!decode(ev, m, out_, offset)) return;
     if (m.dim < 3 || static_cast<int>(m.state.size()) < 3)
       return invalid(offset, "pose with fewer than 3 states");
     out_.live_poses.push_back({m.utime, m.filter, m.state[0], m.state[1], m.state[2], m.status});
   }
   void gate(const lcm::LogEvent& ev, int64_t offset) {
-    lcmloc::gate_decision_t m;
+    lcmloc::gate_decision_t m{};
     if (!decode(ev, m, out_, offset)) return;
     core::GateDecision d;
     d.utime = m.utime;
@@ -141,14 +142,29 @@ int64_t findSync(FILE* f, int64_t from) {
   }
 }
 
+uint64_t bigEndian(const unsigned char* p, int n) {
+  uint64_t v = 0;
+  for (int i = 0; i < n; ++i) v = (v << 8) | p[i];
+  return v;
+}
+
 }  // namespace
 
-LogScanner::LogScanner(const std::string& path, std::vector<LogIssue>* issues) : issues_(issues) {
+struct LogScanner::Impl {
+  std::unique_ptr<FILE, int (*)(FILE*)> file{nullptr, &std::fclose};
+  std::vector<char> iobuf = std::vector<char>(1 << 20);
+  int64_t file_pos = 0;  ///< where the stream stands (seek only when it differs)
+  std::vector<uint8_t> data;
+  lcm::LogEvent event{};
+};
+
+LogScanner::LogScanner(const std::string& path, std::vector<LogIssue>* issues)
+    : impl_(std::make_unique<Impl>()), issues_(issues) {
   file_size_ = lcmloc::eval::fileSize(path);
   if (file_size_ < 0) throw std::runtime_error("cannot open log '" + path + "': no such file");
-  log_ = std::make_unique<lcm::LogFile>(path, "r");
-  if (!log_->good()) throw std::runtime_error("cannot open log '" + path + "' for reading");
-  f_ = log_->getFilePtr();
+  impl_->file.reset(std::fopen(path.c_str(), "rb"));
+  if (!impl_->file) throw std::runtime_error("cannot open log '" + path + "' for reading");
+  std::setvbuf(impl_->file.get(), impl_->iobuf.data(), _IOFBF, impl_->iobuf.size());
 }
 
 LogScanner::~LogScanner() = default;
@@ -168,41 +184,81 @@ void LogScanner::closeDamage(int64_t resume_at) {
   dmg_open_ = false;
 }
 
+/// Reads a whole intact event starting at pos into impl_->event; false when there is none.
+bool LogScanner::readEventAt(int64_t pos) {
+  FILE* f = impl_->file.get();
+  if (impl_->file_pos != pos && fseeko(f, pos, SEEK_SET) != 0) return false;
+  impl_->file_pos = -1;  // unknown until the event is read whole
+  unsigned char h[kEventHeaderBytes];
+  if (std::fread(h, 1, sizeof h, f) != sizeof h || bigEndian(h, 4) != 0xEDA1DA01u) return false;
+  const auto channel_len = static_cast<int64_t>(bigEndian(h + 20, 4));
+  const auto data_len = static_cast<int64_t>(bigEndian(h + 24, 4));
+  if (channel_len <= 0 || channel_len >= 1000 || data_len >= (int64_t{1} << 31) ||
+      pos + kEventHeaderBytes + channel_len + data_len > file_size_)
+    return false;
+  lcm::LogEvent& ev = impl_->event;
+  ev.channel.resize(static_cast<std::size_t>(channel_len));
+  impl_->data.resize(static_cast<std::size_t>(data_len));
+  if (std::fread(ev.channel.data(), 1, ev.channel.size(), f) != ev.channel.size() ||
+      (data_len > 0 && std::fread(impl_->data.data(), 1, impl_->data.size(), f) != impl_->data.size()))
+    return false;
+  ev.eventnum = static_cast<int64_t>(bigEndian(h + 4, 8));
+  ev.timestamp = static_cast<int64_t>(bigEndian(h + 12, 8));
+  ev.datalen = static_cast<int32_t>(data_len);
+  ev.data = impl_->data.data();
+  impl_->file_pos = pos + kEventHeaderBytes + channel_len + data_len;
+  return true;
+}
+
 const lcm::LogEvent* LogScanner::next() {
-  while (true) {
-    const int64_t start = ftello(f_);
-    const lcm::LogEvent* ev = log_->readNextEvent();
-    if (!ev) {
-      if (start >= file_size_ && !dmg_open_) return nullptr;  // clean end of file
-      if (!dmg_open_) {
-        dmg_open_ = true;
-        dmg_event_index_ = events_read_;
-        dmg_start_ = std::max(start, expected_);
-      }
-      // Resynchronise on the next sync word after the failed event, if there is one.
-      const int64_t next = findSync(f_, start + 1);
-      if (next < 0) {
-        closeDamage(file_size_);
-        expected_ = file_size_;
-        return nullptr;
-      }
-      fseeko(f_, next, SEEK_SET);
-      continue;
+  while (pos_ < file_size_) {
+    if (readEventAt(pos_)) {
+      closeDamage(pos_);
+      event_offset_ = pos_;
+      pos_ = impl_->file_pos;
+      ++events_read_;
+      return &impl_->event;
     }
-    const int64_t end = ftello(f_);
-    const int64_t event_start =
-        end - kEventHeaderBytes - static_cast<int64_t>(ev->channel.size()) - ev->datalen;
-    if (event_start > expected_ && !dmg_open_) {
+    if (!dmg_open_) {
       dmg_open_ = true;
       dmg_event_index_ = events_read_;
-      dmg_start_ = expected_;
+      dmg_start_ = pos_;
     }
-    closeDamage(event_start);
-    expected_ = end;
-    event_offset_ = event_start;
-    ++events_read_;
-    return ev;
+    const int64_t next = findSync(impl_->file.get(), pos_ + 1);  // resynchronise
+    impl_->file_pos = -1;
+    if (next < 0) {
+      closeDamage(file_size_);
+      pos_ = file_size_;
+      return nullptr;
+    }
+    pos_ = next;
   }
+  return nullptr;
+}
+
+ScanSummary scanLog(const std::string& path, const std::function<void(const RawEvent&)>& on_event,
+                    const std::atomic<bool>* stop) {
+  ScanSummary out;
+  LogScanner scanner(path, &out.issues);
+  out.file_size = scanner.fileSize();
+  while (!(stop && stop->load())) {
+    const lcm::LogEvent* ev = scanner.next();
+    if (!ev) break;
+    RawEvent raw;
+    raw.index = scanner.eventsRead() - 1;
+    raw.offset = scanner.eventOffset();
+    raw.eventnum = ev->eventnum;
+    raw.utime = ev->timestamp;
+    raw.channel = &ev->channel;
+    raw.data = static_cast<const uint8_t*>(ev->data);
+    raw.size = ev->datalen;
+    on_event(raw);
+  }
+  if (stop && stop->load()) out.interrupted = true;
+  out.events_read = scanner.eventsRead();
+  out.bytes_unreadable = scanner.bytesUnreadable();
+  out.damaged = scanner.damaged();
+  return out;
 }
 
 LogData readLog(const std::string& path, const common::ChannelConfig& channels,
@@ -223,6 +279,9 @@ LogData readLog(const std::string& path, const common::ChannelConfig& channels,
   out.bytes_unreadable = scanner.bytesUnreadable();
   if (stop && stop->load()) out.interrupted = true;
   out.damaged = out.bytes_unreadable > 0;
+  // Damage and bad messages in file order.
+  std::stable_sort(out.issues.begin(), out.issues.end(),
+                   [](const LogIssue& a, const LogIssue& b) { return a.byte_offset < b.byte_offset; });
   std::stable_sort(out.truth.begin(), out.truth.end(),
                    [](const TruthSample& a, const TruthSample& b) { return a.utime < b.utime; });
   return out;

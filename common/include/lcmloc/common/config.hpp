@@ -52,9 +52,16 @@ struct FusionConfig {
 };
 
 struct LoggerConfig {
-  std::string output = "out/run.lcmlog";
+  std::string output = "out/run.lcmlog";  ///< file-name pattern: strftime codes and {index}
   std::vector<std::string> channels;  ///< regexes; empty = everything
-  int queue_capacity = 100000;        ///< messages held for the writer thread
+  int queue_capacity = 1000000;       ///< messages held for the writer thread
+  int64_t queue_bytes = 512ll << 20;  ///< payload bytes held for the writer thread
+  int64_t max_file_bytes = 0;         ///< start a new file before exceeding this size (0 = never)
+  double max_file_seconds = 0;        ///< start a new file after this long [s, wall] (0 = never)
+  double flush_period = 0.2;          ///< fsync period [s, wall]
+  std::string status_channel = "LOGGER_STATUS";  ///< logger_status_t channel ("" = none)
+  double status_period = 1.0;         ///< status period [s, wall]
+  int recv_buf_size = 134217728;      ///< UDP receive buffer the logger sizes its sockets to [bytes]
 };
 
 struct SystemConfig {

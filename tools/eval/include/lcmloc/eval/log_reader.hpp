@@ -6,8 +6,9 @@
 #include <atomic>
 #include <cstdint>
 #include <cstdio>
-#include <map>
+#include <functional>
 #include <memory>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -16,7 +17,6 @@
 
 namespace lcm {
 struct LogEvent;
-class LogFile;
 }  // namespace lcm
 
 namespace lcmloc::eval {
@@ -77,10 +77,13 @@ struct LogData {
   bool usable() const { return !inputs.empty(); }
 };
 
-/// Streams the intact events of a log file one at a time (lcm::LogFile, no network). Damage (a
-/// truncated tail, a corrupt event) is skipped by resynchronising on the next sync word, and each
-/// damaged stretch is appended to issues with the index of the event it precedes and its byte
-/// offset. readLog and the offline replay (lcmloc-replay) both read through it.
+/// Streams the intact events of any LCM log (ours, lcm-logger's) one at a time, in file order,
+/// without the network. The format is parsed here rather than with lcm::LogFile: LCM 1.3.1's
+/// reader also rejects an intact event when the sync word after it is damaged, and cannot say
+/// where an event starts. Damage (a truncated tail, a corrupt event) is skipped by
+/// resynchronising on the next sync word; each damaged stretch is appended to issues with the
+/// index of the event it precedes and its byte offset. readLog, scanLog and the offline replay
+/// (lcmloc-replay) all read through it.
 class LogScanner {
  public:
   /// Throws std::runtime_error when the file cannot be opened. issues may be null.
@@ -91,21 +94,49 @@ class LogScanner {
   /// The next intact event (valid until the next call), or nullptr at the end of the file.
   const lcm::LogEvent* next();
   int64_t eventOffset() const { return event_offset_; }   ///< byte offset of the last event returned
-  int64_t position() const { return expected_; }          ///< bytes consumed so far
+  int64_t position() const { return pos_; }               ///< bytes consumed so far
   int64_t fileSize() const { return file_size_; }
   int64_t eventsRead() const { return events_read_; }     ///< intact events returned
   int64_t bytesUnreadable() const { return bytes_unreadable_; }
   bool damaged() const { return bytes_unreadable_ > 0; }
 
  private:
+  bool readEventAt(int64_t pos);
   void closeDamage(int64_t resume_at);
-  std::unique_ptr<lcm::LogFile> log_;
-  FILE* f_ = nullptr;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
   std::vector<LogIssue>* issues_;
-  int64_t file_size_ = 0, events_read_ = 0, bytes_unreadable_ = 0, expected_ = 0, event_offset_ = 0;
+  int64_t file_size_ = 0, events_read_ = 0, bytes_unreadable_ = 0, pos_ = 0, event_offset_ = 0;
   bool dmg_open_ = false;
   int64_t dmg_event_index_ = 0, dmg_start_ = 0;
 };
+
+/// One intact event, as scanLog hands it out (data valid during the callback only).
+struct RawEvent {
+  int64_t index = 0;       ///< 0-based among intact events
+  int64_t offset = 0;      ///< byte offset of its header
+  int64_t eventnum = 0;    ///< event number stored in the file
+  int64_t utime = 0;       ///< log timestamp (receive time) [us]
+  const std::string* channel = nullptr;
+  const uint8_t* data = nullptr;
+  int32_t size = 0;
+};
+
+/// What scanLog found about the file itself.
+struct ScanSummary {
+  int64_t file_size = 0;
+  int64_t events_read = 0;
+  int64_t bytes_unreadable = 0;
+  bool damaged = false;
+  bool interrupted = false;
+  std::vector<LogIssue> issues;  ///< damaged stretches: where (event index, byte) and how long
+};
+
+/// Reads every intact event of any LCM log (ours, lcm-logger's) in file order, resynchronising
+/// past damage on the next sync word; each damaged stretch is recorded with its position.
+/// Throws std::runtime_error when the file cannot be opened. stop is polled between events.
+ScanSummary scanLog(const std::string& path, const std::function<void(const RawEvent&)>& on_event,
+                    const std::atomic<bool>* stop = nullptr);
 
 /// Reads the log at path. Throws std::runtime_error when the file cannot be opened.
 /// stop (optional) is polled between events; when set, reading ends early.

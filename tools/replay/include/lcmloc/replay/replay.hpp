@@ -1,5 +1,5 @@
 #pragma once
-// Offline replay: reads an LCM log directly (eval::LogScanner over lcm::LogFile, no network),
+// Offline replay: reads an LCM log directly (eval::LogScanner, no network),
 // feeds every event through the fusion daemon's own code (fusion::FusionDaemon over a LogBus):
 // the sensor channels and the recorded FUSION_CONTROL commands, in canonical order by message
 // time (core::FusionEngine). The daemon's publications (POSE, POSE_<TYPE>, GATE, FUSION_STATUS)

@@ -1,0 +1,102 @@
+#pragma once
+// The logger's writing half: the receive side only enqueues into a bounded queue (drops are
+// counted per channel, never silent); a writer thread appends whole events to standard LCM log
+// files (EventFile), starting a new file by size, by time or on request (SIGHUP), writing each
+// batch to the kernel at once and fsync()ing every flush period. A failed write (disk full,
+// file size limit) stops the writer: the file keeps every whole event written before, later
+// messages are counted as lost/dropped and failed() tells the main loop to exit non-zero.
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <ctime>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "lcmloc/logger/event_file.hpp"
+
+namespace lcmloc::logger {
+
+struct Event {
+  std::string channel;
+  std::vector<uint8_t> data;
+  int64_t recv_utime = 0;
+};
+
+struct WriterOptions {
+  std::string pattern = "out/run.lcmlog";  ///< strftime codes and {index} (see fileName)
+  std::size_t capacity = 100000;           ///< queued messages
+  int64_t queue_bytes = 512ll << 20;       ///< queued payload bytes
+  int64_t max_file_bytes = 0;              ///< 0 = no size rotation
+  double max_file_seconds = 0;             ///< 0 = no time rotation
+  double flush_period = 0.2;               ///< fsync period [s]
+};
+
+struct WriterStats {
+  int64_t written = 0;         ///< events handed to the kernel, all files
+  int64_t dropped = 0;         ///< refused by push (queue full, or after a write error)
+  int64_t write_lost = 0;      ///< accepted but lost in a failed write
+  int64_t bytes_written = 0;   ///< all files
+  int64_t flushed_events = 0;  ///< events in the files at the last fsync
+  int32_t files = 0;           ///< files opened
+  int32_t queue_depth = 0;
+  std::string file;            ///< current file
+  bool failed = false;
+  std::string error;           ///< what failed (when failed)
+};
+
+/// Name of file number index (0-based) from pattern at time t (local time): strftime codes are
+/// expanded and "{index}" becomes the index with 3 digits. Without "{index}", a name that is
+/// already taken gets "-NNN" before its extension (file 0 may overwrite an existing file).
+std::string fileName(const std::string& pattern, int index, std::time_t t);
+
+class LogWriter {
+ public:
+  /// Opens the first file; throws std::runtime_error when it cannot.
+  explicit LogWriter(WriterOptions opts);
+  ~LogWriter();
+  LogWriter(const LogWriter&) = delete;
+  LogWriter& operator=(const LogWriter&) = delete;
+
+  /// Enqueues; returns false (and counts a drop) when the queue is full or the writer failed.
+  bool push(Event ev);
+  /// Asks the writer thread to start a new file after what is queued now.
+  void requestRotate();
+  /// Writes what is queued, fsyncs and closes the file; idempotent.
+  void close();
+
+  WriterStats stats() const;
+  bool failed() const;
+  std::map<std::string, int64_t> droppedByChannel() const;
+  /// Paths of every file opened so far, in order.
+  std::vector<std::string> files() const;
+
+ private:
+  void run();
+  void openNext();               // writer thread (and constructor)
+  void fail(int err, const std::string& what);
+  void finishFile();
+
+  WriterOptions opts_;
+  std::unique_ptr<EventFile> file_;
+  std::chrono::steady_clock::time_point file_opened_;
+  int64_t closed_bytes_ = 0, closed_events_ = 0;  // of files already closed (writer thread)
+  int64_t appended_ = 0;                           // events given to EventFile (writer thread)
+
+  mutable std::mutex mu_;
+  std::condition_variable cv_;
+  std::deque<Event> queue_;
+  int64_t queued_bytes_ = 0;
+  bool closing_ = false, rotate_requested_ = false;
+  std::size_t rotate_at_ = 0;  // queue position of the requested new file
+  WriterStats stats_;
+  std::vector<std::string> paths_;
+  std::map<std::string, int64_t> dropped_by_channel_;
+  std::thread thread_;
+};
+
+}  // namespace lcmloc::logger

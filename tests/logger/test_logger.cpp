@@ -1,0 +1,317 @@
+// lcmloc-logger as a real process over udpm on loopback: rotation by size and by time, SIGHUP,
+// clean shutdown with accounting, the disk-full path (RLIMIT_FSIZE), crash safety (kill -9).
+#include <gtest/gtest.h>
+
+#include <sys/mount.h>
+
+#include <filesystem>
+#include <fstream>
+#include <cstring>
+#include <functional>
+#include <set>
+
+#include "child.hpp"
+#include "lcmloc/common/transport.hpp"
+#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/logger_status_t.hpp"
+#include "lcmloc/odometry_t.hpp"
+
+using namespace std::chrono_literals;
+namespace fs = std::filesystem;
+using lcmloc::common::Bus;
+
+namespace {
+
+std::string uniqueUrl() {
+  static int next = 0;
+  const int port = 40000 + (::getpid() % 2000) * 8 + (next++ % 8);
+  return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0&recv_buf_size=4194304";
+}
+
+struct ReadBack {
+  lcmloc::eval::ScanSummary scan;
+  std::vector<int64_t> seqs;       // ODOMETRY seq, in file order
+  std::vector<int64_t> eventnums;
+};
+
+ReadBack readBack(const std::string& file) {
+  ReadBack r;
+  r.scan = lcmloc::eval::scanLog(file, [&](const lcmloc::eval::RawEvent& ev) {
+    r.eventnums.push_back(ev.eventnum);
+    lcmloc::odometry_t o;
+    if (*ev.channel == "ODOMETRY" && o.decode(ev.data, 0, ev.size) >= 0) r.seqs.push_back(o.seq);
+  });
+  return r;
+}
+
+class LoggerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() / ("lcmloc_logger_" + std::to_string(::getpid()) + "_" + info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    url_ = uniqueUrl();
+    config_ = path("config.yaml");
+    std::ofstream(config_) << "logger: {status_period: 0.05, flush_period: 0.05}\n";
+    bus_ = std::make_unique<Bus>(url_);
+    bus_->subscribe<lcmloc::logger_status_t>(
+        "LOGGER_STATUS", [this](const std::string&, const lcmloc::logger_status_t& m, int64_t) { status_ = m; });
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir_);
+  }
+  std::string path(const std::string& n) const { return (dir_ / n).string(); }
+
+  /// Starts the logger (through prlimit with its options when given).
+  std::unique_ptr<Child> start(std::vector<std::string> args, std::vector<std::string> prlimit = {}) {
+    std::vector<std::string> all{"--lcm-url", url_, "--config", config_, "--channel", "ODOMETRY"};
+    all.insert(all.end(), args.begin(), args.end());
+    std::string exe = LCMLOC_LOGGER;
+    if (!prlimit.empty()) {
+      all.insert(all.begin(), LCMLOC_LOGGER);
+      all.insert(all.begin(), "--");
+      all.insert(all.begin(), prlimit.begin(), prlimit.end());
+      exe = LCMLOC_PRLIMIT;
+    }
+    auto c = std::make_unique<Child>(exe, all, path("logger.out"));
+    // Ready once it publishes its status (it subscribed before).
+    EXPECT_TRUE(waitStatus([](const auto&) { return true; }, 10s)) << c->output();
+    return c;
+  }
+
+  bool waitStatus(const std::function<bool(const lcmloc::logger_status_t&)>& pred, std::chrono::milliseconds t) {
+    const auto deadline = std::chrono::steady_clock::now() + t;
+    while (std::chrono::steady_clock::now() < deadline) {
+      if (status_ && pred(*status_)) return true;
+      bus_->handle(20);
+    }
+    return status_ && pred(*status_);
+  }
+
+  void publish(int64_t seq) {
+    lcmloc::odometry_t o{};
+    o.utime = 1000 * seq;
+    o.seq = seq;
+    o.delta_s = 0.1;
+    ASSERT_TRUE(bus_->publish("ODOMETRY", o));
+  }
+
+  /// Log files in the directory, by name.
+  std::vector<std::string> logs() const {
+    std::vector<std::string> v;
+    for (const auto& e : fs::directory_iterator(dir_))
+      if (e.path().extension() == ".lcmlog") v.push_back(e.path().string());
+    std::sort(v.begin(), v.end());
+    return v;
+  }
+
+  fs::path dir_;
+  std::string url_, config_;
+  std::unique_ptr<Bus> bus_;
+  std::optional<lcmloc::logger_status_t> status_;
+};
+
+constexpr int64_t kEventBytes = 28 + 8 + 57;  // header + "ODOMETRY" + odometry_t
+
+}  // namespace
+
+TEST_F(LoggerTest, RotatesBySizeWithoutSplittingOrLosingEvents) {
+  auto logger = start({"--output", path("run.lcmlog"), "--max-file-mb", "0.004"});  // 4000 bytes
+  for (int i = 0; i < 200; ++i) publish(i);
+  ASSERT_TRUE(waitStatus([](const auto& s) { return s.written == 200; }, 10s)) << logger->output();
+  logger->signal(SIGTERM);
+  ASSERT_EQ(logger->wait(10s), std::optional<int>(0)) << logger->output();
+
+  const auto files = logs();
+  const int64_t per_file = 4000 / kEventBytes;  // 43
+  ASSERT_EQ(static_cast<int64_t>(files.size()), (200 + per_file - 1) / per_file) << logger->output();
+  EXPECT_EQ(files[0], path("run-001.lcmlog"));  // sorted: run-001 .. run-004, run.lcmlog
+  std::vector<int64_t> all;
+  for (const std::string name : {"run.lcmlog", "run-001.lcmlog", "run-002.lcmlog", "run-003.lcmlog", "run-004.lcmlog"}) {
+    ASSERT_TRUE(fs::exists(path(name))) << name;
+    EXPECT_LE(fs::file_size(path(name)), 4000u) << name;
+    const auto r = readBack(path(name));
+    EXPECT_FALSE(r.scan.damaged) << name;
+    EXPECT_EQ(r.eventnums.front(), 0) << "each file numbers its events from 0";
+    all.insert(all.end(), r.seqs.begin(), r.seqs.end());
+  }
+  ASSERT_EQ(all.size(), 200u);
+  for (int i = 0; i < 200; ++i) EXPECT_EQ(all[static_cast<std::size_t>(i)], i);
+}
+
+TEST_F(LoggerTest, RotatesByTime) {
+  auto logger = start({"--output", path("t-{index}.lcmlog"), "--max-file-seconds", "0.2"});
+  const auto t0 = std::chrono::steady_clock::now();
+  int n = 0;
+  while (std::chrono::steady_clock::now() - t0 < 1s) {  // paces the publisher, ~10 messages/s
+    publish(n++);
+    bus_->handle(100);
+  }
+  ASSERT_TRUE(waitStatus([&](const auto& s) { return s.written == n; }, 10s)) << logger->output();
+  logger->signal(SIGINT);
+  ASSERT_EQ(logger->wait(10s), std::optional<int>(0)) << logger->output();
+  const auto files = logs();
+  EXPECT_GE(files.size(), 4u) << logger->output();
+  EXPECT_LE(files.size(), 7u) << logger->output();
+  int64_t total = 0;
+  for (const auto& f : files) {
+    const auto r = readBack(f);
+    EXPECT_GT(r.seqs.size(), 0u) << f << ": no empty files";
+    total += static_cast<int64_t>(r.seqs.size());
+  }
+  EXPECT_EQ(total, n);
+  EXPECT_EQ(files.front(), path("t-000.lcmlog"));
+}
+
+TEST_F(LoggerTest, SighupStartsANewFile) {
+  auto logger = start({"--output", path("h-{index}.lcmlog")});
+  for (int i = 0; i < 5; ++i) publish(i);
+  ASSERT_TRUE(waitStatus([](const auto& s) { return s.written == 5; }, 10s)) << logger->output();
+  logger->signal(SIGHUP);
+  ASSERT_TRUE(waitStatus([](const auto& s) { return s.files == 2; }, 10s)) << logger->output();
+  EXPECT_EQ(status_->file, path("h-001.lcmlog"));
+  for (int i = 5; i < 12; ++i) publish(i);
+  ASSERT_TRUE(waitStatus([](const auto& s) { return s.written == 12; }, 10s)) << logger->output();
+  logger->signal(SIGTERM);
+  ASSERT_EQ(logger->wait(10s), std::optional<int>(0)) << logger->output();
+  EXPECT_EQ(readBack(path("h-000.lcmlog")).seqs, (std::vector<int64_t>{0, 1, 2, 3, 4}));
+  EXPECT_EQ(readBack(path("h-001.lcmlog")).seqs, (std::vector<int64_t>{5, 6, 7, 8, 9, 10, 11}));
+  EXPECT_NE(logger->output().find("SIGHUP: starting a new file"), std::string::npos);
+}
+
+TEST_F(LoggerTest, CleanShutdownCountsUpstreamGapsApartFromDrops) {
+  auto logger = start({"--output", path("run-%Y.lcmlog")});
+  for (int64_t seq : {0, 1, 2, 5, 6}) publish(seq);
+  ASSERT_TRUE(waitStatus([](const auto& s) { return s.written == 5; }, 10s)) << logger->output();
+  EXPECT_EQ(status_->state, "running");
+  EXPECT_EQ(status_->gaps, 2);
+  EXPECT_EQ(status_->dropped, 0);
+  ASSERT_EQ(status_->channels, std::vector<std::string>{"ODOMETRY"});
+  EXPECT_EQ(status_->channel_received, std::vector<int64_t>{5});
+  EXPECT_EQ(status_->channel_gaps, std::vector<int64_t>{2});
+  EXPECT_EQ(status_->channel_dropped, std::vector<int64_t>{0});
+  logger->signal(SIGINT);
+  ASSERT_EQ(logger->wait(10s), std::optional<int>(0)) << logger->output();
+  ASSERT_TRUE(waitStatus([](const auto& s) { return s.state == "stopping"; }, 5s));
+  EXPECT_EQ(status_->flushed_events, 5);
+  const auto files = logs();
+  ASSERT_EQ(files.size(), 1u);
+  char year[8];
+  const std::time_t now = std::time(nullptr);
+  std::strftime(year, sizeof year, "%Y", std::localtime(&now));
+  EXPECT_EQ(files[0], path(std::string("run-") + year + ".lcmlog"));
+  EXPECT_EQ(readBack(files[0]).seqs, (std::vector<int64_t>{0, 1, 2, 5, 6}));
+  const std::string out = logger->output();
+  EXPECT_NE(out.find("ODOMETRY                        5 messages, 2 sequence gaps, 0 dropped"), std::string::npos) << out;
+  EXPECT_NE(out.find("2 sequence gaps upstream, 0 dropped by the logger, 0 lost to write errors"), std::string::npos) << out;
+  // Said at start: the size it got, and the kernel's cap.
+  EXPECT_NE(out.find("receive buffer: "), std::string::npos) << out;
+  EXPECT_NE(out.find("net.core.rmem_max = "), std::string::npos) << out;
+}
+
+TEST_F(LoggerTest, DiskFullExitsNonZeroAndKeepsEveryWholeEventReadable) {
+  // RLIMIT_FSIZE of 20000 bytes for the logger (SIGXFSZ is ignored by it): writes fail with EFBIG.
+  auto logger = start({"--output", path("full.lcmlog")}, {"--fsize=20000"});
+  for (int i = 0; i < 1000 && logger->running(); ++i) {
+    publish(i);
+    if (i % 100 == 99) bus_->handle(1);
+  }
+  const auto rc = logger->wait(10s);
+  ASSERT_TRUE(rc.has_value()) << "the logger did not stop on a full disk\n" << logger->output();
+  EXPECT_EQ(*rc, 1) << logger->output();
+  const std::string out = logger->output();
+  EXPECT_NE(out.find("file size limit reached (EFBIG)"), std::string::npos) << out;
+  EXPECT_NE(out.find("stays readable"), std::string::npos) << out;
+  const auto size = static_cast<int64_t>(fs::file_size(path("full.lcmlog")));
+  EXPECT_LE(size, 20000);
+  EXPECT_EQ(size % kEventBytes, 0) << "whole events only";
+  const auto r = readBack(path("full.lcmlog"));
+  EXPECT_FALSE(r.scan.damaged);
+  ASSERT_EQ(static_cast<int64_t>(r.seqs.size()), size / kEventBytes);
+  for (std::size_t i = 0; i < r.seqs.size(); ++i) EXPECT_EQ(r.seqs[i], static_cast<int64_t>(i));
+  EXPECT_GE(r.seqs.size(), 200u);  // 20000 / 93 = 215 fit
+}
+
+TEST_F(LoggerTest, FullTmpfsIsENOSPCExitsNonZeroAndKeepsEveryWholeEventReadable) {
+  const std::string mnt = path("small_disk");
+  fs::create_directories(mnt);
+  if (::mount("tmpfs", mnt.c_str(), "tmpfs", 0, "size=64k") != 0)
+    GTEST_SKIP() << "cannot mount a tmpfs here (needs root): " << std::strerror(errno);
+  struct Unmount {
+    std::string dir;
+    ~Unmount() { ::umount2(dir.c_str(), MNT_DETACH); }
+  } unmount{mnt};
+  auto logger = start({"--output", mnt + "/full.lcmlog"});
+  for (int i = 0; i < 2000 && logger->running(); ++i) {
+    publish(i);
+    if (i % 100 == 99) bus_->handle(1);
+  }
+  const auto rc = logger->wait(10s);
+  ASSERT_TRUE(rc.has_value()) << "the logger did not stop on a full disk\n" << logger->output();
+  EXPECT_EQ(*rc, 1) << logger->output();
+  EXPECT_NE(logger->output().find("disk full (ENOSPC)"), std::string::npos) << logger->output();
+  const auto size = static_cast<int64_t>(fs::file_size(mnt + "/full.lcmlog"));
+  EXPECT_EQ(size % kEventBytes, 0) << "whole events only";
+  const auto r = readBack(mnt + "/full.lcmlog");
+  EXPECT_FALSE(r.scan.damaged);
+  ASSERT_EQ(static_cast<int64_t>(r.seqs.size()), size / kEventBytes);
+  EXPECT_GE(r.seqs.size(), 400u);  // most of the 64 KB
+  for (std::size_t i = 0; i < r.seqs.size(); ++i) EXPECT_EQ(r.seqs[i], static_cast<int64_t>(i));
+}
+
+TEST_F(LoggerTest, KillDashNineKeepsEverythingUpToTheLastFlushReadableByUsAndLcmLogplayer) {
+  auto logger = start({"--output", path("crash.lcmlog")});
+  for (int i = 0; i < 300; ++i) publish(i);
+  ASSERT_TRUE(waitStatus([](const auto& s) { return s.flushed_events == 300; }, 10s)) << logger->output();
+  for (int i = 300; i < 400; ++i) publish(i);  // more in flight while it dies
+  logger->signal(SIGKILL);
+  ASSERT_EQ(logger->wait(5s), std::optional<int>(128 + SIGKILL));
+
+  const auto r = readBack(path("crash.lcmlog"));
+  EXPECT_FALSE(r.scan.damaged);
+  ASSERT_GE(r.seqs.size(), 300u);
+  for (std::size_t i = 0; i < r.seqs.size(); ++i) ASSERT_EQ(r.seqs[i], static_cast<int64_t>(i));
+
+  // lcm-logplayer plays the file: every event arrives on another port.
+  const std::string play_url = uniqueUrl();
+  Bus play(play_url);
+  std::vector<int64_t> played;
+  play.subscribe<lcmloc::odometry_t>("ODOMETRY", [&](const std::string&, const lcmloc::odometry_t& m, int64_t) {
+    played.push_back(m.seq);
+  });
+  Child player(LCMLOC_LCM_LOGPLAYER, {"--lcm-url=" + play_url, "--speed=10", path("crash.lcmlog")}, path("player.out"));
+  const auto deadline = std::chrono::steady_clock::now() + 15s;
+  while (played.size() < r.seqs.size() && std::chrono::steady_clock::now() < deadline) play.handle(50);
+  EXPECT_EQ(played, r.seqs) << player.output();
+  EXPECT_EQ(player.wait(10s), std::optional<int>(0)) << player.output();
+}
+
+TEST_F(LoggerTest, LcmLoggersLogsAreReadByOurReader) {
+  const std::string log = path("lcm.lcmlog");
+  Child lcm_logger(LCMLOC_LCM_LOGGER, {"-q", "--lcm-url=" + url_, "-c", "ODOMETRY", log}, path("lcm-logger.out"));
+  // lcm-logger says nothing when ready: publish until its file shows the first message.
+  int64_t n = 0;
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while ((!fs::exists(log) || fs::file_size(log) == 0) && std::chrono::steady_clock::now() < deadline) {
+    publish(n++);
+    bus_->handle(50);  // lcm-logger flushes every 100 ms
+  }
+  ASSERT_GT(fs::file_size(log), 0u) << lcm_logger.output();
+  for (int i = 0; i < 20; ++i) publish(n++);
+  bus_->handle(300);
+  lcm_logger.signal(SIGINT);
+  ASSERT_TRUE(lcm_logger.wait(10s).has_value());
+  const auto r = readBack(log);
+  EXPECT_FALSE(r.scan.damaged);
+  ASSERT_GE(r.seqs.size(), 20u);
+  for (std::size_t i = 1; i < r.seqs.size(); ++i) EXPECT_EQ(r.seqs[i], r.seqs[i - 1] + 1);
+  EXPECT_EQ(r.seqs.back(), n - 1);
+}
+
+TEST_F(LoggerTest, BadConfigIsAClearErrorWithExitTwo) {
+  std::ofstream(config_) << "logger: {flush_period: -1}\n";
+  Child logger(LCMLOC_LOGGER, {"--lcm-url", url_, "--config", config_}, path("logger.out"));
+  ASSERT_EQ(logger.wait(10s), std::optional<int>(2)) << logger.output();
+  EXPECT_NE(logger.output().find("logger.flush_period"), std::string::npos) << logger.output();
+}

@@ -1,0 +1,337 @@
+// lcmloc-log: look inside LCM logs without writing code.
+//   info    channels, types (by fingerprint), counts, rates, time span, seq gaps, undecodable events
+//   to-csv  one channel or all, decoded to CSV with a header row named after the fields
+//   cut     a time window and/or a channel subset into a new log
+// Every subcommand reads a truncated or damaged log up to (and past) the damage and says where
+// it is (byte offset, event number).
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <cinttypes>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <regex>
+#include <set>
+
+#include <spdlog/spdlog.h>
+
+#include "lcmloc/common/config.hpp"
+#include "lcmloc/common/process.hpp"
+#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/logger/event_file.hpp"
+#include "lcmloc/logger/types.hpp"
+
+using namespace lcmloc;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// Scans the log, stopping early on SIGINT/SIGTERM and logging progress on big files.
+eval::ScanSummary scan(const std::string& path, const std::function<void(const eval::RawEvent&)>& fn) {
+  std::atomic<bool> stop{false};
+  auto last = std::chrono::steady_clock::now();
+  auto s = eval::scanLog(path, [&](const eval::RawEvent& ev) {
+    fn(ev);
+    if ((ev.index & 0xffff) == 0) {
+      if (common::stopRequested()) stop = true;
+      const auto now = std::chrono::steady_clock::now();
+      if (now - last > std::chrono::seconds(2)) {
+        spdlog::info("{}: {} events read, byte {}", path, ev.index, ev.offset);
+        last = now;
+      }
+    }
+  }, &stop);
+  if (s.interrupted) spdlog::warn("{}: interrupted after {} events", path, s.events_read);
+  return s;
+}
+
+void reportDamage(const eval::ScanSummary& s, const std::string& path, std::ostream* os) {
+  for (const auto& i : s.issues) {
+    const std::string line = fmt::format("DAMAGE in {} at byte {} (event {}): {}", path, i.byte_offset,
+                                         i.event_index, i.what);
+    spdlog::warn("{}", line);
+    if (os) *os << line << "\n";
+  }
+}
+
+std::string fingerprintHex(int64_t h) { return fmt::format("0x{:016x}", static_cast<uint64_t>(h)); }
+
+std::string typeOf(const uint8_t* data, std::size_t size) {
+  if (const auto* t = logger::findType(data, size)) return t->name;
+  int64_t h = 0;
+  if (!logger::readFingerprint(data, size, &h)) return "(shorter than a fingerprint)";
+  return "unknown " + fingerprintHex(h);
+}
+
+std::string utimeText(int64_t us) {
+  const std::time_t t = static_cast<std::time_t>(us / 1000000);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char b[64];
+  std::strftime(b, sizeof b, "%Y-%m-%d %H:%M:%S", &tm);
+  return fmt::format("{}.{:06d} UTC", b, static_cast<int>(us % 1000000));
+}
+
+std::regex channelRegex(const std::vector<std::string>& regexes) {
+  std::string r;
+  for (std::size_t i = 0; i < regexes.size(); ++i) r += (i ? "|" : "") + ("(" + regexes[i] + ")");
+  try {
+    return std::regex(r.empty() ? ".*" : r);
+  } catch (const std::regex_error& e) {
+    throw std::runtime_error("bad channel regex '" + r + "': " + e.what());
+  }
+}
+
+// --- info -----------------------------------------------------------------------------------
+
+struct ChannelInfo {
+  int64_t count = 0, bytes = 0, undecodable = 0, gaps = 0, first = 0, last = 0;
+  std::map<std::string, int64_t> types;
+};
+
+int info(const std::string& path) {
+  std::map<std::string, ChannelInfo> channels;
+  common::SeqTracker seqs;
+  int64_t first = 0, last = 0, n = 0, undecodable = 0;
+  std::vector<std::string> bad;  // first few undecodable events, with position
+  const auto s = scan(path, [&](const eval::RawEvent& ev) {
+    auto& c = channels[*ev.channel];
+    if (c.count == 0) c.first = ev.utime;
+    c.last = ev.utime;
+    ++c.count;
+    c.bytes += ev.size;
+    if (n++ == 0) first = ev.utime;
+    first = std::min(first, ev.utime);
+    last = std::max(last, ev.utime);
+    const auto* type = logger::findType(ev.data, static_cast<std::size_t>(ev.size));
+    ++c.types[typeOf(ev.data, static_cast<std::size_t>(ev.size))];
+    if (!type) return;
+    logger::Fields fields;
+    if (!type->fields(ev.data, static_cast<std::size_t>(ev.size), &fields)) {
+      ++c.undecodable;
+      if (++undecodable <= 10)
+        bad.push_back(fmt::format("undecodable {} event at byte {} (event {}): {} bytes, fingerprint of {}",
+                                  *ev.channel, ev.offset, ev.index, ev.size, type->name));
+      return;
+    }
+    std::string key = *ev.channel;
+    if (type->name == "lcmloc.heartbeat_t")  // many publishers share HEARTBEAT: one seq each
+      for (const auto& f : fields)
+        if (f.name == "process") key += "[" + f.value + "]";
+    int64_t seq = 0;
+    if (logger::readSeq(ev.data, static_cast<std::size_t>(ev.size), &seq)) c.gaps += seqs.observe(key, seq);
+  });
+  std::cout << "log:        " << path << " (" << s.file_size << " bytes)\n";
+  std::cout << "events:     " << s.events_read << " on " << channels.size() << " channels"
+            << (s.damaged ? fmt::format(", DAMAGED: {} bytes unreadable", s.bytes_unreadable) : "") << "\n";
+  if (n > 0) {
+    std::cout << "time span:  " << utimeText(first) << " .. " << utimeText(last)
+              << fmt::format(" ({:.3f} s)\n", (last - first) * 1e-6);
+  }
+  std::cout << fmt::format("{:<24} {:<28} {:>9} {:>10} {:>12} {:>9} {:>11}\n", "channel", "type", "count",
+                           "rate[Hz]", "bytes", "seq_gaps", "undecodable");
+  for (const auto& [name, c] : channels) {
+    std::string type = c.types.begin()->first;
+    if (c.types.size() > 1) type = "mixed (" + std::to_string(c.types.size()) + " types)";
+    const double span = (c.last - c.first) * 1e-6;
+    const std::string rate = (c.count > 1 && span > 0) ? fmt::format("{:.2f}", (c.count - 1) / span) : "-";
+    std::cout << fmt::format("{:<24} {:<28} {:>9} {:>10} {:>12} {:>9} {:>11}\n", name, type, c.count, rate, c.bytes,
+                             c.gaps, c.undecodable);
+  }
+  std::cout << fmt::format("total: {} events, {} sequence gaps, {} undecodable\n", s.events_read, seqs.gaps(),
+                           undecodable);
+  for (const auto& b : bad) std::cout << b << "\n";
+  if (undecodable > static_cast<int64_t>(bad.size()))
+    std::cout << "(" << undecodable - static_cast<int64_t>(bad.size()) << " more undecodable events)\n";
+  reportDamage(s, path, &std::cout);
+  return common::kExitOk;
+}
+
+// --- to-csv ---------------------------------------------------------------------------------
+
+std::string csvCell(const logger::Field& f) {
+  if (!f.is_string) return f.value;
+  if (f.value.find_first_of(",\"\n\r") == std::string::npos) return f.value;
+  std::string q = "\"";
+  for (char c : f.value) q += (c == '"') ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
+/// Columns of one channel: the ordered union of every message's field names (arrays of
+/// different lengths widen the table; missing cells stay empty).
+struct Columns {
+  std::vector<std::string> names;
+  std::map<std::string, std::size_t> index;
+  void merge(const logger::Fields& fields) {
+    std::size_t at = 0;  // insert new names after the previous field of the same message
+    for (const auto& f : fields) {
+      auto it = index.find(f.name);
+      if (it != index.end()) { at = it->second + 1; continue; }
+      names.insert(names.begin() + static_cast<std::ptrdiff_t>(at), f.name);
+      for (auto& kv : index)
+        if (kv.second >= at) ++kv.second;
+      index[f.name] = at++;
+    }
+  }
+};
+
+int toCsv(const std::string& path, const std::vector<std::string>& channel_regexes, const std::string& output) {
+  const std::regex re = channelRegex(channel_regexes);
+  std::map<std::string, Columns> columns;
+  std::map<std::string, int64_t> undecodable, unknown;
+  // Pass 1: which channels, which columns.
+  const auto s = scan(path, [&](const eval::RawEvent& ev) {
+    if (!std::regex_match(*ev.channel, re)) return;
+    const auto* type = logger::findType(ev.data, static_cast<std::size_t>(ev.size));
+    if (!type) { ++unknown[*ev.channel]; return; }
+    logger::Fields fields;
+    if (!type->fields(ev.data, static_cast<std::size_t>(ev.size), &fields)) { ++undecodable[*ev.channel]; return; }
+    columns[*ev.channel].merge(fields);
+  });
+  for (const auto& [ch, n] : unknown)
+    spdlog::warn("{}: {} event(s) of a type this tool does not know, not exported", ch, n);
+  for (const auto& [ch, n] : undecodable) spdlog::warn("{}: {} undecodable event(s) skipped", ch, n);
+  reportDamage(s, path, nullptr);
+  if (columns.empty()) {
+    spdlog::error("no decodable events on channels matching '{}' in {}", fmt::join(channel_regexes, "|"), path);
+    return common::kExitRuntimeError;
+  }
+  const bool to_dir = columns.size() > 1;
+  if (to_dir && (output.empty() || output == "-"))
+    throw std::runtime_error(fmt::format("{} channels match: give --output DIR to get one CSV per channel",
+                                         columns.size()));
+  std::map<std::string, std::unique_ptr<std::ofstream>> files;
+  std::ostream* single = &std::cout;
+  if (to_dir) {
+    fs::create_directories(output);
+  } else if (!output.empty() && output != "-") {
+    auto f = std::make_unique<std::ofstream>(output);
+    if (!*f) throw std::runtime_error("cannot write '" + output + "'");
+    single = f.get();
+    files[columns.begin()->first] = std::move(f);
+  }
+  auto streamFor = [&](const std::string& ch) -> std::ostream& {
+    if (!to_dir) return *single;
+    auto& f = files[ch];
+    if (!f) {
+      const std::string p = (fs::path(output) / (ch + ".csv")).string();
+      f = std::make_unique<std::ofstream>(p);
+      if (!*f) throw std::runtime_error("cannot write '" + p + "'");
+    }
+    return *f;
+  };
+  for (const auto& [ch, cols] : columns) {
+    auto& os = streamFor(ch);
+    os << "log_utime";
+    for (const auto& n : cols.names) os << "," << n;
+    os << "\n";
+  }
+  // Pass 2: rows.
+  std::map<std::string, int64_t> rows;
+  std::vector<std::string> cells;
+  scan(path, [&](const eval::RawEvent& ev) {
+    auto it = columns.find(*ev.channel);
+    if (it == columns.end()) return;
+    const auto* type = logger::findType(ev.data, static_cast<std::size_t>(ev.size));
+    logger::Fields fields;
+    if (!type || !type->fields(ev.data, static_cast<std::size_t>(ev.size), &fields)) return;
+    cells.assign(it->second.names.size(), "");
+    for (const auto& f : fields) cells[it->second.index.at(f.name)] = csvCell(f);
+    auto& os = streamFor(*ev.channel);
+    os << ev.utime;
+    for (const auto& c : cells) os << "," << c;
+    os << "\n";
+    ++rows[*ev.channel];
+  });
+  for (const auto& [ch, n] : rows)
+    spdlog::info("{}: {} rows, {} columns{}", ch, n, columns[ch].names.size() + 1,
+                 to_dir ? " -> " + (fs::path(output) / (ch + ".csv")).string()
+                        : (output.empty() || output == "-" ? "" : " -> " + output));
+  for (auto& [ch, f] : files) {
+    f->flush();
+    if (!*f) throw std::runtime_error("writing CSV for " + ch + " failed (disk full?)");
+  }
+  return common::kExitOk;
+}
+
+// --- cut ------------------------------------------------------------------------------------
+
+struct CutOptions {
+  std::vector<std::string> channels;
+  double from = -1, to = -1;            // seconds from the first event
+  int64_t from_utime = -1, to_utime = -1;
+};
+
+int cut(const std::string& path, const std::string& output, const CutOptions& o) {
+  if (fs::exists(output) && fs::equivalent(output, path))
+    throw std::runtime_error("output '" + output + "' is the input log");
+  const std::regex re = channelRegex(o.channels);
+  logger::EventFile out(output);
+  int64_t t0 = -1, kept = 0, err = 0;
+  const auto s = scan(path, [&](const eval::RawEvent& ev) {
+    if (t0 < 0) t0 = ev.utime;
+    if (err) return;
+    const int64_t rel = ev.utime - t0;  // [us], compared in integers: 0.2 s is 200000 us exactly
+    if (o.from >= 0 && rel < std::llround(o.from * 1e6)) return;
+    if (o.to >= 0 && rel > std::llround(o.to * 1e6)) return;
+    if (o.from_utime >= 0 && ev.utime < o.from_utime) return;
+    if (o.to_utime >= 0 && ev.utime > o.to_utime) return;
+    if (!std::regex_match(*ev.channel, re)) return;
+    err = out.append(ev.utime, *ev.channel, ev.data, static_cast<std::size_t>(ev.size));
+    if (!err) ++kept;
+  });
+  if (!err) err = out.close();
+  reportDamage(s, path, nullptr);
+  if (err)
+    throw std::runtime_error(fmt::format("writing {} failed: {} ({} whole events kept)", output,
+                                         std::strerror(static_cast<int>(err)), out.eventsWritten()));
+  spdlog::info("wrote {} of {} events to {}", kept, s.events_read, output);
+  return common::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"lcmloc-log: look inside LCM logs (ours or lcm-logger's): info, to-csv, cut.\n"
+               "A truncated or damaged log is read up to and past the damage, which is reported with its\n"
+               "byte offset and event number."};
+  common::CommonOptions opts;
+  opts.config = "";
+  app.add_option("--config", opts.config, "system YAML file (checked when given; the log tools need no settings)");
+  app.add_option("--log-level", opts.log_level, "trace, debug, info, warn, error, critical, off")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
+  app.require_subcommand(1);
+  std::string log_path, output;
+  std::vector<std::string> channels;
+  CutOptions cut_opts;
+
+  auto* info_cmd = app.add_subcommand("info", "channels, types, counts, rates, time span, seq gaps, undecodable events");
+  info_cmd->add_option("log", log_path, "LCM log file")->required();
+
+  auto* csv_cmd = app.add_subcommand("to-csv", "decode one channel (or all) to CSV, header row named after the fields");
+  csv_cmd->add_option("log", log_path, "LCM log file")->required();
+  csv_cmd->add_option("--channel,-c", channels, "channel regex (repeatable; default: every channel)");
+  csv_cmd->add_option("--output,-o", output,
+                      "CSV file ('-' or none: stdout) for one channel; a directory (one CHANNEL.csv each) for several");
+
+  auto* cut_cmd = app.add_subcommand("cut", "copy a time window and/or a channel subset into a new log");
+  cut_cmd->add_option("log", log_path, "LCM log file")->required();
+  cut_cmd->add_option("--output,-o", output, "new log file")->required();
+  cut_cmd->add_option("--channel,-c", cut_opts.channels, "channel regex to keep (repeatable; default: all)");
+  cut_cmd->add_option("--from", cut_opts.from, "keep from this many seconds after the first event")
+      ->check(CLI::NonNegativeNumber);
+  cut_cmd->add_option("--to", cut_opts.to, "keep up to this many seconds after the first event")
+      ->check(CLI::NonNegativeNumber);
+  cut_cmd->add_option("--from-utime", cut_opts.from_utime, "keep events with log time >= this [us]");
+  cut_cmd->add_option("--to-utime", cut_opts.to_utime, "keep events with log time <= this [us]");
+
+  return common::runProcess(app, argc, argv, opts, "lcmloc-log", [&] {
+    if (!opts.config.empty()) common::loadSystemConfig(opts.config);
+    if (!fs::exists(log_path)) throw common::ConfigError(log_path, "", "no such log file");
+    if (info_cmd->parsed()) return info(log_path);
+    if (csv_cmd->parsed()) return toCsv(log_path, channels, output);
+    return cut(log_path, output, cut_opts);
+  });
+}
