@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "lcmloc/core/landmark_fix.hpp"
 
@@ -141,4 +142,39 @@ TEST(LandmarkFix, CramerRaoAtCentre) {
   const Eigen::Matrix3d C = cramerRao(Vec2::Zero(), lms, sigma);
   EXPECT_NEAR(std::sqrt(C(0, 0)), sigma * 1000.0 * std::sqrt(2.0 / 3.0), 1e-9);
   EXPECT_NEAR(std::sqrt(C(2, 2)), sigma / std::sqrt(3.0), 1e-12);
+}
+
+TEST(LandmarkFix, SmallMonteCarloAgainstCramerRao) {
+  // 100 runs of §III: INS error (500 m, -500 m), -30', bearing noise 30" quantised to 14",
+  // vehicle at the centre. Both readings of "1000 m": range 1000 m and landmarks 1000 m apart.
+  const double sigma = 30.0 * M_PI / 180.0 / 3600.0, res = 14.0 * M_PI / 180.0 / 3600.0;
+  for (double R : {1000.0, 1000.0 / std::sqrt(3.0)}) {
+    const auto map = triangle(R);
+    std::vector<Vec2> lms;
+    for (const auto& [id, l] : map) lms.push_back(l);
+    const Eigen::Matrix3d crb = cramerRao(Vec2::Zero(), lms, sigma);
+    std::mt19937 rng(11);
+    std::normal_distribution<double> n(0.0, sigma);
+    double se_t = 0, se_l = 0, sh_t = 0, sh_l = 0;
+    const int N = 100;
+    for (int k = 0; k < N; ++k) {
+      auto b = bearings(map, Vec2::Zero(), 0.0);
+      for (auto& x : b) x.alpha = res * std::round((x.alpha + n(rng)) / res);
+      const FixResult t = triangleFix(map, b, Vec2(500, -500), -30.0 * kArcMin);
+      const FixResult l = leastSquaresFix(map, b, Vec2(500, -500), -30.0 * kArcMin);
+      ASSERT_TRUE(t.ok && l.ok) << t.error << l.error;
+      se_t += t.position.squaredNorm() / N, se_l += l.position.squaredNorm() / N;
+      sh_t += t.heading * t.heading / N, sh_l += l.heading * l.heading / N;
+    }
+    const double crb_pos = std::sqrt(crb(0, 0) + crb(1, 1)), crb_h = std::sqrt(crb(2, 2));
+    const double as = 180.0 / M_PI * 3600.0;
+    std::printf("R %.0f m: rms pos triangle %.3f LS %.3f CRB %.3f m; 2-sigma heading triangle %.1f LS %.1f CRB %.1f arcsec\n",
+                R, std::sqrt(se_t), std::sqrt(se_l), crb_pos, 2 * std::sqrt(sh_t) * as, 2 * std::sqrt(sh_l) * as,
+                2 * crb_h * as);
+    // Efficient estimators: within 30 % of the bound for 100 runs.
+    EXPECT_NEAR(std::sqrt(se_l) / crb_pos, 1.0, 0.3);
+    EXPECT_NEAR(std::sqrt(sh_l) / crb_h, 1.0, 0.3);
+    EXPECT_NEAR(std::sqrt(se_t) / crb_pos, 1.0, 0.3);
+    EXPECT_NEAR(std::sqrt(sh_t) / crb_h, 1.0, 0.3);
+  }
 }
