@@ -338,6 +338,8 @@ core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterC
     n.get("gps_lockout_rejections", g.gps_lockout_rejections, 0, 1000000);
     n.get("mag_lockout_rejections", g.mag_lockout_rejections, 0, 1000000);
     n.get("coast_timeout", g.coast_timeout, 0.0, 1e6);
+    n.get("course_distance", g.course_distance, 0.0, 1e5, "0 = off");
+    n.get("course_std", g.course_std, 0.0, 10.0);
     n.finish();
   }
   r.finish();

@@ -54,6 +54,8 @@ void validateGnss(const FilterConfig& c) {
   require(g.gps_lockout_rejections >= 0, "gnss.gps_lockout_rejections must be >= 0");
   require(g.mag_lockout_rejections >= 0, "gnss.mag_lockout_rejections must be >= 0");
   require(nonneg(g.coast_timeout), "gnss.coast_timeout must be >= 0");
+  require(nonneg(g.course_distance), "gnss.course_distance must be >= 0");
+  require(nonneg(g.course_std), "gnss.course_std must be >= 0");
 }
 
 /// Consecutive gate rejections of one measurement kind. Every n-th rejection in a row is a
@@ -149,6 +151,7 @@ class GnssFilterBase : public Filter {
     acc_n_ = 0;
     have_fix_ = false;
     last_position_utime_ = from.utime;
+    course_open_ = false;
     gps_lock_ = Lockout(g_.gps_lockout_rejections);
     mag_lock_ = Lockout(g_.mag_lockout_rejections);
   }
@@ -182,6 +185,11 @@ class GnssFilterBase : public Filter {
     st.delta_theta = odo.delta_theta;
     timeUpdate(st);
     last_position_utime_ = std::max(last_position_utime_, odo.utime);
+    if (course_open_) {  // dead-reckoned displacement along the filter's heading since the anchor fix
+      const double th = heading();
+      course_dr_ += odo.delta_s * Vec2(std::cos(th), std::sin(th));
+      course_dist_ += std::abs(odo.delta_s);
+    }
   }
 
   std::optional<GateDecision> update(const ImuInput& m) override {
@@ -200,7 +208,7 @@ class GnssFilterBase : public Filter {
       d.reason = "bad_input";
       return d;
     }
-    headingUpdate(z, d);
+    headingUpdate(z, g_.mag_std * g_.mag_std, d);
     if (d.reason == "gate" && mag_lock_.reject()) inflateHeading();
     if (d.accepted) mag_lock_.accept();
     return d;
@@ -231,12 +239,16 @@ class GnssFilterBase : public Filter {
       gps_lock_.accept();
       have_fix_ = true;
       last_fix_utime_ = gps.utime;
+      if (use_course_ && g_.course_distance > 0) courseAid(Vec2(gps.x, gps.y), sd);
     }
     return d;
   }
 
   /// IMU samples whose forward acceleration was saturated or not finite (not used).
   int64_t saturatedSamples() const { return saturated_; }
+  /// GPS-course heading aid (gnss.course_distance, tvekf): heading updates accepted / gated.
+  int64_t courseAccepted() const { return course_accepted_; }
+  int64_t courseRejected() const { return course_rejected_; }
 
  protected:
   static const std::vector<std::string>& names() {
@@ -277,15 +289,49 @@ class GnssFilterBase : public Filter {
   virtual void setState(const Eigen::VectorXd& x, const Eigen::MatrixXd& P) = 0;
   virtual void timeUpdate(const Step& st) = 0;
   /// Fill d (innovation, mahalanobis, reason, accepted) and correct if it passes the gate.
-  virtual void headingUpdate(double z, GateDecision& d) = 0;
+  virtual void headingUpdate(double z, double r, GateDecision& d) = 0;
+  virtual double heading() const = 0;
   virtual void positionUpdate(const Vec2& z, double r, GateDecision& d) = 0;
   virtual void inflateHeading() = 0;
   virtual void inflatePosition() = 0;
   /// Adds the position random walk of dt seconds to the position covariance.
   virtual void growPosition(double dt) = 0;
 
+  /// GPS-course heading aid (for a vehicle without magnetometer): between two accepted fixes
+  /// at least gnss.course_distance of travel apart, the direction of the GPS chord minus the
+  /// direction of the dead-reckoned chord (odometry integrated along the filter's heading over
+  /// the same stretch) is the heading error, whatever the path's curvature, as long as that error
+  /// was constant over the stretch. Fused as a heading measurement theta + error with variance
+  /// 2 sd^2 / |chord|^2 (+ gnss.course_std^2) behind the 1-dof gate; then re-anchored.
+  void courseAid(const Vec2& z, double sd) {
+    if (!course_open_ || course_dist_ >= g_.course_distance) {
+      if (course_open_) {
+        const Vec2 c = z - course_anchor_;
+        // a chord much shorter than the travel (a U-turn, reversing back and forth) says little
+        if (c.norm() >= 0.5 * course_dist_ && course_dr_.norm() >= 0.5 * course_dist_) {
+          const double err = wrapAngle(std::atan2(c.y(), c.x()) - std::atan2(course_dr_.y(), course_dr_.x()));
+          const double r = 2.0 * sd * sd / c.squaredNorm() + g_.course_std * g_.course_std;
+          GateDecision d = decision(last_fix_utime_, "GPS_COURSE", 0, gate1_);
+          headingUpdate(wrapAngle(heading() + err), r, d);
+          if (d.accepted) {
+            ++course_accepted_;
+            mag_lock_.accept();
+          } else {
+            ++course_rejected_;
+            if (d.reason == "gate" && mag_lock_.reject()) inflateHeading();
+          }
+        }
+      }
+      course_open_ = true;
+      course_anchor_ = z;
+      course_dr_.setZero();
+      course_dist_ = 0;
+    }
+  }
+
   FilterConfig cfg_;
   GnssConfig g_;
+  bool use_course_ = false;  ///< the GPS-course heading aid applies (tvekf)
   double gate1_, gate2_;  ///< chi-square gates of 1-D (heading) and 2-D (position) innovations
   double enc_sum_ = 0;    ///< encoder distance accumulated since the start [m] (eq. 5's s(k))
 
@@ -300,6 +346,10 @@ class GnssFilterBase : public Filter {
   int64_t last_fix_utime_ = 0;
   int64_t last_position_utime_ = 0;  ///< time the position prediction has reached
   Lockout gps_lock_, mag_lock_;
+  bool course_open_ = false;
+  Vec2 course_anchor_ = Vec2::Zero(), course_dr_ = Vec2::Zero();
+  double course_dist_ = 0;
+  int64_t course_accepted_ = 0, course_rejected_ = 0;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -313,12 +363,14 @@ class GnssFilterBase : public Filter {
 class TvEkf final : public GnssFilterBase {
  public:
   explicit TvEkf(const FilterConfig& c) : GnssFilterBase(c) {
+    use_course_ = true;
     Eigen::VectorXd x;
     Eigen::MatrixXd P;
     initialState(x, P);
     setState(x, P);
   }
   std::string name() const override { return "tvekf"; }
+  double heading() const override { return th_; }
 
  protected:
   void fillState(Eigen::VectorXd& x, Eigen::MatrixXd& P) const override {
@@ -365,9 +417,9 @@ class TvEkf final : public GnssFilterBase {
     Psv_ = 0.5 * (Psv_ + Psv_.transpose()).eval();
   }
 
-  void headingUpdate(double z, GateDecision& d) override {
+  void headingUpdate(double z, double r, GateDecision& d) override {
     const double v = wrapAngle(z - th_);
-    const double S = Pth_ + g_.mag_std * g_.mag_std;
+    const double S = Pth_ + r;
     d.innovation = Eigen::VectorXd::Constant(1, v);
     d.mahalanobis = v * v / S;
     if (!(d.mahalanobis <= gate1_)) {
@@ -433,6 +485,7 @@ class GpsUkf final : public GnssFilterBase {
     setState(x, P);
   }
   std::string name() const override { return "ukf_gps"; }
+  double heading() const override { return ukf_.x()[kTheta]; }
 
  protected:
   void fillState(Eigen::VectorXd& x, Eigen::MatrixXd& P) const override {
@@ -476,10 +529,9 @@ class GpsUkf final : public GnssFilterBase {
       ukf_.correct(in);
   }
 
-  void headingUpdate(double zth, GateDecision& d) override {
+  void headingUpdate(double zth, double r, GateDecision& d) override {
     Innovation<kN, 1> in;
-    const Eigen::Matrix<double, 1, 1> R =
-        Eigen::Matrix<double, 1, 1>::Constant(g_.mag_std * g_.mag_std);
+    const Eigen::Matrix<double, 1, 1> R = Eigen::Matrix<double, 1, 1>::Constant(r);
     const Eigen::Matrix<double, 1, 1> z = Eigen::Matrix<double, 1, 1>::Constant(zth);
     if (!ukf_.innovate<1>([](const U::Vector& s) { return Eigen::Matrix<double, 1, 1>(s[kTheta]); },
                           R, z, 1u, in)) {

@@ -46,6 +46,12 @@ struct GnssConfig {
   /// Same for the magnetometer heading gate (samples).
   int mag_lockout_rejections = 50;
   double coast_timeout = 3.0;      ///< no accepted fix for this long: status DEAD_RECKONING [s]
+  /// tvekf only: GPS-course heading aid for a vehicle without magnetometer (the heading of
+  /// §2.2 is otherwise corrected by nothing but the magnetometer): between accepted fixes at
+  /// least this much travel apart, chord direction of the fixes minus that of the dead-reckoned
+  /// path is fused as a heading measurement [m]; 0 = off (the paper).
+  double course_distance = 0.0;
+  double course_std = 0.02;        ///< extra 1 sigma of a course measurement [rad]
 };
 
 /// Parameters shared by every filter of the magnetic-ruler family (defaults: the paper, §4,

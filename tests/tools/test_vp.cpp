@@ -1,0 +1,168 @@
+// Victoria Park import and held-out-fix experiment: hand-made CSVs for refusals, a short slice of
+// the real files (LCMLOC_VP_DIR) for counts and the held-out error.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+#include "lcmloc/common/config.hpp"
+#include "lcmloc/common/convert.hpp"
+#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/vp/vp.hpp"
+
+using namespace lcmloc;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path tempDir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("lcmloc_test_vp_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+void write(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
+
+}  // namespace
+
+TEST(VpImport, BadRowsAreRefusedWithLineNumbersAndTheRestConverted) {
+  const auto d = tempDir("bad");
+  write(d / "odo.csv",
+        "time_ms,speed_mps,steering_rad\n"
+        "1000.0,2.0,0.0\n"           // line 2: starts the interval
+        "1025.0,2.0,0.1\n"           // line 3: 2 m/s over 25 ms, straight
+        "abc,2.0,0.1\n"              // line 4: not a number
+        "1050.0,nan,0.1\n"           // line 5: not finite
+        "1050.0,2.0\n"               // line 6: 2 columns
+        "1020.0,2.0,0.1\n"           // line 7: time goes back
+        "1060.0,2.0,1.5\n"           // line 8: steering beyond 1 rad
+        "1060.0,2.0,0.1,\n"          // line 9: empty 4th column
+        "1075.0,2.0,0.1\n");         // line 10: 2 m/s over 50 ms at psi = 0.1 (from line 3)
+  write(d / "gps.csv",
+        "time_ms,Lo_m,La_m\n"
+        "1000.0,10.0,20.0\n"         // fix 0
+        "1010.0,x,20.0\n"            // line 3: not a number
+        "1020.0,11.0,20.5\n"         // fix 1 (held out, every 2nd, phase 1)
+        "1030.0,12.0,21.0\n");       // fix 2
+  vp::ImportOptions o;
+  o.odometry_csv = (d / "odo.csv").string();
+  o.gps_csv = (d / "gps.csv").string();
+  o.output = (d / "out.lcmlog").string();
+  o.holdout_every = 2;
+  o.holdout_phase = 1;
+  const auto r = vp::importVictoriaPark(o);
+  EXPECT_EQ(r.odometry_rows, 9);
+  EXPECT_EQ(r.odometry_refused, 6);
+  EXPECT_EQ(r.odometry_written, 3);
+  EXPECT_EQ(r.gps_rows, 4);
+  EXPECT_EQ(r.gps_refused, 1);
+  EXPECT_EQ(r.gps_written, 2);
+  EXPECT_EQ(r.heldout_written, 1);
+  EXPECT_EQ(r.first_utime, 1000000);
+  EXPECT_EQ(r.last_utime, 1075000);
+  std::map<int64_t, std::string> odo_lines;
+  for (const auto& f : r.refusals)
+    if (f.file == o.odometry_csv) odo_lines[f.line] = f.reason;
+  ASSERT_EQ(odo_lines.size(), 6u);
+  for (int64_t l : {4, 5, 6, 7, 8, 9}) EXPECT_TRUE(odo_lines.count(l)) << "line " << l;
+  EXPECT_NE(odo_lines[4].find("not a number"), std::string::npos) << odo_lines[4];
+  EXPECT_NE(odo_lines[6].find("expected 3 columns"), std::string::npos) << odo_lines[6];
+  EXPECT_NE(odo_lines[7].find("not after"), std::string::npos) << odo_lines[7];
+  EXPECT_NE(odo_lines[8].find("steering"), std::string::npos) << odo_lines[8];
+  ASSERT_EQ(r.refusals.back().file, o.gps_csv);
+  EXPECT_EQ(r.refusals.back().line, 3);
+
+  // the log: time order, channels, eq. 2 with the encoder offset correction, lat/lon round trip
+  std::vector<lcmloc::odometry_t> odo;
+  std::vector<std::pair<std::string, lcmloc::gps_fix_t>> gps;
+  int64_t last = 0;
+  eval::scanLog(o.output, [&](const eval::RawEvent& e) {
+    EXPECT_GE(e.utime, last);
+    last = e.utime;
+    if (*e.channel == "ODOMETRY") {
+      odo.emplace_back();
+      ASSERT_EQ(odo.back().decode(e.data, 0, e.size), e.size);
+    } else {
+      gps.emplace_back(*e.channel, lcmloc::gps_fix_t{});
+      ASSERT_EQ(gps.back().second.decode(e.data, 0, e.size), e.size);
+    }
+  });
+  ASSERT_EQ(odo.size(), 3u);
+  EXPECT_DOUBLE_EQ(odo[0].delta_s, 0.0);
+  EXPECT_NEAR(odo[1].delta_s, 2.0 * 0.025, 1e-12);  // psi = 0 held from line 2: no correction
+  const double vc = 2.0 / (1.0 - std::tan(0.1) * 0.76 / 2.83);  // README: v_c = v_e / (1 - tan(psi) H / L)
+  EXPECT_NEAR(odo[2].delta_s, vc * 0.050, 1e-12);
+  EXPECT_NEAR(odo[2].delta_theta, vc * 0.050 * std::tan(0.1) / 2.83, 1e-12);
+  EXPECT_TRUE(odo[2].has_steering);
+  EXPECT_DOUBLE_EQ(odo[2].steering, 0.1);
+  ASSERT_EQ(gps.size(), 3u);
+  EXPECT_EQ(gps[0].first, "GPS");
+  EXPECT_EQ(gps[1].first, "GPS_HELDOUT");
+  EXPECT_EQ(gps[2].first, "GPS");
+  EXPECT_EQ(gps[2].second.seq, 1);  // consecutive on GPS: the daemon counts no gap
+  const common::LocalFrame frame(o.datum);
+  const auto in = common::toCore(gps[2].second, "GPS", frame);
+  ASSERT_TRUE(in.has_value());
+  EXPECT_NEAR(in->x, 12.0, 1e-6);
+  EXPECT_NEAR(in->y, 21.0, 1e-6);
+  fs::remove_all(d);
+}
+
+TEST(VpImport, WrongHeaderOrMissingFileIsAnError) {
+  const auto d = tempDir("hdr");
+  write(d / "odo.csv", "t,v,psi\n1,2,3\n");
+  write(d / "gps.csv", "time_ms,Lo_m,La_m\n");
+  vp::ImportOptions o;
+  o.odometry_csv = (d / "odo.csv").string();
+  o.gps_csv = (d / "gps.csv").string();
+  EXPECT_THROW(vp::importVictoriaPark(o), std::runtime_error);
+  o.odometry_csv = (d / "missing.csv").string();
+  EXPECT_THROW(vp::importVictoriaPark(o), std::runtime_error);
+  fs::remove_all(d);
+}
+
+TEST(VpImport, InterpolateBetweenPoses) {
+  const std::vector<std::array<double, 3>> tr{{0.0, 0.0, 0.0}, {1.0, 2.0, -4.0}};
+  double x = 0, y = 0;
+  ASSERT_TRUE(vp::interpolate(tr, 0.25, x, y));
+  EXPECT_DOUBLE_EQ(x, 0.5);
+  EXPECT_DOUBLE_EQ(y, -1.0);
+  EXPECT_FALSE(vp::interpolate(tr, 1.5, x, y));
+}
+
+// Measured on this slice (first 8000 odometry rows, 200 s, 496 m; config/victoria_park.yaml):
+// held-out RMSE tvekf 5.15 m (p95 3.68 m), ukf_gps 0.89 m (p95 1.65 m).
+constexpr int64_t kSliceRows = 8000, kGpsRows = 616;
+constexpr double kRmseBound = 7.0, kP95Bound = 5.0;
+
+TEST(VpExperiment, ShortSliceOfTheRealDrive) {
+  const std::string dir = LCMLOC_VP_DIR;
+  if (!fs::exists(dir + "/vp_odometry.csv") || !fs::exists(dir + "/vp_gps.csv"))
+    GTEST_SKIP() << "Victoria Park files not found in " << dir << " (CMake LCMLOC_VP_DIR)";
+  const auto cfg = common::loadSystemConfig(LCMLOC_VP_YAML);
+  vp::ImportOptions o;
+  o.odometry_csv = dir + "/vp_odometry.csv";
+  o.gps_csv = dir + "/vp_gps.csv";
+  o.max_rows = kSliceRows;
+  vp::ExperimentOptions eo;
+  eo.out_dir = tempDir("slice").string();
+  eo.filters = {"tvekf", "ukf_gps"};
+  const auto r = vp::runExperiment(cfg, o, eo);
+  EXPECT_EQ(r.import.odometry_rows, kSliceRows);
+  EXPECT_EQ(r.import.odometry_refused, 0);
+  EXPECT_EQ(r.import.gps_rows, kGpsRows);
+  EXPECT_EQ(r.import.gps_refused, 0);
+  EXPECT_EQ(r.import.heldout_written, (kGpsRows + 4) / 5);
+  ASSERT_EQ(r.scores.size(), 2u);
+  for (const auto& s : r.scores) {
+    SCOPED_TRACE(s.filter);
+    EXPECT_GE(s.scored, r.import.heldout_written - 1);
+    EXPECT_LT(s.rmse_m, kRmseBound);
+    EXPECT_LT(s.p95_m, kP95Bound);
+  }
+  EXPECT_TRUE(fs::exists(eo.out_dir + "/report.json"));
+  fs::remove_all(eo.out_dir);
+}

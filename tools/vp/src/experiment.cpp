@@ -1,0 +1,209 @@
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/fusion_status_t.hpp"
+#include "lcmloc/gate_decision_t.hpp"
+#include "lcmloc/pose_t.hpp"
+#include "lcmloc/replay/replay.hpp"
+#include "lcmloc/vp/vp.hpp"
+
+namespace lcmloc::vp {
+
+bool interpolate(const std::vector<std::array<double, 3>>& tr, double t, double& x, double& y) {
+  if (tr.empty() || t < tr.front()[0] || t > tr.back()[0]) return false;
+  auto it = std::lower_bound(tr.begin(), tr.end(), t, [](const std::array<double, 3>& p, double v) { return p[0] < v; });
+  if (it == tr.begin() || (*it)[0] == t) {
+    x = (*it)[1];
+    y = (*it)[2];
+    return true;
+  }
+  const auto& b = *it;
+  const auto& a = *(it - 1);
+  const double w = (t - a[0]) / (b[0] - a[0]);
+  x = a[1] + w * (b[1] - a[1]);
+  y = a[2] + w * (b[2] - a[2]);
+  return true;
+}
+
+namespace {
+
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const double pos = q * static_cast<double>(v.size() - 1);
+  const auto i = static_cast<std::size_t>(pos);
+  const double f = pos - static_cast<double>(i);
+  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
+}
+
+template <typename T>
+bool decode(const eval::RawEvent& e, T& m) {
+  return m.decode(e.data, 0, e.size) == e.size;
+}
+
+}  // namespace
+
+ExperimentResult runExperiment(const common::SystemConfig& cfg0, ImportOptions imp, const ExperimentOptions& opt) {
+  namespace fs = std::filesystem;
+  const auto t_start = std::chrono::steady_clock::now();
+  fs::create_directories(opt.out_dir);
+  ExperimentResult res;
+  res.log_path = opt.out_dir + "/vp.lcmlog";
+  imp.output = res.log_path;
+  imp.datum = cfg0.datum;
+  imp.odometry_channel = cfg0.channels.odometry;
+  imp.gps_channel = cfg0.channels.gps;
+  res.import = importVictoriaPark(imp);
+  spdlog::info("imported -> {}\n{}", res.log_path, importSummary(imp, res.import, 5));
+  const auto& fixes = res.import.fixes;
+  if (fixes.empty()) throw std::runtime_error("no GPS fix imported: nothing to score against");
+  const double t0 = static_cast<double>(res.import.first_utime) * 1e-6;
+
+  // initial pose from the first (filter-visible) fixes
+  core::Vec3 init = cfg0.fusion.filter.initial_pose;
+  if (opt.init_from_gps) {
+    const Fix* first = nullptr;
+    for (const auto& f : fixes) {
+      if (f.heldout) continue;
+      if (!first) {
+        first = &f;
+        init = core::Vec3(f.x, f.y, init[2]);
+      } else if (std::hypot(f.x - first->x, f.y - first->y) >= opt.init_course_m) {
+        init[2] = std::atan2(f.y - first->y, f.x - first->x);
+        break;
+      }
+    }
+    spdlog::info("initial pose from GPS: x {:.2f} m, y {:.2f} m, heading {:.3f} rad", init[0], init[1], init[2]);
+  }
+
+  for (const auto& type : opt.filters) {
+    if (imp.stop && imp.stop()) break;
+    common::SystemConfig cfg = cfg0;
+    YAML::Node n;
+    n["type"] = type;
+    cfg.fusion.filter = common::parseFilterConfig(n, cfg0.fusion.filter, "--filters", "fusion.filter");
+    cfg.fusion.filter.initial_pose = init;
+    cfg.fusion.shadow.clear();
+    replay::ReplayOptions ro;
+    ro.input = res.log_path;
+    ro.output = opt.out_dir + "/" + type + ".lcmlog";
+    ro.progress_period_s = 5.0;
+    ro.stop = imp.stop;
+    const auto rr = replay::replayLog(cfg, ro);
+    spdlog::info("{}: {} events read, {} used, {} rejected, {} written in {:.2f} s", type, rr.events_read, rr.used,
+                 rr.rejected, rr.written, rr.seconds);
+    Score s;
+    s.filter = type;
+    eval::scanLog(ro.output, [&](const eval::RawEvent& e) {
+      if (*e.channel == cfg.channels.pose) {
+        lcmloc::pose_t p;
+        if (decode(e, p) && p.dim >= 2) {
+          ++s.poses;
+          const double t = static_cast<double>(p.utime) * 1e-6 - t0;
+          if (!s.track.empty() && t == s.track.back()[0]) s.track.back() = {t, p.state[0], p.state[1]};
+          else s.track.push_back({t, p.state[0], p.state[1]});
+        }
+      } else if (*e.channel == cfg.channels.gate) {
+        lcmloc::gate_decision_t g;
+        if (decode(e, g) && g.sensor == cfg.channels.gps && g.reason != "no_fix")
+          (g.accepted ? s.gps_accepted : s.gps_rejected)++;
+      } else if (*e.channel == cfg.channels.status) {
+        lcmloc::fusion_status_t st;
+        if (decode(e, st) && st.event == "lockout") ++s.lockouts;
+      }
+    });
+    std::error_code ec;
+    fs::remove(ro.output, ec);  // the pose stream is in the data files; the log is large
+    std::vector<double> errs;
+    for (const auto& f : fixes) {
+      if (!f.heldout) continue;
+      double x = 0, y = 0;
+      const double t = static_cast<double>(f.utime) * 1e-6 - t0;
+      if (!interpolate(s.track, t, x, y)) continue;
+      const double e = std::hypot(x - f.x, y - f.y);
+      s.t.push_back(t);
+      s.err.push_back(e);
+    }
+    s.scored = static_cast<int64_t>(s.err.size());
+    double se = 0;
+    for (double e : s.err) se += e * e;
+    s.rmse_m = s.scored ? std::sqrt(se / static_cast<double>(s.scored)) : 0;
+    s.median_m = quantile(s.err, 0.5);
+    s.p95_m = quantile(s.err, 0.95);
+    s.max_m = s.err.empty() ? 0 : *std::max_element(s.err.begin(), s.err.end());
+    res.scores.push_back(std::move(s));
+  }
+
+  // report.json
+  nlohmann::json j;
+  const auto& ir = res.import;
+  j["import"] = {{"odometry_rows", ir.odometry_rows}, {"odometry_refused", ir.odometry_refused},
+                 {"odometry_messages", ir.odometry_written}, {"gps_rows", ir.gps_rows},
+                 {"gps_refused", ir.gps_refused}, {"gps_fixes_to_filter", ir.gps_written},
+                 {"gps_fixes_held_out", ir.heldout_written}, {"holdout_every", imp.holdout_every},
+                 {"holdout_phase", imp.holdout_phase}, {"distance_m", ir.distance_m},
+                 {"duration_s", (ir.last_utime - ir.first_utime) * 1e-6}, {"wheelbase_m", imp.wheelbase},
+                 {"encoder_offset_m", imp.encoder_offset}};
+  j["initial_pose"] = {init[0], init[1], init[2]};
+  j["course_distance_m"] = cfg0.fusion.filter.gnss.course_distance;
+  for (const auto& s : res.scores)
+    j["filters"][s.filter] = {{"poses", s.poses}, {"heldout_scored", s.scored}, {"rmse_m", s.rmse_m},
+                              {"median_m", s.median_m}, {"p95_m", s.p95_m}, {"max_m", s.max_m},
+                              {"gps_accepted", s.gps_accepted}, {"gps_rejected", s.gps_rejected},
+                              {"lockouts", s.lockouts}};
+  std::ofstream(opt.out_dir + "/report.json") << std::setw(2) << j << "\n";
+
+  // figures
+  {
+    std::ofstream g(opt.out_dir + "/gps.dat"), h(opt.out_dir + "/heldout.dat");
+    g << "# t[s] x y\n";
+    h << "# t[s] x y\n";
+    for (const auto& f : fixes)
+      (f.heldout ? h : g) << static_cast<double>(f.utime) * 1e-6 - t0 << ' ' << f.x << ' ' << f.y << '\n';
+  }
+  std::string pa, pb;
+  const char* colors[] = {"#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e"};
+  int ci = 0;
+  for (const auto& s : res.scores) {
+    std::ofstream d(opt.out_dir + "/" + s.filter + "_track.dat");
+    d << "# t[s] x y (every 10th pose)\n";
+    for (std::size_t i = 0; i < s.track.size(); i += 10)
+      d << s.track[i][0] << ' ' << s.track[i][1] << ' ' << s.track[i][2] << '\n';
+    std::ofstream e(opt.out_dir + "/" + s.filter + "_err.dat");
+    e << "# t[s] error at the held-out fix [m]\n";
+    for (std::size_t i = 0; i < s.t.size(); ++i) e << s.t[i] << ' ' << s.err[i] << '\n';
+    const std::string c = colors[ci++ % 5];
+    pa += fmt::format(", '{}_track.dat' using 2:3 with lines lw 1.5 lc rgb '{}' title '{} (RMSE {:.2f} m)'", s.filter,
+                      c, s.filter, s.rmse_m);
+    pb += fmt::format("{}'{}_err.dat' using 1:2 with points pt 7 ps 0.4 lc rgb '{}' title '{}'", pb.empty() ? "" : ", ",
+                      s.filter, c, s.filter);
+  }
+  {
+    std::ofstream gp(opt.out_dir + "/plot.gp");
+    gp << "set terminal pngcairo size 1200,1000 noenhanced\nset grid\nset output 'drive.png'\n"
+       << "set title 'Victoria Park: GPS fixes given to the filter, held-out fixes, fused tracks'\n"
+       << "set xlabel 'x east [m]'\nset ylabel 'y north [m]'\nset size ratio -1\nset key outside bottom center horizontal\n"
+       << "plot 'gps.dat' using 2:3 with points pt 7 ps 0.35 lc rgb '#aaaaaa' title 'GPS (to the filter)', "
+       << "'heldout.dat' using 2:3 with points pt 6 ps 0.6 lc rgb 'black' title 'GPS held out'" << pa << "\n";
+    if (!pb.empty())
+      gp << "set output 'error.png'\nset terminal pngcairo size 1200,600 noenhanced\nset size noratio\n"
+         << "set title 'Error of the fused track at the held-out fixes'\nset xlabel 't [s]'\n"
+         << "set ylabel 'error [m]'\nset logscale y\nset key top left\nplot " << pb << "\n";
+  }
+  const std::string cmd = "cd '" + opt.out_dir + "' && gnuplot plot.gp > gnuplot.log 2>&1";
+  if (std::system(cmd.c_str()) != 0) spdlog::warn("gnuplot failed (see {}/gnuplot.log): no figures", opt.out_dir);
+  res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  return res;
+}
+
+}  // namespace lcmloc::vp
