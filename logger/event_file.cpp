@@ -95,9 +95,9 @@ int EventFile::flush(bool sync) {
   return 0;
 }
 
-int EventFile::close() {
+int EventFile::close(bool sync) {
   if (fd_ < 0) return 0;
-  int err = flush(true);
+  int err = flush(sync);
   if (::close(fd_) != 0 && err == 0) err = errno;
   fd_ = -1;
   return err;

@@ -136,20 +136,34 @@ lcmloc::magruler_t toLcm(const models::RulerReading& r, int64_t seq) {
 
 lcmloc::pose_t toLcm(const core::FilterState& s, const std::string& filter, int64_t seq) {
   lcmloc::pose_t m;
+  toLcm(s, filter, seq, &m);
+  return m;
+}
+
+void toLcm(const core::FilterState& s, const std::string& filter, int64_t seq, lcmloc::pose_t* out) {
+  lcmloc::pose_t& m = *out;
   const auto n = static_cast<int>(s.x.size());
   m.utime = s.utime;
   m.seq = seq;
-  m.filter = filter;
+  if (m.filter != filter) m.filter = filter;
   m.status = static_cast<int32_t>(s.status);
   m.dim = n;
   m.state.assign(s.x.data(), s.x.data() + n);
   m.state_names.resize(n);
-  for (int i = 0; i < n; ++i)
-    m.state_names[i] = i < static_cast<int>(s.names.size()) ? s.names[i] : "s" + std::to_string(i);
-  m.covariance.assign(n, std::vector<double>(n, 0.0));
-  for (int i = 0; i < n && i < s.P.rows(); ++i)
-    for (int j = 0; j < n && j < s.P.cols(); ++j) m.covariance[i][j] = s.P(i, j);
-  return m;
+  for (int i = 0; i < n; ++i) {
+    if (i < static_cast<int>(s.names.size())) {
+      if (m.state_names[i] != s.names[i]) m.state_names[i] = s.names[i];
+    } else {
+      m.state_names[i] = "s" + std::to_string(i);
+    }
+  }
+  m.covariance.resize(n);
+  for (int i = 0; i < n; ++i) {
+    auto& row = m.covariance[i];
+    row.assign(n, 0.0);
+    if (i < s.P.rows())
+      for (int j = 0; j < n && j < s.P.cols(); ++j) row[j] = s.P(i, j);
+  }
 }
 
 lcmloc::gate_decision_t toLcm(const core::GateDecision& d, const std::string& filter, int64_t seq) {

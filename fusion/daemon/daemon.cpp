@@ -217,8 +217,23 @@ std::string FusionDaemon::poseChannel(const std::string& filter, bool active) co
 }
 
 void FusionDaemon::publishState(const std::string& filter, bool active, const core::FilterState& s) {
-  const std::string ch = poseChannel(filter, active);
-  bus_.publish(ch, common::toLcm(s, filter, out_seq_[ch]++));
+  PoseOut* po = nullptr;
+  for (auto& p : pose_out_)
+    if (p.active == active && p.filter == filter) {
+      po = &p;
+      break;
+    }
+  if (!po) {
+    PoseOut n;
+    n.filter = filter;
+    n.active = active;
+    n.channel = poseChannel(filter, active);
+    n.seq = &out_seq_[n.channel];
+    pose_out_.push_back(std::move(n));
+    po = &pose_out_.back();
+  }
+  common::toLcm(s, filter, (*po->seq)++, &po->msg);
+  bus_.publish(po->channel, po->msg);
   if (!active) return;
   last_utime_ = s.utime;
   last_status_ = s.status;

@@ -20,6 +20,7 @@
 #include "lcmloc/imu_t.hpp"
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
+#include "lcmloc/pose_t.hpp"
 
 namespace lcmloc::fusion {
 
@@ -72,6 +73,16 @@ class FusionDaemon {
   std::unique_ptr<core::FusionEngine> engine_;
   common::SeqTracker gaps_;
   std::map<std::string, int64_t> out_seq_;  ///< per output channel
+  /// Per (filter, active): its POSE channel, that channel's seq counter (a node of out_seq_) and
+  /// the message, reused for every state it publishes (no per-message allocations).
+  struct PoseOut {
+    std::string filter;
+    bool active = false;
+    std::string channel;
+    int64_t* seq = nullptr;
+    lcmloc::pose_t msg;
+  };
+  std::vector<PoseOut> pose_out_;
   std::map<std::string, int64_t> log_count_;
   int64_t messages_in_ = 0, rejected_ = 0, last_utime_ = 0, next_status_utime_ = INT64_MIN;
   core::FilterStatus last_status_ = core::FilterStatus::Uninitialized;

@@ -71,6 +71,13 @@ struct FusionEngine::Impl {
     if (out.on_event) out.on_event(name, detail, utime);
   }
 
+  FilterState scratch;  ///< reused for every published state (no allocations per message)
+  void emitState(const Filter& f, bool is_active) {
+    if (!out.on_state) return;
+    f.stateInto(scratch);
+    out.on_state(f.name(), is_active, scratch);
+  }
+
   template <typename F>
   void forEachFilter(F&& f) {
     f(*active, true);
@@ -99,7 +106,7 @@ struct FusionEngine::Impl {
     }
     forEachFilter([&](Filter& f, bool is_active) {
       f.predict(odo);
-      if (out.on_state) out.on_state(f.name(), is_active, f.state());
+      emitState(f, is_active);
     });
   }
 
@@ -109,7 +116,7 @@ struct FusionEngine::Impl {
       const GateDecision d = f.update(det);
       if (is_active) ++(d.accepted ? counters.accepted : counters.rejected);
       if (out.on_decision) out.on_decision(f.name(), is_active, d);
-      if (out.on_state) out.on_state(f.name(), is_active, f.state());
+      emitState(f, is_active);
     });
   }
 
@@ -128,7 +135,7 @@ struct FusionEngine::Impl {
       if (!d) return;
       if (is_active) ++(d->accepted ? counters.accepted : counters.rejected);
       if (out.on_decision) out.on_decision(f.name(), is_active, *d);
-      if (out.on_state) out.on_state(f.name(), is_active, f.state());
+      emitState(f, is_active);
     });
   }
   void handle(const EngineInput& in, const ImuInput& m) {

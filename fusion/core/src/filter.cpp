@@ -140,12 +140,15 @@ class DeadReckoningFilter final : public Filter {
   std::string name() const override { return "dead_reckoning"; }
   FilterState state() const override {
     FilterState s;
+    stateInto(s);
+    return s;
+  }
+  void stateInto(FilterState& s) const override {
     s.utime = utime_;
     s.x = x_;
     s.P = P_;
     s.names = names_;
     s.status = FilterStatus::DeadReckoning;
-    return s;
   }
   void initialize(const FilterState& from) override {
     Eigen::VectorXd x;
@@ -211,12 +214,15 @@ class RulerUkf final : public Filter {
 
   FilterState state() const override {
     FilterState s;
+    stateInto(s);
+    return s;
+  }
+  void stateInto(FilterState& s) const override {
     s.utime = utime_;
     s.x = ukf_.x();
     s.P = ukf_.P();
     s.names = names_;
     s.status = status_;
-    return s;
   }
 
   void initialize(const FilterState& from) override {

@@ -1,17 +1,25 @@
 #include "lcmloc/replay/log_bus.hpp"
 
+#include <cstring>
 #include <stdexcept>
 
-#include <lcm/lcm-cpp.hpp>
+#include "lcmloc/logger/event_file.hpp"
 
 namespace lcmloc::replay {
 
+/// The output log: the standard LCM log format (events numbered 0, 1, ... as lcm::LogFile numbers
+/// them), written through a 1 MB user-space buffer (one write(2) per MB, not several stdio calls
+/// per event).
 class LogWriter {
  public:
-  explicit LogWriter(const std::string& path) : log(path, "w") {
-    if (!log.good()) throw std::runtime_error("cannot create output log '" + path + "'");
+  explicit LogWriter(const std::string& path) {
+    try {
+      file = std::make_unique<logger::EventFile>(path, std::size_t{1} << 20);
+    } catch (const std::exception& e) {
+      throw std::runtime_error("cannot create output log '" + path + "': " + e.what());
+    }
   }
-  lcm::LogFile log;
+  std::unique_ptr<logger::EventFile> file;
 };
 
 int64_t messageUtime(const void* data, std::size_t size, int64_t fallback) {
@@ -28,19 +36,29 @@ LogBus::LogBus(const std::string& output) {
 
 LogBus::~LogBus() = default;
 
-void LogBus::close() { writer_.reset(); }
+void LogBus::close() {
+  if (writer_ && writer_->file->close(false) != 0) publishFailed("(output log)", "write to the output log");
+  writer_.reset();
+}
+
+std::map<std::string, int64_t> LogBus::writtenPerChannel() const {
+  std::map<std::string, int64_t> m;
+  for (const auto& [ch, n] : per_channel_) m[ch] += n;
+  return m;
+}
 
 bool LogBus::write(const std::string& channel, const void* data, std::size_t size, int64_t timestamp) {
   ++written_;
-  ++per_channel_[channel];
+  // A handful of channels: a linear search beats a map lookup per event.
+  auto it = per_channel_.begin();
+  while (it != per_channel_.end() && it->first != channel) ++it;
+  if (it == per_channel_.end())
+    per_channel_.emplace_back(channel, 1);
+  else
+    ++it->second;
   if (!writer_) return true;
-  lcm::LogEvent ev;
-  ev.eventnum = 0;  // numbered by the writer
-  ev.timestamp = timestamp;
-  ev.channel = channel;
-  ev.datalen = static_cast<int32_t>(size);
-  ev.data = const_cast<void*>(data);
-  if (writer_->log.writeEvent(&ev) != 0) return publishFailed(channel, "write to the output log");
+  if (writer_->file->append(timestamp, channel, data, size) != 0)
+    return publishFailed(channel, "write to the output log");
   return true;
 }
 

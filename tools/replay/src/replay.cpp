@@ -16,7 +16,8 @@ namespace lcmloc::replay {
 bool isDaemonOutput(const common::ChannelConfig& ch, const std::string& c) {
   if (c == ch.pose || c == ch.gate || c == ch.status) return true;
   // shadow filters: POSE_<TYPE>
-  if (c.size() > ch.pose.size() + 1 && c.compare(0, ch.pose.size() + 1, ch.pose + "_") == 0) return true;
+  const std::size_t n = ch.pose.size();
+  if (c.size() > n + 1 && c[n] == '_' && c.compare(0, n, ch.pose) == 0) return true;
   return false;
 }
 

@@ -40,9 +40,12 @@ class MessageBus {
   /// Encodes and publishes; returns false (and counts/logs once) on failure.
   template <typename T>
   bool publish(const std::string& channel, const T& msg) {
-    std::vector<uint8_t> buf(static_cast<std::size_t>(msg.getEncodedSize()));
-    if (msg.encode(buf.data(), 0, static_cast<int>(buf.size())) < 0) return publishFailed(channel, "encode");
-    return publishRaw(channel, buf.data(), buf.size());
+    // One encode buffer per thread, reused (no allocation per message once it has grown).
+    thread_local std::vector<uint8_t> buf;
+    const auto size = static_cast<std::size_t>(msg.getEncodedSize());
+    if (buf.size() < size) buf.resize(size);
+    if (msg.encode(buf.data(), 0, static_cast<int>(size)) < 0) return publishFailed(channel, "encode");
+    return publishRaw(channel, buf.data(), size);
   }
   virtual bool publishRaw(const std::string& channel, const void* data, std::size_t size) = 0;
 

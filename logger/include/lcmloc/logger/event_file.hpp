@@ -25,8 +25,8 @@ class EventFile {
   int append(int64_t utime, const std::string& channel, const void* data, std::size_t size);
   /// Writes the buffer to the kernel; with sync also fsync()s. Returns 0 or an errno.
   int flush(bool sync);
-  /// Flushes, fsyncs and closes; returns 0 or an errno. Idempotent.
-  int close();
+  /// Flushes, fsyncs (unless sync is false) and closes; returns 0 or an errno. Idempotent.
+  int close(bool sync = true);
 
   const std::string& path() const { return path_; }
   /// Bytes in the file plus bytes buffered.

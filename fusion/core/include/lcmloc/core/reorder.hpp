@@ -5,9 +5,10 @@
 #include <algorithm>
 #include <climits>
 #include <cstdint>
+#include <deque>
 #include <functional>
-#include <map>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 namespace lcmloc::core {
@@ -30,16 +31,21 @@ class ReorderBuffer {
   /// released (key <= last released), or is a duplicate key.
   bool push(const OrderKey& key, T item) {
     if (released_any_ && !(last_released_ < key)) return false;
-    if (items_.count(key)) return false;
+    if (items_.empty() || items_.back().first < key) {  // the usual case: in order
+      items_.emplace_back(key, std::move(item));
+    } else {
+      const auto it = lowerBound(key);
+      if (!(key < it->first)) return false;  // duplicate
+      items_.emplace(it, key, std::move(item));
+    }
     newest_utime_ = std::max(newest_utime_, key.utime);
-    items_.emplace(key, std::move(item));
     return true;
   }
 
   /// Releases, in canonical order, every item older than newest - window.
   template <typename F>
   void releaseReady(F&& sink) {
-    while (!items_.empty() && items_.begin()->first.utime < newest_utime_ - window_us_) pop(sink);
+    while (!items_.empty() && items_.front().first.utime < newest_utime_ - window_us_) pop(sink);
   }
 
   /// Releases everything (end of input / shutdown).
@@ -49,28 +55,39 @@ class ReorderBuffer {
   }
 
   std::size_t size() const { return items_.size(); }
-  bool contains(const OrderKey& key) const { return items_.count(key) > 0; }
+  bool contains(const OrderKey& key) const {
+    const auto it = lowerBound(key);
+    return it != items_.end() && !(key < it->first);
+  }
   /// Key of the last released item (meaningful once anything was released).
   bool releasedAny() const { return released_any_; }
   const OrderKey& lastReleased() const { return last_released_; }
   int64_t window() const { return window_us_; }
 
  private:
+  using Item = std::pair<OrderKey, T>;
+  typename std::deque<Item>::const_iterator lowerBound(const OrderKey& key) const {
+    return std::lower_bound(items_.begin(), items_.end(), key,
+                            [](const Item& a, const OrderKey& k) { return a.first < k; });
+  }
+  typename std::deque<Item>::iterator lowerBound(const OrderKey& key) {
+    return std::lower_bound(items_.begin(), items_.end(), key,
+                            [](const Item& a, const OrderKey& k) { return a.first < k; });
+  }
   template <typename F>
   void pop(F& sink) {
-    auto it = items_.begin();
-    last_released_ = it->first;
+    last_released_ = items_.front().first;
     released_any_ = true;
-    OrderKey k = it->first;
-    T v = std::move(it->second);
-    items_.erase(it);
+    const OrderKey k = items_.front().first;
+    T v = std::move(items_.front().second);
+    items_.pop_front();
     sink(k, v);
   }
   int64_t window_us_;
   int64_t newest_utime_ = INT64_MIN;
   bool released_any_ = false;
   OrderKey last_released_;
-  std::map<OrderKey, T> items_;
+  std::deque<Item> items_;  ///< sorted by key (inputs arrive nearly in order: appends)
 };
 
 }  // namespace lcmloc::core

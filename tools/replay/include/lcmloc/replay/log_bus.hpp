@@ -40,7 +40,8 @@ class LogBus : public common::MessageBus {
   bool subscribed(const std::string& channel);
 
   int64_t written() const { return written_; }
-  const std::map<std::string, int64_t>& writtenPerChannel() const { return per_channel_; }
+  std::map<std::string, int64_t> writtenPerChannel() const;
+  /// Writes out what is buffered and closes the output.
   void close();
 
  private:
@@ -55,7 +56,7 @@ class LogBus : public common::MessageBus {
   std::map<std::string, std::vector<std::size_t>> route_;  ///< channel -> matching subs (cached)
   std::unique_ptr<class LogWriter> writer_;
   int64_t written_ = 0;
-  std::map<std::string, int64_t> per_channel_;
+  std::vector<std::pair<std::string, int64_t>> per_channel_;
 };
 
 }  // namespace lcmloc::replay
