@@ -22,12 +22,6 @@ using lcmloc::common::Bus;
 
 namespace {
 
-std::string uniqueUrl() {
-  static int next = 0;
-  const int port = 40000 + (::getpid() % 2000) * 8 + (next++ % 8);
-  return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0&recv_buf_size=4194304";
-}
-
 struct ReadBack {
   lcmloc::eval::ScanSummary scan;
   std::vector<int64_t> seqs;       // ODOMETRY seq, in file order
@@ -51,7 +45,7 @@ class LoggerTest : public ::testing::Test {
     dir_ = fs::temp_directory_path() / ("lcmloc_logger_" + std::to_string(::getpid()) + "_" + info->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    url_ = uniqueUrl();
+    url_ = uniqueLcmUrl();
     config_ = path("config.yaml");
     std::ofstream(config_) << "logger: {status_period: 0.05, flush_period: 0.05}\n";
     bus_ = std::make_unique<Bus>(url_);
@@ -274,7 +268,7 @@ TEST_F(LoggerTest, KillDashNineKeepsEverythingUpToTheLastFlushReadableByUsAndLcm
   for (std::size_t i = 0; i < r.seqs.size(); ++i) ASSERT_EQ(r.seqs[i], static_cast<int64_t>(i));
 
   // lcm-logplayer plays the file: every event arrives on another port.
-  const std::string play_url = uniqueUrl();
+  const std::string play_url = uniqueLcmUrl();
   Bus play(play_url);
   std::vector<int64_t> played;
   play.subscribe<lcmloc::odometry_t>("ODOMETRY", [&](const std::string&, const lcmloc::odometry_t& m, int64_t) {

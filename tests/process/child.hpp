@@ -72,3 +72,12 @@ class Child {
   std::optional<int> status_;
   std::string output_;
 };
+
+/// A udpm:// URL on loopback with a port of its own, shared by every process test so that tests
+/// of different files running at the same time do not hear each other: one allocator, 8 ports
+/// per test process, 5000 process slots (20000..59999).
+inline std::string uniqueLcmUrl() {
+  static int next = 0;
+  const int port = 20000 + (::getpid() % 5000) * 8 + (next++ % 8);
+  return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0&recv_buf_size=4194304";
+}

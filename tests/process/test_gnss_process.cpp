@@ -24,12 +24,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string uniqueUrl() {
-  static int next = 0;
-  const int port = 40000 + (::getpid() % 3000) * 4 + (next++ % 4);
-  return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0&recv_buf_size=4194304";
-}
-
 bool waitFor(lcmloc::common::Bus& bus, const std::function<bool()>& pred, std::chrono::milliseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   while (!pred() && std::chrono::steady_clock::now() < deadline) bus.handle(50);
@@ -51,7 +45,7 @@ class GnssProcess : public ::testing::Test {
     dir_ = fs::temp_directory_path() / ("lcmloc_gnss_" + std::to_string(::getpid()) + "_" + info->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    url_ = uniqueUrl();
+    url_ = uniqueLcmUrl();
   }
   void TearDown() override {
     if (!HasFailure()) fs::remove_all(dir_);

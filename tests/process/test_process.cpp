@@ -30,12 +30,6 @@ const std::map<std::string, std::string> kExecutables{
     {"lcmloc-logger", LCMLOC_LOGGER}, {"lcmloc-launcher", LCMLOC_LAUNCHER}};
 
 /// A port no other test (in this run or a parallel one) uses.
-std::string uniqueUrl() {
-  static int next = 0;
-  const int port = 20000 + (::getpid() % 4000) * 8 + (next++ % 8);
-  return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0&recv_buf_size=4194304";
-}
-
 class ProcessTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -44,7 +38,7 @@ class ProcessTest : public ::testing::Test {
            ("lcmloc_process_" + std::to_string(::getpid()) + "_" + info->test_suite_name() + "_" + info->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    url_ = uniqueUrl();
+    url_ = uniqueLcmUrl();
   }
   void TearDown() override {
     if (!HasFailure()) fs::remove_all(dir_);

@@ -27,12 +27,6 @@ using lcmloc::common::Bus;
 
 namespace {
 
-std::string uniqueUrl() {
-  static int next = 0;
-  const int port = 36000 + (::getpid() % 3000) * 8 + (next++ % 8);
-  return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0&recv_buf_size=4194304";
-}
-
 struct Event {
   int64_t timestamp = 0;
   std::string channel;
@@ -84,7 +78,7 @@ class ReplayProcessTest : public ::testing::Test {
     dir_ = fs::temp_directory_path() / ("lcmloc_rprocess_" + std::to_string(::getpid()) + "_" + info->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    url_ = uniqueUrl();
+    url_ = uniqueLcmUrl();
   }
   void TearDown() override {
     if (!HasFailure()) fs::remove_all(dir_);
