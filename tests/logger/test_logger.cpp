@@ -10,7 +10,7 @@
 #include <functional>
 #include <set>
 
-#include "child.hpp"
+#include "process_fixture.hpp"
 #include "lcmloc/common/transport.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/logger_status_t.hpp"
@@ -38,24 +38,16 @@ ReadBack readBack(const std::string& file) {
   return r;
 }
 
-class LoggerTest : public ::testing::Test {
+class LoggerTest : public ProcessFixture {
  protected:
   void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("lcmloc_logger_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    url_ = uniqueLcmUrl();
+    ProcessFixture::SetUp();
     config_ = path("config.yaml");
     std::ofstream(config_) << "logger: {status_period: 0.05, flush_period: 0.05}\n";
     bus_ = std::make_unique<Bus>(url_);
     bus_->subscribe<lcmloc::logger_status_t>(
         "LOGGER_STATUS", [this](const std::string&, const lcmloc::logger_status_t& m, int64_t) { status_ = m; });
   }
-  void TearDown() override {
-    if (!HasFailure()) fs::remove_all(dir_);
-  }
-  std::string path(const std::string& n) const { return (dir_ / n).string(); }
 
   /// Starts the logger (through prlimit with its options when given).
   std::unique_ptr<Child> start(std::vector<std::string> args, std::vector<std::string> prlimit = {}) {
@@ -100,8 +92,7 @@ class LoggerTest : public ::testing::Test {
     return v;
   }
 
-  fs::path dir_;
-  std::string url_, config_;
+  std::string config_;
   std::unique_ptr<Bus> bus_;
   std::optional<lcmloc::logger_status_t> status_;
 };

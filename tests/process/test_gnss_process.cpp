@@ -9,7 +9,7 @@
 #include <functional>
 #include <set>
 
-#include "child.hpp"
+#include "process_fixture.hpp"
 #include "lcmloc/common/geodesy.hpp"
 #include "lcmloc/common/transport.hpp"
 #include "lcmloc/gate_decision_t.hpp"
@@ -38,26 +38,7 @@ std::string findInPath(const std::string& exe) {
   return "";
 }
 
-class GnssProcess : public ::testing::Test {
- protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("lcmloc_gnss_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    url_ = uniqueLcmUrl();
-  }
-  void TearDown() override {
-    if (!HasFailure()) fs::remove_all(dir_);
-  }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  std::string writeFile(const std::string& name, const std::string& text) const {
-    std::ofstream(path(name)) << text;
-    return path(name);
-  }
-  fs::path dir_;
-  std::string url_;
-};
+class GnssProcess : public ProcessFixture {};
 
 }  // namespace
 

@@ -11,7 +11,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 
-#include "child.hpp"
+#include "process_fixture.hpp"
 #include "lcmloc/common/transport.hpp"
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/fusion_status_t.hpp"
@@ -30,27 +30,8 @@ const std::map<std::string, std::string> kExecutables{
     {"lcmloc-logger", LCMLOC_LOGGER}, {"lcmloc-launcher", LCMLOC_LAUNCHER}};
 
 /// A port no other test (in this run or a parallel one) uses.
-class ProcessTest : public ::testing::Test {
+class ProcessTest : public ProcessFixture {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("lcmloc_process_" + std::to_string(::getpid()) + "_" + info->test_suite_name() + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    url_ = uniqueLcmUrl();
-  }
-  void TearDown() override {
-    if (!HasFailure()) fs::remove_all(dir_);
-  }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  std::string writeFile(const std::string& name, const std::string& text) const {
-    std::ofstream(path(name)) << text;
-    return path(name);
-  }
-
-  fs::path dir_;
-  std::string url_;
 };
 
 /// Handles bus messages until pred() or the timeout; returns pred().

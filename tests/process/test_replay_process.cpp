@@ -12,7 +12,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 
-#include "child.hpp"
+#include "process_fixture.hpp"
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/transport.hpp"
 #include "lcmloc/fusion_status_t.hpp"
@@ -71,23 +71,8 @@ long firstDifference(const std::vector<std::vector<uint8_t>>& a, const std::vect
   return a.size() == b.size() ? -1 : static_cast<long>(std::min(a.size(), b.size()));
 }
 
-class ReplayProcessTest : public ::testing::Test {
+class ReplayProcessTest : public ProcessFixture {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("lcmloc_rprocess_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    url_ = uniqueLcmUrl();
-  }
-  void TearDown() override {
-    if (!HasFailure()) fs::remove_all(dir_);
-  }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  std::string writeFile(const std::string& name, const std::string& text) const {
-    std::ofstream(path(name)) << text;
-    return path(name);
-  }
   /// Runs lcmloc-replay and returns its output log's events.
   std::vector<Event> replay(const std::string& log, const std::string& config, const std::string& name) {
     Child r(LCMLOC_REPLAY, {log, "-o", path(name), "--config", config}, path(name + ".out"));
@@ -96,9 +81,6 @@ class ReplayProcessTest : public ::testing::Test {
     EXPECT_EQ(rc.value_or(-1), 0) << r.output();
     return readEvents(path(name));
   }
-
-  fs::path dir_;
-  std::string url_;
 };
 
 /// A test-side daemon watcher: heartbeats, POSE/GATE payloads and FUSION_STATUS messages.
