@@ -12,9 +12,38 @@
 #include <map>
 #include <sstream>
 
+#include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/report.hpp"
 
 namespace lcmloc::eval {
+
+bool findInPath(const std::string& exe) {
+  const char* path = std::getenv("PATH");
+  if (!path) return false;
+  std::stringstream ss(path);
+  std::string dir;
+  while (std::getline(ss, dir, ':'))
+    if (!dir.empty() && ::access((dir + "/" + exe).c_str(), X_OK) == 0) return true;
+  return false;
+}
+
+int runGnuplot(const std::string& dir, const std::string& script) {
+  const pid_t pid = ::fork();
+  if (pid < 0) return -1;
+  if (pid == 0) {
+    if (::chdir(dir.c_str()) != 0) ::_exit(126);
+    const int fd = ::open("gnuplot.log", O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd >= 0) { ::dup2(fd, 1); ::dup2(fd, 2); ::close(fd); }
+    ::execlp("gnuplot", "gnuplot", script.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) return -1;
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
 namespace {
 
 const std::map<std::string, std::string> kColours{{"dead_reckoning", "#e69f00"},
@@ -36,34 +65,6 @@ std::string fileStem(std::string name) {
 }
 
 double seconds(int64_t utime, int64_t t0) { return static_cast<double>(utime - t0) * 1e-6; }
-
-bool findInPath(const std::string& exe) {
-  const char* path = std::getenv("PATH");
-  if (!path) return false;
-  std::stringstream ss(path);
-  std::string dir;
-  while (std::getline(ss, dir, ':'))
-    if (!dir.empty() && ::access((dir + "/" + exe).c_str(), X_OK) == 0) return true;
-  return false;
-}
-
-/// Runs gnuplot on script inside dir, its output to gnuplot.log; returns the exit status.
-int runGnuplot(const std::string& dir, const std::string& script) {
-  const pid_t pid = ::fork();
-  if (pid < 0) return -1;
-  if (pid == 0) {
-    if (::chdir(dir.c_str()) != 0) ::_exit(126);
-    const int fd = ::open("gnuplot.log", O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (fd >= 0) { ::dup2(fd, 1); ::dup2(fd, 2); ::close(fd); }
-    ::execlp("gnuplot", "gnuplot", script.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) return -1;
-  }
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
 
 void writeTrack(const std::string& path, const FilterRun& run, int64_t t0) {
   std::ofstream f(path);

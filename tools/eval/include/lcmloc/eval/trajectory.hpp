@@ -1,0 +1,184 @@
+#pragma once
+// Scoring of recorded estimates against a reference (lcmloc-evaluate): reads the estimates
+// (pose_t with covariance), the ground truth (ground_truth_t, or gps_fix_t about a datum) and
+// the gate decisions (gate_decision_t) of any log through LogScanner, interpolates the truth
+// onto the estimate times and computes position / heading / drift errors, NEES against its
+// chi-square bounds and gate statistics. No LCM networking; plotting and TUM export in
+// trajectory_report.hpp. Definitions: docs/evaluate.md.
+#include <atomic>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "lcmloc/common/geodesy.hpp"
+#include "lcmloc/eval/log_reader.hpp"
+
+namespace lcmloc::eval {
+
+/// One recorded estimate: (x, y, theta) and the top-left 3x3 block of its covariance.
+struct Estimate {
+  int64_t utime = 0;
+  double x = 0, y = 0, theta = 0;
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  bool has_cov = false;              ///< dim >= 3 and a finite covariance was recorded
+  int status = 0;                    ///< pose_t STATUS_*
+};
+
+/// The estimates of one pose channel, sorted by utime.
+struct EstimateTrack {
+  std::string channel;
+  std::vector<std::string> filters;  ///< filter names seen on the channel, in order of appearance
+  std::vector<Estimate> poses;
+};
+
+/// One reference sample. gps_fix_t truth has no heading.
+struct TruthPose {
+  int64_t utime = 0;
+  double x = 0, y = 0, heading = 0;
+  bool has_heading = true;
+};
+
+/// One gate_decision_t.
+struct GateRecord {
+  int64_t utime = 0;
+  std::string filter, sensor, reason;
+  int dim = 0;                       ///< innovation dimension (the NIS's degrees of freedom)
+  double nis = 0;                    ///< v' S^-1 v (mahalanobis field)
+  bool accepted = false;
+};
+
+struct TrajectoryLogOptions {
+  std::string pose_channel = "POSE";
+  bool all_pose_channels = false;    ///< also every other channel named POSE_*
+  std::string truth_channel = "GROUND_TRUTH";
+  std::string gate_channel = "GATE";
+  /// Needed only when the truth channel holds gps_fix_t (lat/lon -> local x east, y north).
+  std::optional<common::Datum> datum;
+};
+
+struct TrajectoryLog {
+  std::string path;
+  int64_t file_size = 0, events_read = 0, bytes_unreadable = 0;
+  bool damaged = false, interrupted = false;
+  std::map<std::string, int64_t> channel_counts;
+  std::vector<EstimateTrack> tracks; ///< the pose channel first (even when empty), then POSE_* by name
+  std::vector<TruthPose> truth;      ///< sorted by utime, one sample per utime
+  std::string truth_type;            ///< "ground_truth_t", "gps_fix_t" or "" (none decoded)
+  std::vector<GateRecord> gates;     ///< in log order
+  std::vector<LogIssue> issues;      ///< damage and undecodable/invalid messages, in file order
+};
+
+/// Reads the log at path. Throws std::runtime_error when it cannot be opened. Damage and bad
+/// messages are recorded in issues; everything readable is used. stop is polled between events.
+TrajectoryLog readTrajectoryLog(const std::string& path, const TrajectoryLogOptions& opt,
+                                const std::atomic<bool>* stop = nullptr);
+
+// ---------------------------------------------------------------------------------------------
+
+struct EvaluateOptions {
+  std::vector<double> segment_lengths{10.0, 50.0, 100.0};  ///< drift segments [m]
+  /// An estimate between two truth samples further apart than this is not scored [s] (0 = any).
+  double max_truth_gap_s = 1.0;
+  double confidence = 0.95;          ///< two-sided probability of the chi-square intervals
+};
+
+/// Why an estimate was not interpolated.
+enum class TruthMiss { kNone, kBefore, kAfter, kGap };
+
+/// Truth at utime: linear in x, y; heading along the shortest angle. nullopt (and why) before
+/// the first or after the last sample or between two samples more than max_gap_us apart
+/// (max_gap_us <= 0: no limit).
+std::optional<TruthPose> interpolateTruth(const std::vector<TruthPose>& truth, int64_t utime,
+                                          int64_t max_gap_us, TruthMiss* why = nullptr);
+
+/// Quantile of the chi-square distribution with dof (> 0, any size) degrees of freedom.
+double chi2QuantileAnyDof(double p, double dof);
+
+struct ErrorStats {
+  int64_t n = 0;
+  double rmse = 0, mean = 0, median = 0, p95 = 0, max = 0;
+};
+
+/// Sorted-sample percentile, linear between order statistics (numpy's default); q in [0, 1].
+double percentile(std::vector<double> v, double q);
+ErrorStats errorStats(const std::vector<double>& v);   ///< of absolute values
+
+struct ConsistencyStats {
+  int dof = 0;
+  int64_t samples = 0;
+  double mean = 0;
+  double mean_lo = 0, mean_hi = 0;       ///< two-sided bounds of the mean over `samples` draws
+  double sample_lo = 0, sample_hi = 0;   ///< two-sided per-sample interval
+  double fraction_inside = 0;            ///< of samples inside [sample_lo, sample_hi]
+  std::string verdict = "none";          ///< honest, optimistic, conservative, none (no samples)
+};
+
+/// Mean of values (each chi-square with its dof when consistent) against the bounds; values
+/// and dofs have equal length. sample bounds use dofs.front() (all equal in practice).
+ConsistencyStats consistency(const std::vector<double>& values, const std::vector<int>& dofs,
+                             double confidence);
+
+struct DriftStats {
+  double length_m = 0;
+  int64_t segments = 0;                  ///< one per scored start with a segment of that length
+  double mean_pct = 0, median_pct = 0, max_pct = 0;
+};
+
+/// One scored estimate.
+struct ScoredPose {
+  int64_t utime = 0;
+  double x = 0, y = 0, theta = 0;
+  double truth_x = 0, truth_y = 0, truth_heading = 0;
+  double err_x = 0, err_y = 0, err = 0;
+  double err_heading = 0;                ///< wrap(theta - truth heading) (0 without truth heading)
+  double distance = 0;                   ///< truth path length from the first truth sample [m]
+  double nees3 = -1, nees2 = -1;         ///< -1 when not computed
+  Eigen::Matrix2d cov_xy = Eigen::Matrix2d::Zero();
+  bool has_cov = false;
+};
+
+struct TrackScore {
+  std::string channel;
+  std::vector<std::string> filters;
+  int64_t estimates = 0, scored = 0;
+  int64_t before_truth = 0, after_truth = 0, in_truth_gap = 0;  ///< not scored, and why
+  int64_t without_covariance = 0;        ///< scored, but no usable (positive definite) covariance
+  int64_t first_utime = 0, last_utime = 0;  ///< estimate time span
+  ErrorStats position;                   ///< |(x, y) error| [m]
+  bool has_heading = false;
+  ErrorStats heading;                    ///< |wrapped heading error| [rad]
+  double path_length_m = 0;              ///< truth path length between first and last scored estimate
+  double final_error_m = 0;
+  double final_error_pct = 0;            ///< 100 * final error / path length (0 without a path)
+  std::vector<DriftStats> drift;
+  ConsistencyStats nees3, nees2;         ///< over (x, y, theta) and over (x, y)
+  std::vector<ScoredPose> points;
+};
+
+/// Scores one track; truth must be sorted by utime.
+TrackScore scoreTrack(const EstimateTrack& track, const std::vector<TruthPose>& truth,
+                      const EvaluateOptions& opt);
+
+struct GateGroup {
+  std::string filter, sensor;            ///< "*" when aggregated over all
+  int64_t decisions = 0, accepted = 0, rejected = 0, ignored = 0;
+  std::map<std::string, int64_t> reasons;
+  double mean_dof = 0;                   ///< mean innovation dimension of the accepted ones
+  ConsistencyStats nis;                  ///< NIS of the accepted measurements
+  double nis_mean_all = 0;               ///< mean NIS over every decision with a finite NIS
+};
+
+struct GateStats {
+  std::vector<GateGroup> by_filter_sensor, by_filter, by_sensor;  ///< sorted by name
+};
+
+/// Counts per (filter, sensor), per filter, per sensor. A decision whose reason is
+/// "dead_reckoning" is ignored (the filter uses no measurement), the others are accepted or
+/// rejected.
+GateStats gateStatistics(const std::vector<GateRecord>& gates, double confidence);
+
+}  // namespace lcmloc::eval
