@@ -203,8 +203,9 @@ void printTrajectorySummary(std::ostream& os, const TrajectoryLog& log, const st
        << "  reasons\n";
     for (const auto& g : gates.by_filter_sensor) {
       os << std::left << std::setw(18) << g.filter << std::setw(18) << g.sensor << std::right << std::setw(9)
-         << g.accepted << std::setw(9) << g.rejected << std::setprecision(2) << std::setw(10) << g.nis.mean
-         << std::setw(6) << g.mean_dof << "  ";
+         << g.accepted << std::setw(9) << g.rejected << std::setprecision(2);
+      if (g.nis.samples) os << std::setw(10) << g.nis.mean << std::setw(6) << g.mean_dof << "  ";
+      else os << std::setw(10) << "-" << std::setw(6) << "-" << "  ";
       bool first = true;
       for (const auto& [r, n] : g.reasons) {
         os << (first ? "" : ", ") << r << " " << n;
@@ -288,7 +289,8 @@ PlotResult writeTrajectoryPlots(const TrajectoryLog& log, const std::vector<Trac
       gp << "set output 'nees_" << st << ".png'\n"
          << "set multiplot layout " << (three ? 2 : 1) << ",1 title 'NEES of " << s.channel
          << " (log scale) with the two-sided 95% bounds'\n"
-         << "set xlabel 'time [s]'\nset logscale y\nunset title\n";
+         << "set xlabel 'time [s]'\nset logscale y\nset format y '%g'\nunset title\n"
+         << "set key inside right bottom box opaque font ',10'\n" << std::setprecision(3);
       auto panel = [&](const ConsistencyStats& c, int column, const char* name) {
         gp << "set ylabel 'NEES " << name << "'\n"
            << "plot " << tail(track) << " u 1:" << column << " w l lw 1 lc rgb '#0072b2' t 'NEES " << name << "', \\\n  "
@@ -300,7 +302,8 @@ PlotResult writeTrajectoryPlots(const TrajectoryLog& log, const std::vector<Trac
       };
       if (three) panel(s.nees3, 7, "(x, y, theta)");
       panel(s.nees2, 8, "(x, y)");
-      gp << "unset logscale y\nunset multiplot\n";
+      gp << "unset logscale y\nset format y '% h'\nunset multiplot\nset key outside right top nobox font ',12'\n"
+         << std::setprecision(6);
       res.figures.push_back("nees_" + st + ".png");
     }
     res.figures.insert(res.figures.end() - (s.nees2.samples ? 1 : 0),
