@@ -148,8 +148,10 @@ int main(int argc, char** argv) {
       std::filesystem::create_directories(tum_dir);
       for (const auto& t : tracks) {
         const std::string file = tum_dir + "/" + (t.channel == lo.pose_channel ? "estimate" : "estimate_" + t.channel) + ".tum";
-        eval::writeTum(file, t.poses);
-        std::cout << "TUM: " << file << " (" << t.poses.size() << " poses)\n";
+        const auto n = eval::writeTum(file, t.poses);
+        std::cout << "TUM: " << file << " (" << n << " poses";
+        if (n != t.poses.size()) std::cout << "; " << t.poses.size() - n << " with a repeated utime left out";
+        std::cout << ")\n";
       }
       if (!log.truth.empty()) {
         eval::writeTum(tum_dir + "/truth.tum", log.truth);

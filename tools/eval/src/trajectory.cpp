@@ -160,14 +160,18 @@ TrackScore scoreTrack(const EstimateTrack& track, const std::vector<TruthPose>& 
   std::vector<double> pos_err, head_err, nees3, nees2;
   std::vector<int> dof3, dof2;
   sc.has_heading = !truth.empty();
+  bool skipped = false;
   for (const auto& e : track.poses) {
     TruthMiss why = TruthMiss::kNone;
     const auto t = interpolateTruth(truth, e.utime, max_gap_us, &why);
     if (!t) {
+      skipped = true;
       (why == TruthMiss::kBefore ? sc.before_truth : why == TruthMiss::kAfter ? sc.after_truth : sc.in_truth_gap)++;
       continue;
     }
     ScoredPose p;
+    p.after_skip = skipped && !sc.points.empty();
+    skipped = false;
     p.utime = e.utime;
     p.x = e.x;
     p.y = e.y;

@@ -161,12 +161,12 @@ json makeTrajectoryReport(const TrajectoryLog& log, const std::vector<TrackScore
 
 void printTrajectorySummary(std::ostream& os, const TrajectoryLog& log, const std::vector<TrackScore>& scores,
                             const GateStats& gates) {
-  os << std::left << std::setw(18) << "channel" << std::right << std::setw(8) << "scored" << std::setw(9)
+  os << std::left << std::setw(22) << "channel" << std::right << std::setw(8) << "scored" << std::setw(9)
      << "RMSE[m]" << std::setw(9) << "med[m]" << std::setw(9) << "p95[m]" << std::setw(9) << "max[m]"
      << std::setw(10) << "hRMSE[d]" << std::setw(9) << "final%" << std::setw(10) << "NEES3" << std::setw(10)
      << "NEES2" << "  covariance\n";
   for (const auto& s : scores) {
-    os << std::left << std::setw(18) << s.channel << std::right << std::setw(8) << s.scored << std::fixed;
+    os << std::left << std::setw(22) << s.channel << std::right << std::setw(8) << s.scored << std::fixed;
     if (s.scored == 0) {
       os << "   (no estimate inside the truth span)\n";
       continue;
@@ -175,7 +175,7 @@ void printTrajectorySummary(std::ostream& os, const TrajectoryLog& log, const st
        << s.position.p95 << std::setw(9) << s.position.max;
     if (s.has_heading) os << std::setprecision(2) << std::setw(10) << s.heading.rmse * 180.0 / kPi;
     else os << std::setw(10) << "-";
-    if (s.path_length_m > 0) os << std::setprecision(2) << std::setw(9) << s.final_error_pct;
+    if (s.path_length_m > 0) os << std::setprecision(3) << std::setw(9) << s.final_error_pct;
     else os << std::setw(9) << "-";
     auto nees = [&](const ConsistencyStats& c) {
       if (c.samples) os << std::setprecision(2) << std::setw(10) << c.mean;
@@ -246,6 +246,7 @@ PlotResult writeTrajectoryPlots(const TrajectoryLog& log, const std::vector<Trac
       f << "# t[s] x[m] y[m] theta[rad] err[m] err_heading[deg] nees3 nees2 (? = not computed)\n"
         << std::setprecision(10);
       for (const auto& p : s.points) {
+        if (p.after_skip) f << '\n';  // no line across estimates that were not scored
         f << seconds(p.utime, t0) << ' ' << p.x << ' ' << p.y << ' ' << p.theta << ' ' << p.err << ' ';
         if (s.has_heading) f << p.err_heading * 180.0 / kPi << ' ';
         else f << "? ";
@@ -278,11 +279,12 @@ PlotResult writeTrajectoryPlots(const TrajectoryLog& log, const std::vector<Trac
     gp << "set output 'errors_" << st << ".png'\n"
        << "set multiplot layout " << (s.has_heading ? 2 : 1) << ",1 title 'Errors of " << s.channel << "'\n"
        << "set xlabel 'time [s]'\nset ylabel 'position error [m]'\nunset title\n"
+       << "set key inside right top box opaque\n"
        << "plot " << tail(track) << " u 1:5 w l lw 2 lc rgb '#0072b2' t '|position error|'\n";
     if (s.has_heading)
       gp << "set ylabel 'heading error [deg]'\nplot " << tail(track)
          << " u 1:6 w l lw 2 lc rgb '#009e73' t 'heading error (wrapped)'\n";
-    gp << "unset multiplot\n";
+    gp << "unset multiplot\nset key outside right top nobox\n";
 
     if (s.nees2.samples) {
       const bool three = s.nees3.samples > 0;
@@ -352,7 +354,7 @@ void writeLines(const std::string& path, It begin, It end, F line) {
 }
 }  // namespace
 
-void writeTum(const std::string& path, const std::vector<Estimate>& poses) {
+std::size_t writeTum(const std::string& path, const std::vector<Estimate>& poses) {
   // TUM tools want unique timestamps: of several estimates at one utime the last is written.
   std::vector<Estimate> unique;
   for (const auto& e : poses) {
@@ -360,6 +362,7 @@ void writeTum(const std::string& path, const std::vector<Estimate>& poses) {
     else unique.push_back(e);
   }
   writeLines(path, unique.begin(), unique.end(), [](const Estimate& e) { return tumLine(e.utime, e.x, e.y, e.theta); });
+  return unique.size();
 }
 
 void writeTum(const std::string& path, const std::vector<TruthPose>& truth) {

@@ -139,6 +139,7 @@ struct ScoredPose {
   double nees3 = -1, nees2 = -1;         ///< -1 when not computed
   Eigen::Matrix2d cov_xy = Eigen::Matrix2d::Zero();
   bool has_cov = false;
+  bool after_skip = false;               ///< estimates right before this one were not scored
 };
 
 struct TrackScore {

@@ -39,9 +39,10 @@ PlotResult writeTrajectoryPlots(const TrajectoryLog& log, const std::vector<Trac
 /// decimals from the utime), z = 0 and the quaternion of a rotation by yaw about z.
 std::string tumLine(int64_t utime, double x, double y, double yaw);
 
-/// Writes the poses of a track (every estimate, also those outside the truth span) as TUM.
-/// Throws std::runtime_error on I/O failure.
-void writeTum(const std::string& path, const std::vector<Estimate>& poses);
+/// Writes the poses of a track (every estimate, also those outside the truth span) as TUM; of
+/// several estimates with one utime only the last (TUM tools want unique timestamps). Returns
+/// the lines written. Throws std::runtime_error on I/O failure.
+std::size_t writeTum(const std::string& path, const std::vector<Estimate>& poses);
 /// Writes the truth samples as TUM (heading 0 when the truth has none).
 void writeTum(const std::string& path, const std::vector<TruthPose>& truth);
 
