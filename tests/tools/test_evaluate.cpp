@@ -281,8 +281,31 @@ TEST_F(EvaluateTest, NeesOfHonestCovarianceIsNearItsDof) {
   EXPECT_LT(s.nees3.mean, s.nees3.mean_hi);
   EXPECT_EQ(s.nees3.verdict, "honest");
   EXPECT_EQ(s.nees2.verdict, "honest");
+  EXPECT_GT(s.nees3.effective_samples, 1500.0);  // independent draws: about 2000
+  EXPECT_EQ(s.nees3.verdict_effective, "honest");
   EXPECT_NEAR(s.nees3.fraction_inside, 0.95, 0.015);
   EXPECT_NEAR(s.nees2.fraction_inside, 0.95, 0.015);
+}
+
+TEST_F(EvaluateTest, EffectiveSampleSizeOfCorrelatedSeries) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> n01;
+  std::vector<double> iid(20000), ar(20000);
+  double a = 0;
+  for (std::size_t i = 0; i < iid.size(); ++i) {
+    iid[i] = n01(rng);
+    a = 0.9 * a + n01(rng);  // AR(1), phi 0.9: integrated autocorrelation time (1 + phi) / (1 - phi) = 19
+    ar[i] = a;
+  }
+  EXPECT_NEAR(eval::effectiveSampleSize(iid), 20000.0, 2000.0);
+  EXPECT_NEAR(eval::effectiveSampleSize(ar), 20000.0 / 19.0, 200.0);
+  // The bounds of the mean widen with the effective sample size.
+  std::vector<double> nees(ar.size());
+  for (std::size_t i = 0; i < ar.size(); ++i) nees[i] = 2.0 + 0.1 * ar[i];
+  const auto c = eval::consistency(nees, std::vector<int>(nees.size(), 2), 0.95);
+  EXPECT_LT(c.effective_samples, 1300.0);
+  EXPECT_LT(c.mean_lo_effective, c.mean_lo);
+  EXPECT_GT(c.mean_hi_effective, c.mean_hi);
 }
 
 TEST_F(EvaluateTest, NeesFlagsConservativeAndOptimisticCovariance) {
@@ -290,9 +313,11 @@ TEST_F(EvaluateTest, NeesFlagsConservativeAndOptimisticCovariance) {
   EXPECT_NEAR(big.nees3.mean, 0.75, 0.08);
   EXPECT_EQ(big.nees3.verdict, "conservative");
   EXPECT_EQ(big.nees2.verdict, "conservative");
+  EXPECT_EQ(big.nees3.verdict_effective, "conservative");
   const auto small = neesRun(file("small.lcmlog"), 0.25, 42);  // 4x too small
   EXPECT_NEAR(small.nees3.mean, 12.0, 1.2);
   EXPECT_EQ(small.nees3.verdict, "optimistic");
+  EXPECT_EQ(small.nees3.verdict_effective, "optimistic");
   EXPECT_LT(small.nees3.fraction_inside, 0.7);
 }
 

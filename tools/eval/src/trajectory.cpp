@@ -96,7 +96,40 @@ ConsistencyStats consistency(const std::vector<double>& values, const std::vecto
   for (double v : values) inside += (v >= c.sample_lo && v <= c.sample_hi) ? 1 : 0;
   c.fraction_inside = static_cast<double>(inside) / n;
   c.verdict = c.mean > c.mean_hi ? "optimistic" : c.mean < c.mean_lo ? "conservative" : "honest";
+  c.effective_samples = effectiveSampleSize(values);
+  const double dof_per_sample = total_dof / n;
+  c.mean_lo_effective = chi2QuantileAnyDof(tail, c.effective_samples * dof_per_sample) / c.effective_samples;
+  c.mean_hi_effective = chi2QuantileAnyDof(1.0 - tail, c.effective_samples * dof_per_sample) / c.effective_samples;
+  c.verdict_effective = c.mean > c.mean_hi_effective   ? "optimistic"
+                        : c.mean < c.mean_lo_effective ? "conservative"
+                                                       : "honest";
   return c;
+}
+
+double effectiveSampleSize(const std::vector<double>& x) {
+  const std::size_t n = x.size();
+  if (n < 4) return static_cast<double>(n);
+  double mean = 0;
+  for (double v : x) mean += v;
+  mean /= static_cast<double>(n);
+  auto autocov = [&](std::size_t lag) {
+    double s = 0;
+    for (std::size_t i = 0; i + lag < n; ++i) s += (x[i] - mean) * (x[i + lag] - mean);
+    return s / static_cast<double>(n);
+  };
+  const double c0 = autocov(0);
+  if (!(c0 > 0)) return static_cast<double>(n);
+  // Geyer (1992): sum pairs rho(2m) + rho(2m+1) while they stay positive.
+  double sum = 0;  // sum of rho(k), k >= 1
+  constexpr std::size_t kMaxLag = 20000;  // bounds the cost (n * lags) of very long correlations
+  for (std::size_t m = 0; 2 * m + 1 < n && 2 * m + 1 <= kMaxLag; ++m) {
+    const double r0 = m == 0 ? 1.0 : autocov(2 * m) / c0;
+    const double r1 = autocov(2 * m + 1) / c0;
+    if (r0 + r1 <= 0) break;
+    sum += (m == 0 ? 0.0 : r0) + r1;
+  }
+  const double tau = std::max(1.0, 1.0 + 2.0 * sum);
+  return std::max(1.0, static_cast<double>(n) / tau);
 }
 
 namespace {

@@ -32,7 +32,10 @@ json consistencyJson(const ConsistencyStats& c) {
           {"mean_bounds", {number(c.mean_lo), number(c.mean_hi)}},
           {"sample_bounds", {number(c.sample_lo), number(c.sample_hi)}},
           {"fraction_inside", c.fraction_inside},
-          {"verdict", c.verdict}};
+          {"verdict", c.verdict},
+          {"effective_samples", c.effective_samples},
+          {"mean_bounds_effective", {number(c.mean_lo_effective), number(c.mean_hi_effective)}},
+          {"verdict_effective", c.verdict_effective}};
 }
 
 json trackJson(const TrackScore& s) {
@@ -187,7 +190,10 @@ void printTrajectorySummary(std::ostream& os, const TrajectoryLog& log, const st
     os << "  " << c.verdict;
     if (c.samples)
       os << " (" << (s.nees3.samples ? 3 : 2) << " dof: mean in [" << std::setprecision(2) << c.mean_lo << ", "
-         << c.mean_hi << "], " << std::setprecision(1) << 100.0 * c.fraction_inside << "% inside per-sample 95%)";
+         << c.mean_hi << "], " << std::setprecision(1) << 100.0 * c.fraction_inside
+         << "% inside per-sample 95%); " << c.verdict_effective << " for " << std::setprecision(0)
+         << c.effective_samples << " effective samples (mean in [" << std::setprecision(2) << c.mean_lo_effective
+         << ", " << c.mean_hi_effective << "])";
     os << "\n";
     if (s.before_truth + s.after_truth + s.in_truth_gap > 0)
       os << "  skipped: " << s.before_truth << " before the truth, " << s.after_truth << " after, " << s.in_truth_gap

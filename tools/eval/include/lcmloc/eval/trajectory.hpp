@@ -115,7 +115,15 @@ struct ConsistencyStats {
   double sample_lo = 0, sample_hi = 0;   ///< two-sided per-sample interval
   double fraction_inside = 0;            ///< of samples inside [sample_lo, sample_hi]
   std::string verdict = "none";          ///< honest, optimistic, conservative, none (no samples)
+  /// Samples of a time series are correlated; the same test with the effective sample size
+  /// n_eff = n / (1 + 2 sum of the autocorrelations) (Geyer's initial positive sequence).
+  double effective_samples = 0;
+  double mean_lo_effective = 0, mean_hi_effective = 0;
+  std::string verdict_effective = "none";
 };
+
+/// Effective sample size of a series (n when uncorrelated, less when positively correlated).
+double effectiveSampleSize(const std::vector<double>& series);
 
 /// Mean of values (each chi-square with its dof when consistent) against the bounds; values
 /// and dofs have equal length. sample bounds use dofs.front() (all equal in practice).
