@@ -3,7 +3,9 @@
 # real executable talking over udpm:// on loopback, started by lcmloc-launcher from
 # config/system.yaml; the logger records out/demo/run.lcmlog. Then lcmloc-eval replays that log
 # through dead reckoning, the UKF and the gated UKF and writes out/demo/report.json, PNG figures
-# and a summary. Same set-up as tools/test.sh (packages, multicast route, build).
+# and a summary; lcmloc-evaluate scores the recorded POSE into out/demo/evaluate/ (report.json,
+# figures) and exports TUM files to out/demo/tum/. Same set-up as tools/test.sh (packages,
+# multicast route, build).
 set -euo pipefail
 
 usage() {
@@ -66,3 +68,6 @@ lcmloc_log "live run done in $((SECONDS - start)) s: $log ($(stat -c %s "$log") 
 
 lcmloc_log "evaluating the log offline"
 "$bin/lcmloc-eval" "$log" --config "$scenario" --out "$out"
+
+lcmloc_log "scoring the recorded POSE against GROUND_TRUTH (docs/evaluate.md)"
+"$bin/lcmloc-evaluate" "$log" --out "$out/evaluate" --tum-dir "$out/tum" --segment-lengths 5,10,20
