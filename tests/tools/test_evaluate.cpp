@@ -240,6 +240,14 @@ TEST_F(EvaluateTest, TruthAt10HzIsInterpolatedAtOddEstimateTimes) {
   ASSERT_TRUE(mid.has_value());
   EXPECT_NEAR(mid->x, 1.0, 1e-12);
   EXPECT_FALSE(eval::interpolateTruth(gappy, 2100001, 0, &why).has_value());
+  eval::EstimateTrack across{"POSE", {}, {}};
+  for (int64_t u : {50000, 1000000, 2100000}) across.poses.push_back({u, 0, 0, 0, Eigen::Matrix3d::Identity(), true, 0});
+  eval::EvaluateOptions opt;
+  const auto g = eval::scoreTrack(across, gappy, opt);
+  EXPECT_EQ(g.in_truth_gap, 1);
+  ASSERT_EQ(g.points.size(), 2u);
+  EXPECT_FALSE(g.points[0].after_skip);
+  EXPECT_TRUE(g.points[1].after_skip);  // figures break the line there
   EXPECT_EQ(why, eval::TruthMiss::kAfter);
 }
 
@@ -392,6 +400,29 @@ TEST_F(EvaluateTest, TumLinesAndFiles) {
     for (std::string l; std::getline(f, l);) ++lines;
     EXPECT_EQ(lines, 2001) << name;
   }
+}
+
+TEST_F(EvaluateTest, TumExportKeepsOneLinePerTimestampAndSkipsBadPoses) {
+  {
+    LogWriter w(file("run.lcmlog"));
+    for (int i = 0; i < 5; ++i) {
+      w.add("POSE", poseMsg(kT0 + i * 1000, i, 0, 0, Eigen::Matrix3d::Identity()), kT0);
+      w.add("POSE", poseMsg(kT0 + i * 1000, i + 0.5, 0, 0, Eigen::Matrix3d::Identity()), kT0);  // same utime
+    }
+    pose_t two = poseMsg(kT0 + 9000, 9, 9, 0, Eigen::Matrix3d::Identity());
+    two.dim = 2;
+    two.state.resize(2);
+    two.state_names.resize(2);
+    two.covariance = {{1, 0}, {0, 1}};
+    w.add("POSE", two, kT0);
+  }
+  ASSERT_EQ(evaluate(file("run.lcmlog") + " --export-only --tum-dir " + file("tum")), 0) << output_;
+  EXPECT_NE(output_.find("fewer than 3 states"), std::string::npos) << output_;
+  std::ifstream f(file("tum/estimate.tum"));
+  std::vector<std::string> lines;
+  for (std::string l; std::getline(f, l);) lines.push_back(l);
+  ASSERT_EQ(lines.size(), 6u);  // header + 5 unique stamps
+  EXPECT_EQ(lines[1], eval::tumLine(kT0, 0.5, 0, 0));  // the last of the two at kT0
 }
 
 TEST_F(EvaluateTest, CommandLineReportsEverything) {
