@@ -3,6 +3,7 @@
 // its chi-square bounds, gate statistics from GATE; writes report.json, PNG figures and, on
 // request, TUM trajectory files for the evo tools. Nothing is replayed (that is lcmloc-eval).
 #include <atomic>
+#include <chrono>
 #include <csignal>
 #include <filesystem>
 #include <iostream>
@@ -118,7 +119,16 @@ int main(int argc, char** argv) {
 
   eval::TrajectoryLog log;
   try {
-    log = eval::readTrajectoryLog(log_path, lo, &g_stop);
+    // A progress line every 2 s of wall time on long logs.
+    const auto start = std::chrono::steady_clock::now();
+    auto last = start;
+    log = eval::readTrajectoryLog(log_path, lo, &g_stop, [&](int64_t pos, int64_t size) {
+      const auto now = std::chrono::steady_clock::now();
+      if (now - last < std::chrono::seconds(2)) return;
+      last = now;
+      spdlog::info("reading {}: {:.0f} of {:.0f} MB ({:.0f} %)", log_path, pos / 1e6, size / 1e6,
+                   size > 0 ? 100.0 * static_cast<double>(pos) / static_cast<double>(size) : 100.0);
+    });
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return kExitNothingUsable;

@@ -155,7 +155,7 @@ class TrajectoryDecoder {
 }  // namespace
 
 TrajectoryLog readTrajectoryLog(const std::string& path, const TrajectoryLogOptions& opt,
-                                const std::atomic<bool>* stop) {
+                                const std::atomic<bool>* stop, const std::function<void(int64_t, int64_t)>& progress) {
   TrajectoryLog out;
   out.path = path;
   LogScanner scanner(path, &out.issues);
@@ -166,6 +166,7 @@ TrajectoryLog readTrajectoryLog(const std::string& path, const TrajectoryLogOpti
     if (!ev) break;
     ++out.channel_counts[ev->channel];
     decoder.handle(*ev, scanner.eventsRead() - 1, scanner.eventOffset());
+    if (progress && (scanner.eventsRead() & 0xFFFF) == 0) progress(scanner.position(), scanner.fileSize());
   }
   if (stop && stop->load()) out.interrupted = true;
   decoder.finish();

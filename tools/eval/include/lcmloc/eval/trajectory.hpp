@@ -7,6 +7,7 @@
 // trajectory_report.hpp. Definitions: docs/evaluate.md.
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -74,8 +75,10 @@ struct TrajectoryLog {
 
 /// Reads the log at path. Throws std::runtime_error when it cannot be opened. Damage and bad
 /// messages are recorded in issues; everything readable is used. stop is polled between events.
+/// progress (optional) is called about every 2^16 events with the bytes consumed and the file size.
 TrajectoryLog readTrajectoryLog(const std::string& path, const TrajectoryLogOptions& opt,
-                                const std::atomic<bool>* stop = nullptr);
+                                const std::atomic<bool>* stop = nullptr,
+                                const std::function<void(int64_t, int64_t)>& progress = nullptr);
 
 // ---------------------------------------------------------------------------------------------
 
