@@ -17,6 +17,7 @@ LCMLOC_PACKAGES=(
   gnuplot-nox iproute2
   gpsd gpsd-clients libgps-dev libgeographiclib-dev
   util-linux time bc procps
+  libboost-dev
 )
 
 lcmloc_log() { echo "[lcmloc] $*" >&2; }
