@@ -4,6 +4,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -34,7 +35,10 @@ int main(int argc, char** argv) {
   app.add_option("--bit0", mo.bit0, "side of reed bit 0: right or left")->capture_default_str()
       ->check(CLI::IsMember({"right", "left"}));
   app.add_option("--filter", mo.filter, "filter type of config.yaml")->capture_default_str();
-  app.add_option("--grid-angle", mo.grid_angle, "grid axes vs the start heading [rad]")->capture_default_str();
+  std::optional<double> grid_angle;
+  app.add_option("--grid-angle", grid_angle,
+                 "grid axes vs the start heading [rad] (default 0; pi/4 for diagonal45degrees, which starts at 45 "
+                 "degrees to the grid)");
   app.add_option("--pv-diag", pv, "detection noise: range [m^2], bearing [rad^2]")->expected(2);
   app.add_option("--pw-diag", pw, "process noise per pw_distance: x, y [m^2], theta [rad^2]")->expected(3);
   app.add_option("--pw-turn", mo.pw_turn, "heading variance per radian turned [rad^2/rad]")->capture_default_str();
@@ -52,6 +56,7 @@ int main(int argc, char** argv) {
       mo.input = path ? run : data + "/" + run + ".txt";
       mo.name = std::filesystem::path(mo.input).stem().string();
       mo.out_dir = out + "/" + mo.name;
+      mo.grid_angle = grid_angle ? *grid_angle : mo.name == "diagonal45degrees" ? 0.7853981633974483 : 0.0;
       if (import_only) {
         const auto r = import::importMagnetGrid(mo);
         std::cout << fmt::format(

@@ -37,7 +37,9 @@ struct MagnetGridOptions {
   core::Vec3 pw_diag{4e-5, 4e-5, 4e-3};   ///< process noise per pw_distance of travel
   double pw_distance = 1.0;               ///< [m]
   double pw_turn = 2e-3;                  ///< heading variance per radian turned [rad^2/rad]
-  core::Vec2 pv_diag{2.5e-5, 4e-3};       ///< detection noise: range [m^2] (along track), bearing [rad^2]
+  /// Detection noise: range [m^2] (along track), bearing [rad^2]: the 10 mm switch pitch as a
+  /// uniform quantisation, 10 mm / sqrt(12) = 2.9 mm, in both directions (bearing: over 80 mm).
+  core::Vec2 pv_diag{8.4e-6, 1.31e-3};
   double reach = 0.02;                    ///< reach_forward = reach_lateral [m]
 };
 
