@@ -274,6 +274,9 @@ TEST(MagnetGrid, SmallRunImportsAndTheGatedFilterAcceptsTheMagnetPasses) {
   EXPECT_GT(rep.nis_mean, 0.05);
   EXPECT_LT(rep.nis_mean, 2.0);
   EXPECT_GE(rep.within_gate, 0.95);
+  // the reed row's position is known far better than half the magnet spacing before each pass
+  EXPECT_GT(rep.max_prior_sigma, 0.0);
+  EXPECT_LT(rep.max_prior_sigma, 0.0275 / 2);
   EXPECT_TRUE(fs::exists(d / "line2magnets" / "report.json"));
   // the lateral offsets: two rows of magnets about 55 mm apart, symmetric about the axis
   double lo = 1, hi = -1;
@@ -299,4 +302,39 @@ TEST(MagnetGrid, TheReedBitOrderIsTheOneTheLoopDataSupports) {
   EXPECT_GT(right.accepted, left.accepted + 5);
   EXPECT_GT(right.nis_mean, 1.0);  // the noise model is neither far too wide ...
   EXPECT_LT(right.nis_mean, 3.0);  // ... nor far too narrow (dof 2)
+}
+
+TEST(Import, ConfigKeysForLandmarksAndTheMapFile) {
+  const auto cfg = common::parseSystemConfig(
+      "fusion:\n  map_file: map.csv\n  filter:\n    type: ukf_landmarks\n    pw_turn: 0.01\n"
+      "    landmarks: {range_std: 0.2, bearing_std: 0.03, beacon_std: 0.3}\n"
+      "channels: {landmarks: CAM, beacons: UWB}\n",
+      "/some/dir/run.yaml");
+  EXPECT_EQ(cfg.fusion.map_file, "/some/dir/map.csv");  // relative to the config file
+  EXPECT_EQ(cfg.fusion.filter.pw_turn, 0.01);
+  EXPECT_EQ(cfg.fusion.filter.landmarks.bearing_std, 0.03);
+  EXPECT_EQ(cfg.fusion.filter.landmarks.beacon_std, 0.3);
+  EXPECT_EQ(cfg.channels.landmarks, "CAM");
+  EXPECT_EQ(cfg.channels.beacons, "UWB");
+  try {
+    common::parseSystemConfig("fusion:\n  filter:\n    landmarks: {range_sd: 0.2}\n", "x.yaml");
+    FAIL() << "unknown key accepted";
+  } catch (const common::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("fusion.filter.landmarks.range_sd"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Import, CommandExitsNonzeroWhenNothingIsUsable) {
+  const auto d = tempDir("cli");
+  write(d / "odometry.csv", "time,delta_s,delta_theta\nx,1,2\n");
+  const std::string bin = LCMLOC_IMPORT_BIN;
+  const std::string log = (d / "cli.log").string();
+  EXPECT_NE(std::system((bin + " " + d.string() + " -o " + (d / "out").string() + " > " + log + " 2>&1").c_str()), 0);
+  std::ifstream in(log);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("odometry.csv:2: column 1: not a number: 'x'"), std::string::npos) << text;
+  write(d / "odometry.csv", "time,delta_s,delta_theta\n1,0.1,0\n2,0.1,0\n");
+  EXPECT_EQ(std::system((bin + " " + d.string() + " -o " + (d / "out").string() + " > " + log + " 2>&1").c_str()), 0);
+  EXPECT_TRUE(fs::exists(d / "out" / "run.lcmlog"));
+  EXPECT_TRUE(fs::exists(d / "out" / "config.yaml"));
 }

@@ -72,15 +72,16 @@ int main(int argc, char** argv) {
       std::cout << fmt::format(
           "{}: {:.2f} m, {:.1f} rad turned, {} passes: {} accepted, {} gate-rejected, {} without candidate, {} "
           "lockouts; NIS mean {:.2f} (dof 2), median {:.2f} (1.39), within gate {:.3f} (0.99), within 95% {:.3f} "
-          "(0.95); {} magnets; final sigma xy {:.1f} mm; {} refused rows -> {}/track.png\n",
+          "(0.95); {} magnets; max prior sigma {:.1f} mm; final sigma xy {:.1f} mm; {} refused rows -> {}/track.png\n",
           mo.name, r.distance_m, r.turned_rad, rep.detections, rep.accepted, rep.rejected_gate, rep.no_candidate,
           rep.lockouts, rep.nis_mean, rep.nis_median, rep.within_gate, rep.within_95, rep.distinct_magnets,
-          rep.final_sigma_xy * 1e3, r.refused, mo.out_dir);
+          rep.max_prior_sigma * 1e3, rep.final_sigma_xy * 1e3, r.refused, mo.out_dir);
       summary[mo.name] = {{"passes", rep.detections}, {"accepted", rep.accepted}, {"rejected_gate", rep.rejected_gate},
                           {"no_candidate", rep.no_candidate}, {"lockouts", rep.lockouts},
                           {"nis_mean", rep.nis_mean}, {"nis_median", rep.nis_median},
                           {"within_gate", rep.within_gate}, {"within_95", rep.within_95},
                           {"distinct_magnets", rep.distinct_magnets}, {"distance_m", r.distance_m},
+                          {"max_prior_sigma_m", rep.max_prior_sigma},
                           {"refused_rows", r.refused}};
     }
     if (!import_only) {

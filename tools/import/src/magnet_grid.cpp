@@ -272,6 +272,8 @@ MagnetGridReport runMagnetGrid(const MagnetGridOptions& opt, MagnetGridImport* i
   std::vector<std::array<double, 4>> track, dr;  // t, x, y, theta
   std::vector<std::array<double, 3>> accepted_at, rejected_at;  // magnet x, y / reed-row x, y
   lcmloc::pose_t last{};
+  double prior_sigma = 0;
+  int64_t decisions = 0;  // of the reed-row position, from the last pose before a decision
   bool have_last = false;
   const double t0 = imp.first_utime * 1e-6;
   eval::scanLog(ro.output, [&](const eval::RawEvent& e) {
@@ -281,6 +283,8 @@ MagnetGridReport runMagnetGrid(const MagnetGridOptions& opt, MagnetGridImport* i
         track.push_back({p.utime * 1e-6 - t0, p.state[0], p.state[1], p.state[2]});
         last = p;
         have_last = true;
+        prior_sigma = std::sqrt(std::max(0.0, p.covariance[0][0] + p.covariance[1][1] +
+                                                  opt.reed_offset * opt.reed_offset * p.covariance[2][2]));
       }
     } else if (*e.channel == dr_channel) {
       lcmloc::pose_t p;
@@ -289,6 +293,8 @@ MagnetGridReport runMagnetGrid(const MagnetGridOptions& opt, MagnetGridImport* i
       lcmloc::gate_decision_t g;
       if (!decode(e, g) || g.filter != active) return;
       rep.gate = g.gate;
+      if (decisions++ > 0)  // the first pass is the grid's anchor: associated by construction
+        rep.max_prior_sigma = std::max(rep.max_prior_sigma, prior_sigma);
       if (g.accepted) ++rep.accepted;
       else if (g.reason == "gate") ++rep.rejected_gate;
       else if (g.reason == "no_candidate") ++rep.no_candidate;
@@ -349,6 +355,8 @@ MagnetGridReport runMagnetGrid(const MagnetGridOptions& opt, MagnetGridImport* i
               {"median", rep.nis_median}, {"expected_median", 1.386}, {"within_gate", rep.within_gate},
               {"expected_within_gate", 0.99}, {"within_95", rep.within_95}, {"expected_within_95", 0.95},
               {"mean_accepted", rep.nis_mean_accepted}};
+  j["association"] = {{"max_prior_sigma_m", rep.max_prior_sigma}, {"half_grid_m", 0.5 * opt.grid},
+                      {"note", "largest 1-sigma of the reed-row position before a detection (the first, the grid anchor, excluded) vs half the magnet spacing"}};
   j["final"] = {{"sigma_xy_m", rep.final_sigma_xy}, {"sigma_theta_rad", rep.final_sigma_theta},
                 {"gap_to_dead_reckoning_m", rep.dr_gap_m}};
   std::ofstream(fs::path(opt.out_dir) / "report.json") << std::setw(2) << j << "\n";

@@ -81,6 +81,10 @@ struct MagnetGridReport {
   int distinct_magnets = 0;          ///< magnets accepted at least once
   double final_sigma_xy = 0;         ///< sqrt(P_xx + P_yy) at the end [m]
   double final_sigma_theta = 0;      ///< [rad]
+  /// Largest 1-sigma of the reed-row position (x, y and reed_offset x heading) just before a
+  /// detection, the first (the grid's anchor) excluded [m]: far below half the magnet spacing
+  /// (27.5 mm) the nearest magnet is unambiguous.
+  double max_prior_sigma = 0;
   double dr_gap_m = 0;               ///< final distance between the gated and dead-reckoned tracks [m]
 };
 
