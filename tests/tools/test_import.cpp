@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "lcmloc/common/config.hpp"
+#include "lcmloc/common/convert.hpp"
 #include "lcmloc/common/csv.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/import/import.hpp"
@@ -337,4 +338,34 @@ TEST(Import, CommandExitsNonzeroWhenNothingIsUsable) {
   EXPECT_EQ(std::system((bin + " " + d.string() + " -o " + (d / "out").string() + " > " + log + " 2>&1").c_str()), 0);
   EXPECT_TRUE(fs::exists(d / "out" / "run.lcmlog"));
   EXPECT_TRUE(fs::exists(d / "out" / "config.yaml"));
+}
+
+TEST(Import, LandmarkAndBeaconMessagesAreValidatedOnTheWayIn) {
+  lcmloc::landmark_obs_t m{};
+  m.utime = 1;
+  m.landmark_id = -1;
+  m.range = 3.0;
+  m.bearing = 0.5;
+  std::string why;
+  auto o = common::toCore(m, "CAM", &why);
+  ASSERT_TRUE(o);
+  EXPECT_EQ(o->sensor, "CAM");
+  EXPECT_EQ(o->landmark_id, -1);
+  m.range = NAN;
+  EXPECT_FALSE(common::toCore(m, "CAM", &why));
+  EXPECT_NE(why.find("range is NaN"), std::string::npos);
+  m.range = 3.0;
+  m.bearing = 4.0;
+  EXPECT_FALSE(common::toCore(m, "CAM", &why));
+  m.bearing = 0.5;
+  m.landmark_id = -2;
+  EXPECT_FALSE(common::toCore(m, "CAM", &why));
+  lcmloc::beacon_range_t b{};
+  b.utime = 1;
+  b.beacon_id = 4;
+  b.range = -0.1;
+  EXPECT_FALSE(common::toCore(b, "UWB", &why));
+  b.range = 2.0;
+  ASSERT_TRUE(common::toCore(b, "UWB", &why));
+  EXPECT_EQ(common::toCore(b, "UWB", &why)->beacon_id, 4);
 }

@@ -464,7 +464,7 @@ ImportResult importDirectory(const ImportOptions& opt) {
     const core::FilterConfig d;
     std::ofstream c(r.config_path);
     c << "# Written by lcmloc-import from " << opt.dir << " (docs/import_formats.md).\n"
-      << "# Replay: lcmloc-replay run.lcmlog -c config.yaml --with-inputs -o estimates.lcmlog\n"
+      << "# Replay: lcmloc-replay run.lcmlog --config config.yaml --with-inputs -o estimates.lcmlog\n"
       << "scenario: {name: import, seed: 1, realtime_factor: 0.0}\n"
       << "markers: {count: 0}            # the map is fusion.map_file\n"
       << fmt::format("datum: {{latitude: {:.9f}, longitude: {:.9f}, altitude: {:.3f}}}\n", opt.datum.latitude,

@@ -226,7 +226,7 @@ MagnetGridImport importMagnetGrid(const MagnetGridOptions& opt) {
     common::csv::writeMap(r.map_path, r.map);
     std::ofstream c(r.config_path);
     c << "# Written by lcmloc-magnet-grid --import-only from " << opt.input << " (docs/magnet_grid.md).\n"
-      << "# Replay: lcmloc-replay run.lcmlog -c config.yaml -o estimates.lcmlog\n"
+      << "# Replay: lcmloc-replay run.lcmlog --config config.yaml -o estimates.lcmlog\n"
       << "scenario: {name: " << opt.name << ", seed: 1, realtime_factor: 0.0}\n"
       << "markers: {count: 0}              # the map is fusion.map_file (the 55 mm grid)\n"
       << "fusion:\n"
