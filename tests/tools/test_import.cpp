@@ -10,6 +10,8 @@
 
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/convert.hpp"
+#include "lcmloc/gate_decision_t.hpp"
+#include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/common/csv.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/import/import.hpp"
@@ -368,4 +370,65 @@ TEST(Import, LandmarkAndBeaconMessagesAreValidatedOnTheWayIn) {
   b.range = 2.0;
   ASSERT_TRUE(common::toCore(b, "UWB", &why));
   EXPECT_EQ(common::toCore(b, "UWB", &why)->beacon_id, 4);
+}
+
+TEST(Import, TheDocumentedExampleDirectoryImportsAndScores) {
+  // docs/examples/csv_square: a square driven twice with turns in place, landmarks (known and
+  // unknown id), beacons, ground truth; measurement noise as the config's defaults.
+  const auto d = tempDir("example");
+  import::ImportOptions o;
+  o.dir = LCMLOC_EXAMPLE_DIR;
+  o.out_dir = (d / "out").string();
+  const auto r = import::importDirectory(o);
+  EXPECT_TRUE(r.refusals.empty());
+  EXPECT_EQ(r.map_size, 9);
+  EXPECT_EQ(r.filter, "ukf_landmarks");
+  const auto cfg = common::loadSystemConfig(r.config_path);
+  replay::ReplayOptions ro;
+  ro.input = r.log_path;
+  ro.output = (d / "out" / "est.lcmlog").string();
+  ro.with_inputs = true;
+  replay::replayLog(cfg, ro);
+  std::vector<std::array<double, 3>> truth;  // t, x, y
+  std::vector<lcmloc::pose_t> poses;
+  int64_t landmarks = 0, landmarks_ok = 0, beacons = 0, beacons_ok = 0;
+  double nis_landmarks = 0, nis_beacons = 0;
+  eval::scanLog(ro.output, [&](const eval::RawEvent& e) {
+    if (*e.channel == "GROUND_TRUTH") {
+      lcmloc::ground_truth_t g{};
+      if (g.decode(e.data, 0, e.size) == e.size) truth.push_back({static_cast<double>(g.utime), g.x, g.y});
+    } else if (*e.channel == "POSE") {
+      lcmloc::pose_t p;
+      if (p.decode(e.data, 0, e.size) == e.size) poses.push_back(p);
+    } else if (*e.channel == "GATE") {
+      lcmloc::gate_decision_t g{};
+      if (g.decode(e.data, 0, e.size) != e.size) return;
+      if (g.sensor == "LANDMARKS") { ++landmarks; landmarks_ok += g.accepted; nis_landmarks += g.mahalanobis; }
+      if (g.sensor == "BEACONS") { ++beacons; beacons_ok += g.accepted; nis_beacons += g.mahalanobis; }
+    }
+  });
+  ASSERT_GT(poses.size(), 3000u);
+  double sq = 0;
+  int n = 0;
+  for (const auto& p : poses) {
+    const double t = static_cast<double>(p.utime);
+    auto it = std::lower_bound(truth.begin(), truth.end(), t,
+                               [](const std::array<double, 3>& a, double v) { return a[0] < v; });
+    if (it == truth.begin() || it == truth.end()) continue;
+    const auto& a = *(it - 1);
+    const auto& b = *it;
+    const double w = (t - a[0]) / (b[0] - a[0]);
+    const double ex = p.state[0] - (a[1] + w * (b[1] - a[1])), ey = p.state[1] - (a[2] + w * (b[2] - a[2]));
+    sq += ex * ex + ey * ey;
+    ++n;
+  }
+  const double rmse = std::sqrt(sq / n);
+  EXPECT_LT(rmse, 0.04);  // measured 0.018 m
+  EXPECT_EQ(landmarks, 1040);
+  EXPECT_GE(landmarks_ok, 1020);
+  EXPECT_EQ(beacons, 208);
+  EXPECT_GE(beacons_ok, 200);
+  // innovations as their chi-square distributions say (2 and 1 dof): measured 1.78 and 1.05
+  EXPECT_NEAR(nis_landmarks / landmarks, 2.0, 0.6);
+  EXPECT_NEAR(nis_beacons / beacons, 1.0, 0.4);
 }
