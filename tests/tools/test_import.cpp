@@ -391,17 +391,21 @@ TEST(Import, TheDocumentedExampleDirectoryImportsAndScores) {
   replay::replayLog(cfg, ro);
   std::vector<std::array<double, 3>> truth;  // t, x, y
   std::vector<lcmloc::pose_t> poses;
+  lcmloc::ground_truth_t truth_msg;
   int64_t landmarks = 0, landmarks_ok = 0, beacons = 0, beacons_ok = 0;
   double nis_landmarks = 0, nis_beacons = 0;
   eval::scanLog(ro.output, [&](const eval::RawEvent& e) {
     if (*e.channel == "GROUND_TRUTH") {
-      lcmloc::ground_truth_t g{};
-      if (g.decode(e.data, 0, e.size) == e.size) truth.push_back({static_cast<double>(g.utime), g.x, g.y});
+      // (decoded into a message that lives outside the lambda: LCM 1.3.1's generated decode
+      // writes doubles through int64_t pointers, and a value-initialised local let the compiler
+      // keep the zeros)
+      if (truth_msg.decode(e.data, 0, e.size) == e.size)
+        truth.push_back({static_cast<double>(truth_msg.utime), truth_msg.x, truth_msg.y});
     } else if (*e.channel == "POSE") {
       lcmloc::pose_t p;
       if (p.decode(e.data, 0, e.size) == e.size) poses.push_back(p);
     } else if (*e.channel == "GATE") {
-      lcmloc::gate_decision_t g{};
+      lcmloc::gate_decision_t g;
       if (g.decode(e.data, 0, e.size) != e.size) return;
       if (g.sensor == "LANDMARKS") { ++landmarks; landmarks_ok += g.accepted; nis_landmarks += g.mahalanobis; }
       if (g.sensor == "BEACONS") { ++beacons; beacons_ok += g.accepted; nis_beacons += g.mahalanobis; }
