@@ -11,6 +11,7 @@
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/convert.hpp"
 #include "lcmloc/gate_decision_t.hpp"
+#include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/common/csv.hpp"
 #include "lcmloc/eval/log_reader.hpp"
@@ -146,6 +147,18 @@ TEST(Import, GoodFilesOfEveryKindBecomeALogMapAndConfig) {
   EXPECT_NEAR(odo[1].delta_theta, 0.05, 1e-12);
   EXPECT_TRUE(odo[4].has_steering);
   EXPECT_NEAR(odo[4].delta_theta, 1.0 * std::tan(0.1) / 2.0, 1e-12);
+  // local GPS x,y go out as lat/lon about the datum and come back as x,y in the fusion
+  const common::LocalFrame frame(o.datum);
+  std::vector<core::GpsInput> fixes;
+  eval::scanLog(r.log_path, [&](const eval::RawEvent& e) {
+    lcmloc::gps_fix_t m;
+    if (*e.channel == "GPS" && m.decode(e.data, 0, e.size) == e.size)
+      if (auto in = common::toCore(m, "GPS", frame)) fixes.push_back(*in);
+  });
+  ASSERT_EQ(fixes.size(), 3u);
+  EXPECT_NEAR(fixes[0].x, 2.1, 1e-6);
+  EXPECT_NEAR(fixes[0].y, 0.3, 1e-6);
+  EXPECT_DOUBLE_EQ(fixes[0].position_std, 0.5);
   const auto cfg = common::loadSystemConfig(r.config_path);
   EXPECT_EQ(cfg.fusion.filter.type, "ukf_landmarks");
   EXPECT_EQ(common::csv::loadMap(cfg.fusion.map_file).size(), 4u);
@@ -211,6 +224,11 @@ TEST(Import, NothingUsableMixedClocksAndBadMapAreErrors) {
   EXPECT_THROW(import::importDirectory(o), std::runtime_error);  // duplicate id
   o.dir = (d / "missing").string();
   EXPECT_THROW(import::importDirectory(o), std::runtime_error);
+  const auto e = tempDir("steer");
+  write(e / "odo.csv", "time,speed,steering\n1,2,0.1\n2,2,0.1\n");
+  o.dir = e.string();
+  o.base = import::TimeBase::Auto;
+  EXPECT_THROW(import::importDirectory(o), std::runtime_error);  // speed,steering without --wheelbase
 }
 
 TEST(Import, MicrosecondsAreDetectedAndStartAtZeroShifts) {
