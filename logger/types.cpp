@@ -17,6 +17,8 @@
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
+#include "lcmloc/landmark_obs_t.hpp"
+#include "lcmloc/beacon_range_t.hpp"
 
 namespace lcmloc::logger {
 namespace {
@@ -87,6 +89,10 @@ void visit(const pose_t& m, Visitor& v) {
   F(utime); F(seq); F(filter); F(status); F(dim); F(state); F(state_names);
   for (std::size_t i = 0; i < m.covariance.size(); ++i) v("covariance_" + std::to_string(i), m.covariance[i]);
 }
+void visit(const landmark_obs_t& m, Visitor& v) {
+  F(utime); F(seq); F(landmark_id); F(range); F(bearing); F(range_std); F(bearing_std);
+}
+void visit(const beacon_range_t& m, Visitor& v) { F(utime); F(seq); F(beacon_id); F(range); F(range_std); }
 #undef F
 
 template <typename T>
@@ -119,7 +125,7 @@ const std::vector<TypeInfo>& knownTypes() {
       entry<fault_event_t>(),  entry<fusion_control_t>(), entry<fusion_status_t>(), entry<gate_decision_t>(),
       entry<gps_fix_t>(),      entry<ground_truth_t>(),   entry<heartbeat_t>(),     entry<imu_t>(),
       entry<landmark_bearings_t>(), entry<logger_status_t>(), entry<magruler_t>(), entry<odometry_t>(),
-      entry<pose_t>()};
+      entry<pose_t>(), entry<landmark_obs_t>(), entry<beacon_range_t>()};
   return types;
 }
 

@@ -230,6 +230,8 @@ void parseChannels(KeyReader& root, ChannelConfig& c) {
   r.get("heartbeat", c.heartbeat);
   r.get("imu", c.imu);
   r.get("gps", c.gps);
+  r.get("landmarks", c.landmarks);
+  r.get("beacons", c.beacons);
   r.finish();
 }
 
@@ -248,6 +250,11 @@ void parseFusion(KeyReader& root, FusionConfig& f) {
     checkFilterType(f.shadow[i], root.file(), "fusion.shadow[" + std::to_string(i) + "]");
   r.get("reorder_window", f.reorder_window, 0.0, 10.0);
   r.get("status_period", f.status_period, 0.01, 3600.0);
+  r.get("map_file", f.map_file);
+  if (!f.map_file.empty() && f.map_file[0] != '/') {
+    const auto slash = root.file().rfind('/');
+    if (slash != std::string::npos) f.map_file = root.file().substr(0, slash + 1) + f.map_file;
+  }
   r.finish();
 }
 
@@ -341,6 +348,14 @@ core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterC
     n.get("course_distance", g.course_distance, 0.0, 1e5, "0 = off");
     n.get("course_std", g.course_std, 0.0, 10.0);
     n.finish();
+  }
+  r.get("pw_turn", c.pw_turn, 0.0, 1e3);
+  {
+    KeyReader l(r.child("landmarks"), file, r.keyPath("landmarks"));
+    l.get("range_std", c.landmarks.range_std, 1e-9, 1e6);
+    l.get("bearing_std", c.landmarks.bearing_std, 1e-9, 10.0);
+    l.get("beacon_std", c.landmarks.beacon_std, 1e-9, 1e6);
+    l.finish();
   }
   r.finish();
   return c;

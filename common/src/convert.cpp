@@ -270,4 +270,51 @@ lcmloc::gps_fix_t toLcm(const models::GpsFixSample& f, const LocalFrame& frame, 
   return m;
 }
 
+std::optional<core::LandmarkObservation> toCore(const lcmloc::landmark_obs_t& m, const std::string& channel,
+                                                std::string* why) {
+  if (!validUtime(m.utime, why) || !finiteField(m.range, "range", why) || !finiteField(m.bearing, "bearing", why) ||
+      !finiteField(m.range_std, "range_std", why) || !finiteField(m.bearing_std, "bearing_std", why))
+    return std::nullopt;
+  if (m.range < 0 || m.range_std < 0 || m.bearing_std < 0) {
+    fail(why, "range and stds must be >= 0");
+    return std::nullopt;
+  }
+  if (std::abs(m.bearing) > M_PI) {
+    fail(why, "bearing " + std::to_string(m.bearing) + " rad out of range [-pi, pi]");
+    return std::nullopt;
+  }
+  if (m.landmark_id < -1) {
+    fail(why, "landmark_id " + std::to_string(m.landmark_id) + " (valid: >= 0, or -1 = unknown)");
+    return std::nullopt;
+  }
+  core::LandmarkObservation o;
+  o.utime = m.utime;
+  o.landmark_id = m.landmark_id;
+  o.range = m.range;
+  o.bearing = m.bearing;
+  o.range_std = m.range_std;
+  o.bearing_std = m.bearing_std;
+  o.sensor = channel;
+  o.seq = m.seq;
+  return o;
+}
+
+std::optional<core::BeaconRange> toCore(const lcmloc::beacon_range_t& m, const std::string& channel,
+                                        std::string* why) {
+  if (!validUtime(m.utime, why) || !finiteField(m.range, "range", why) || !finiteField(m.range_std, "range_std", why))
+    return std::nullopt;
+  if (m.range < 0 || m.range_std < 0) {
+    fail(why, "range and range_std must be >= 0");
+    return std::nullopt;
+  }
+  core::BeaconRange b;
+  b.utime = m.utime;
+  b.beacon_id = m.beacon_id;
+  b.range = m.range;
+  b.range_std = m.range_std;
+  b.sensor = channel;
+  b.seq = m.seq;
+  return b;
+}
+
 }  // namespace lcmloc::common

@@ -7,6 +7,7 @@
 #include <spdlog/spdlog.h>
 
 #include "lcmloc/common/convert.hpp"
+#include "lcmloc/common/csv.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/models/world.hpp"
 
@@ -56,7 +57,9 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
     spdlog::info("{}: {}", event, detail);
     publishStatus(event, detail, utime);
   };
-  const auto map = models::makeMarkerMap(models::Path(cfg.scenario.path), cfg.scenario.markers);
+  const auto map = cfg.fusion.map_file.empty()
+                       ? models::makeMarkerMap(models::Path(cfg.scenario.path), cfg.scenario.markers)
+                       : common::csv::loadMap(cfg.fusion.map_file);
   engine_ = std::make_unique<core::FusionEngine>(ec, map, out);
 
   const auto& ch = cfg.channels;
@@ -70,14 +73,18 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
       ch.imu, [this](const std::string& c, const lcmloc::imu_t& m, int64_t) { onImu(c, m); }, err);
   bus_.subscribe<lcmloc::gps_fix_t>(
       ch.gps, [this](const std::string& c, const lcmloc::gps_fix_t& m, int64_t) { onGps(c, m); }, err);
+  bus_.subscribe<lcmloc::landmark_obs_t>(
+      ch.landmarks, [this](const std::string& c, const lcmloc::landmark_obs_t& m, int64_t) { onLandmark(c, m); }, err);
+  bus_.subscribe<lcmloc::beacon_range_t>(
+      ch.beacons, [this](const std::string& c, const lcmloc::beacon_range_t& m, int64_t) { onBeacon(c, m); }, err);
   bus_.subscribe<lcmloc::fusion_control_t>(
       ch.control, [this](const std::string& c, const lcmloc::fusion_control_t& m, int64_t) { onControl(c, m); },
       err);
 
-  spdlog::info("filter {} (shadow: {}), {} markers, reorder window {:.3f} s; in: {}, {}, {}, {}, {}; out: {}, {}, {}",
+  spdlog::info("filter {} (shadow: {}), {} markers, reorder window {:.3f} s; in: {}, {}, {}, {}, {}, {}, {}; out: {}, {}, {}",
                cfg.fusion.filter.type, cfg.fusion.shadow.empty() ? "none" : fmt::format("{}", fmt::join(cfg.fusion.shadow, ", ")),
                map.size(), cfg.fusion.reorder_window, ch.odometry, fmt::format("{}", fmt::join(ch.magruler, ", ")),
-               ch.imu, ch.gps, ch.control, ch.pose, ch.gate, ch.status);
+               ch.imu, ch.gps, ch.landmarks, ch.beacons, ch.control, ch.pose, ch.gate, ch.status);
   if (!hold_) publishStatus("started", "filter " + engine_->activeFilter(), 0);
 }
 
@@ -176,6 +183,22 @@ void FusionDaemon::onGps(const std::string& ch, const lcmloc::gps_fix_t& m) {
   received(ch, m.seq);
   std::string why;
   auto in = common::toCore(m, ch, frame_, &why);
+  if (!in) return reject(ch, m.seq, m.utime, why);
+  push({ch, m.seq, m.utime, *in});
+}
+
+void FusionDaemon::onLandmark(const std::string& ch, const lcmloc::landmark_obs_t& m) {
+  received(ch, m.seq);
+  std::string why;
+  auto in = common::toCore(m, ch, &why);
+  if (!in) return reject(ch, m.seq, m.utime, why);
+  push({ch, m.seq, m.utime, *in});
+}
+
+void FusionDaemon::onBeacon(const std::string& ch, const lcmloc::beacon_range_t& m) {
+  received(ch, m.seq);
+  std::string why;
+  auto in = common::toCore(m, ch, &why);
   if (!in) return reject(ch, m.seq, m.utime, why);
   push({ch, m.seq, m.utime, *in});
 }

@@ -22,6 +22,8 @@ int typeRank(const EngineInput& in) {
     case 0: return 1;  // odometry
     case 1: return 2;  // ruler
     case 3: return 3;  // imu
+    case 5: return 5;  // landmark
+    case 6: return 6;  // beacon
     default: return 4; // gps
   }
 }
@@ -41,6 +43,11 @@ bool isFinite(const ImuInput& m) {
 bool isFinite(const GpsInput& g) {
   return !g.has_fix || (std::isfinite(g.x) && std::isfinite(g.y));
 }
+bool isFinite(const LandmarkObservation& m) {
+  return std::isfinite(m.range) && std::isfinite(m.bearing) && std::isfinite(m.range_std) &&
+         std::isfinite(m.bearing_std);
+}
+bool isFinite(const BeaconRange& m) { return std::isfinite(m.range) && std::isfinite(m.range_std); }
 
 }  // namespace
 
@@ -143,6 +150,13 @@ struct FusionEngine::Impl {
   }
   void handle(const EngineInput& in, const GpsInput& m) {
     handleAbsolute(in, m, Measurement::Gps, "GPS fix");
+  }
+
+  void handle(const EngineInput& in, const LandmarkObservation& m) {
+    handleAbsolute(in, m, Measurement::Landmark, "landmark observation");
+  }
+  void handle(const EngineInput& in, const BeaconRange& m) {
+    handleAbsolute(in, m, Measurement::Beacon, "beacon range");
   }
 
   void handle(const EngineInput& in, const ControlCommand& cmd) {

@@ -56,6 +56,11 @@ void validate(const FilterConfig& c) {
           "steer_bias_std0 must be > 0");
   require(std::isfinite(c.scale_rw) && c.scale_rw >= 0, "scale_rw must be >= 0");
   require(std::isfinite(c.steer_bias_rw) && c.steer_bias_rw >= 0, "steer_bias_rw must be >= 0");
+  require(std::isfinite(c.pw_turn) && c.pw_turn >= 0, "pw_turn must be >= 0");
+  require(std::isfinite(c.landmarks.range_std) && c.landmarks.range_std > 0, "landmarks.range_std must be > 0");
+  require(std::isfinite(c.landmarks.bearing_std) && c.landmarks.bearing_std > 0,
+          "landmarks.bearing_std must be > 0");
+  require(std::isfinite(c.landmarks.beacon_std) && c.landmarks.beacon_std > 0, "landmarks.beacon_std must be > 0");
 }
 
 bool isFinite(const OdometryInput& o) {
@@ -65,9 +70,15 @@ bool isFinite(const OdometryInput& o) {
 
 /// Pose process noise of one step: Pw accumulated over pw_distance metres of travel
 /// (per step as printed when pw_distance = 0). See docs/paper_000_reading.md.
-Vec3 poseProcessNoise(const FilterConfig& c, double ds) {
-  return c.pw_distance > 0 ? Vec3(c.pw_diag * (std::abs(ds) / c.pw_distance)) : c.pw_diag;
+/// Plus pw_turn |dtheta| on the heading, so that turning in place is not noise-free.
+}  // namespace
+Vec3 detail::poseProcessNoise(const FilterConfig& c, double ds, double dtheta) {
+  Vec3 q = c.pw_distance > 0 ? Vec3(c.pw_diag * (std::abs(ds) / c.pw_distance)) : c.pw_diag;
+  q[2] += c.pw_turn * std::abs(dtheta);
+  return q;
 }
+namespace {
+using detail::poseProcessNoise;
 
 /// Initial state and covariance of a filter with these state names.
 void initialState(const FilterConfig& c, const std::vector<std::string>& names,
@@ -168,7 +179,7 @@ class DeadReckoningFilter final : public Filter {
     F(1, 2) = ds * std::cos(mid);
     x_ = propagatePose(x_, ds, dth);
     P_ = F * P_ * F.transpose();
-    P_.diagonal() += poseProcessNoise(cfg_, ds);
+    P_.diagonal() += poseProcessNoise(cfg_, ds, dth);
     utime_ = odo.utime;
   }
   GateDecision update(const RulerDetection& det) override {
@@ -252,7 +263,7 @@ class RulerUkf final : public Filter {
       return out;
     };
     typename U::Matrix Q = U::Matrix::Zero();
-    Q.template topLeftCorner<3, 3>().diagonal() = poseProcessNoise(cfg_, odo.delta_s);
+    Q.template topLeftCorner<3, 3>().diagonal() = poseProcessNoise(cfg_, odo.delta_s, dth_meas);
     if constexpr (N == 5) {
       Q(3, 3) = cfg_.scale_rw * cfg_.scale_rw * std::abs(odo.delta_s);
       Q(4, 4) = cfg_.steer_bias_rw * cfg_.steer_bias_rw * std::abs(odo.delta_s);
@@ -353,7 +364,7 @@ class RulerUkf final : public Filter {
 }  // namespace
 
 std::vector<std::string> filterTypes() {
-  return {"dead_reckoning", "ukf", "ukf_gated", "ukf_calib", "tvekf", "ukf_gps"};
+  return {"dead_reckoning", "ukf", "ukf_gated", "ukf_calib", "tvekf", "ukf_gps", "ukf_landmarks"};
 }
 
 std::unique_ptr<Filter> makeFilter(const FilterConfig& cfg, const MarkerMap& map) {
@@ -363,8 +374,9 @@ std::unique_ptr<Filter> makeFilter(const FilterConfig& cfg, const MarkerMap& map
   if (cfg.type == "ukf_gated") return std::make_unique<RulerUkf<3>>(cfg.type, cfg, map, true);
   if (cfg.type == "ukf_calib") return std::make_unique<RulerUkf<5>>(cfg.type, cfg, map, true);
   if (auto f = detail::makeGnssFilter(cfg)) return f;
+  if (auto f = detail::makeLandmarkFilter(cfg, map)) return f;
   throw std::invalid_argument("filter config: unknown type '" + cfg.type +
-                              "' (known: dead_reckoning, ukf, ukf_gated, ukf_calib, tvekf, ukf_gps)");
+                              "' (known: dead_reckoning, ukf, ukf_gated, ukf_calib, tvekf, ukf_gps, ukf_landmarks)");
 }
 
 }  // namespace lcmloc::core

@@ -19,4 +19,11 @@ void copyMatching(const FilterState& from, const std::vector<std::string>& names
 /// std::invalid_argument for an invalid configuration.
 std::unique_ptr<Filter> makeGnssFilter(const FilterConfig& cfg);
 
+/// The landmark/beacon filter ("ukf_landmarks") over the map; nullptr for another type.
+std::unique_ptr<Filter> makeLandmarkFilter(const FilterConfig& cfg, const MarkerMap& map);
+
+/// Pose process noise of one odometry step (x, y, theta variances): Pw over pw_distance of
+/// travel plus pw_turn |dtheta| on the heading.
+Vec3 poseProcessNoise(const FilterConfig& c, double ds, double dtheta);
+
 }  // namespace lcmloc::core::detail

@@ -7,76 +7,20 @@
 #include <stdexcept>
 
 #include <fmt/format.h>
-#include <lcm/lcm-cpp.hpp>
 
+#include "lcmloc/common/csv.hpp"
 #include "lcmloc/common/geodesy.hpp"
+#include "lcmloc/import/event_log.hpp"
 #include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/vp/vp.hpp"
 
 namespace lcmloc::vp {
 namespace {
-
-/// One CSV data row: fields as numbers, or why not.
-bool parseRow(const std::string& line, std::size_t n, std::vector<double>& out, std::string& why) {
-  out.clear();
-  std::string s = line;
-  if (!s.empty() && s.back() == '\r') s.pop_back();
-  std::stringstream ss(s);
-  std::string f;
-  while (std::getline(ss, f, ',')) {
-    const char* b = f.c_str();
-    char* e = nullptr;
-    errno = 0;
-    const double v = std::strtod(b, &e);
-    while (e && (*e == ' ' || *e == '\t')) ++e;
-    if (f.empty() || e == b || *e != '\0' || errno == ERANGE) {
-      why = fmt::format("column {}: not a number: '{}'", out.size() + 1, f);
-      return false;
-    }
-    if (!std::isfinite(v)) {
-      why = fmt::format("column {}: not finite: '{}'", out.size() + 1, f);
-      return false;
-    }
-    out.push_back(v);
-  }
-  if (!s.empty() && s.back() == ',') {
-    why = fmt::format("column {}: empty", out.size() + 1);
-    return false;
-  }
-  if (out.size() != n) {
-    why = fmt::format("expected {} columns, got {}", n, out.size());
-    return false;
-  }
-  return true;
-}
-
+using common::csv::parseRow;
 std::ifstream openCsv(const std::string& path, const std::string& header) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot open '" + path + "'");
-  std::string h;
-  std::getline(in, h);
-  if (!h.empty() && h.back() == '\r') h.pop_back();
-  if (h != header)
-    throw std::runtime_error(fmt::format("'{}': line 1: expected the header '{}', got '{}'", path, header, h));
-  return in;
+  return common::csv::openWithHeader(path, header);
 }
-
-struct Event {
-  int64_t utime;
-  int order;  ///< odometry before GPS at equal time
-  int64_t index;
-  std::string channel;
-  std::vector<uint8_t> bytes;
-};
-
-template <typename T>
-std::vector<uint8_t> encode(const T& m) {
-  std::vector<uint8_t> b(static_cast<std::size_t>(m.getEncodedSize()));
-  m.encode(b.data(), 0, static_cast<int>(b.size()));
-  return b;
-}
-
 }  // namespace
 
 ImportResult importVictoriaPark(const ImportOptions& opt) {
@@ -85,7 +29,7 @@ ImportResult importVictoriaPark(const ImportOptions& opt) {
   if (opt.holdout_every < 0 || (opt.holdout_every > 0 && (opt.holdout_phase < 0 || opt.holdout_phase >= opt.holdout_every)))
     throw std::invalid_argument("holdout: every must be >= 0 and phase in [0, every)");
   ImportResult r;
-  std::vector<Event> events;
+  import::EventLog events;
   const common::LocalFrame frame(opt.datum);
   auto refuse = [&](const std::string& file, int64_t line, const std::string& why) {
     r.refusals.push_back({file, line, why});
@@ -147,10 +91,10 @@ ImportResult importVictoriaPark(const ImportOptions& opt) {
       speed_prev = speed;
       steer_prev = steer;
       ++r.odometry_written;
-      events.push_back({m.utime, 0, static_cast<int64_t>(events.size()), opt.odometry_channel, encode(m)});
+      events.add(m.utime, 0, opt.odometry_channel, m);
+      last_odo_utime = m.utime;
     }
     r.odometry_refused = r.odometry_rows - r.odometry_written;
-    if (!events.empty()) last_odo_utime = events.back().utime;
   }
 
   // GPS: local metres -> lat/lon about the datum; every k-th accepted fix held out.
@@ -198,35 +142,17 @@ ImportResult importVictoriaPark(const ImportOptions& opt) {
       m.position_std = opt.gps_std;
       r.fixes.push_back({m.utime, x, y, held});
       (held ? r.heldout_written : r.gps_written)++;
-      events.push_back({m.utime, 1, static_cast<int64_t>(events.size()), held ? opt.heldout_channel : opt.gps_channel,
-                        encode(m)});
+      events.add(m.utime, 1, held ? opt.heldout_channel : opt.gps_channel, m);
     }
     r.gps_refused = r.gps_rows - r.gps_written - r.heldout_written;
   }
 
-  std::sort(events.begin(), events.end(), [](const Event& a, const Event& b) {
-    if (a.utime != b.utime) return a.utime < b.utime;
-    if (a.order != b.order) return a.order < b.order;
-    return a.index < b.index;
-  });
+  events.sort();
   if (!events.empty()) {
-    r.first_utime = events.front().utime;
-    r.last_utime = events.back().utime;
+    r.first_utime = events.firstUtime();
+    r.last_utime = events.lastUtime();
   }
-  if (!opt.output.empty()) {
-    lcm::LogFile log(opt.output, "w");
-    if (!log.good()) throw std::runtime_error("cannot create '" + opt.output + "'");
-    int64_t n = 0;
-    for (auto& e : events) {
-      lcm::LogEvent le;
-      le.eventnum = n++;
-      le.timestamp = e.utime;
-      le.channel = e.channel;
-      le.datalen = static_cast<int32_t>(e.bytes.size());
-      le.data = e.bytes.data();
-      if (log.writeEvent(&le) != 0) throw std::runtime_error("cannot write '" + opt.output + "'");
-    }
-  }
+  if (!opt.output.empty()) events.write(opt.output);
   return r;
 }
 

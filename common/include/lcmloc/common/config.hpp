@@ -33,6 +33,8 @@ struct ChannelConfig {
   std::string heartbeat = "HEARTBEAT";
   std::string imu = "IMU";
   std::string gps = "GPS";
+  std::string landmarks = "LANDMARKS";  ///< landmark_obs_t
+  std::string beacons = "BEACONS";      ///< beacon_range_t
 };
 
 /// Where lcmloc-gps takes its fixes from (the `gps` section; the simulated receiver's model is
@@ -49,6 +51,9 @@ struct FusionConfig {
   std::vector<std::string> shadow;    ///< extra filter types run side by side (POSE_<TYPE>)
   double reorder_window = 0.05;       ///< canonical-order window of message time [s]
   double status_period = 1.0;         ///< FUSION_STATUS period of message time [s]
+  /// Map CSV (id,x,y; docs/import_formats.md) of markers, landmarks and beacons; a relative path
+  /// is relative to the config file's directory. "" = the scenario's markers along the path.
+  std::string map_file;
 };
 
 struct LoggerConfig {

@@ -12,6 +12,8 @@
 #include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/imu_t.hpp"
+#include "lcmloc/landmark_obs_t.hpp"
+#include "lcmloc/beacon_range_t.hpp"
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
@@ -43,5 +45,12 @@ lcmloc::pose_t toLcm(const core::FilterState& s, const std::string& filter, int6
 void toLcm(const core::FilterState& s, const std::string& filter, int64_t seq, lcmloc::pose_t* out);
 lcmloc::gate_decision_t toLcm(const core::GateDecision& d, const std::string& filter, int64_t seq);
 core::FilterState toCore(const lcmloc::pose_t& m);
+/// Landmark observation; nullopt (why set) when a field is NaN/Inf, the range or a std is
+/// negative, the bearing is outside [-pi, pi] or the id is below -1.
+std::optional<core::LandmarkObservation> toCore(const lcmloc::landmark_obs_t& m, const std::string& channel,
+                                                std::string* why = nullptr);
+/// Beacon range; nullopt (why set) when a field is NaN/Inf or the range or std is negative.
+std::optional<core::BeaconRange> toCore(const lcmloc::beacon_range_t& m, const std::string& channel,
+                                        std::string* why = nullptr);
 
 }  // namespace lcmloc::common

@@ -25,7 +25,9 @@ struct EngineInput {
   int64_t seq = 0;
   int64_t utime = 0;
   /// Alternatives are only ever appended (the index is part of the canonical tie-break).
-  std::variant<OdometryInput, RulerDetection, ControlCommand, ImuInput, GpsInput> payload;
+  std::variant<OdometryInput, RulerDetection, ControlCommand, ImuInput, GpsInput, LandmarkObservation,
+               BeaconRange>
+      payload;
 };
 
 /// Outputs are delivered through callbacks, in processing order.
@@ -44,7 +46,8 @@ struct EngineConfig {
   FilterConfig filter;                 ///< initial active filter
   std::vector<std::string> shadow;     ///< shadow filter types (same parameters otherwise)
   int64_t reorder_window_us = 50000;
-  /// Canonical tie-break rank at equal utime: control < odometry < ruler < imu < gps (by payload type);
+  /// Canonical tie-break rank at equal utime: control < odometry < ruler < imu < gps < landmark <
+  /// beacon (by payload type);
   /// inputs of one type on different channels are ordered by a stable hash of the channel name,
   /// then by seq.
 };

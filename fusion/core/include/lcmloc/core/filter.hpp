@@ -57,7 +57,7 @@ struct GnssConfig {
 /// Parameters shared by every filter of the magnetic-ruler family (defaults: the paper, §4,
 /// as read in docs/paper_000_reading.md).
 struct FilterConfig {
-  std::string type = "ukf_gated";  ///< "dead_reckoning", "ukf", "ukf_gated", "ukf_calib"
+  std::string type = "ukf_gated";  ///< "dead_reckoning", "ukf", "ukf_gated", "ukf_calib", "tvekf", "ukf_gps", "ukf_landmarks"
   double wheelbase = 2.5;          ///< L [m]
   double ruler_offset = 1.5;       ///< L1: ruler centre ahead of M [m]
   double ruler_half_width = 0.5;   ///< half length of the ruler [m]
@@ -91,10 +91,21 @@ struct FilterConfig {
   /// "tvekf" and "ukf_gps" only (they also use wheelbase, initial_pose, p0_diag, sigma, gate,
   /// lockout_inflation).
   GnssConfig gnss;
+  /// Heading process noise per radian turned [rad^2/rad], added to every odometry step of the
+  /// magnetic-ruler family (dead_reckoning, ukf, ukf_gated, ukf_calib) and ukf_landmarks:
+  /// Q_theta += pw_turn |delta_theta|. Without it a robot turning in place (delta_s = 0) would
+  /// predict with zero process noise (Pw scales with |delta_s| only).
+  double pw_turn = 1e-4;
+  /// "ukf_landmarks" only: default measurement noise when an observation carries none.
+  struct Landmarks {
+    double range_std = 0.1;       ///< landmark range, 1 sigma [m]
+    double bearing_std = 0.02;    ///< landmark bearing, 1 sigma [rad]
+    double beacon_std = 0.1;      ///< beacon range, 1 sigma [m]
+  } landmarks;
 };
 
 /// Measurement kinds a filter may use (Filter::uses).
-enum class Measurement { Ruler, Imu, Gps };
+enum class Measurement { Ruler, Imu, Gps, Landmark, Beacon };
 
 class Filter {
  public:
@@ -122,6 +133,10 @@ class Filter {
   virtual std::optional<GateDecision> update(const ImuInput&) { return std::nullopt; }
   /// One GPS fix; returns the gate decision when the filter uses GPS (default: ignored).
   virtual std::optional<GateDecision> update(const GpsInput&) { return std::nullopt; }
+  /// One range-bearing landmark observation (default: ignored).
+  virtual std::optional<GateDecision> update(const LandmarkObservation&) { return std::nullopt; }
+  /// One range-only beacon measurement (default: ignored).
+  virtual std::optional<GateDecision> update(const BeaconRange&) { return std::nullopt; }
 };
 
 /// Builds a filter of cfg.type over the marker map. Throws std::invalid_argument for an unknown

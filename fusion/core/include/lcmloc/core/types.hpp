@@ -55,6 +55,29 @@ struct GpsInput {
   int64_t seq = 0;
 };
 
+/// A range-bearing observation of a map landmark (channel LANDMARKS), measured from the
+/// reference point M in the body frame (x forward, y left).
+struct LandmarkObservation {
+  int64_t utime = 0;
+  int landmark_id = -1;         ///< id in the map; -1 = unknown (nearest neighbour, gated)
+  double range = 0.0;           ///< distance from M to the landmark [m]
+  double bearing = 0.0;         ///< angle from the body x axis to the landmark, CCW [rad]
+  double range_std = 0.0;       ///< 1 sigma [m]; <= 0: the filter's landmark.range_std
+  double bearing_std = 0.0;     ///< 1 sigma [rad]; <= 0: the filter's landmark.bearing_std
+  std::string sensor = "LANDMARKS";
+  int64_t seq = 0;
+};
+
+/// A range-only measurement to a beacon of the map (channel BEACONS), from M.
+struct BeaconRange {
+  int64_t utime = 0;
+  int beacon_id = 0;            ///< id in the map
+  double range = 0.0;           ///< [m]
+  double range_std = 0.0;       ///< 1 sigma [m]; <= 0: the filter's landmark.beacon_std
+  std::string sensor = "BEACONS";
+  int64_t seq = 0;
+};
+
 /// A magnetic marker of the map.
 struct Marker {
   int id = 0;

@@ -1,0 +1,218 @@
+// "ukf_landmarks": a 3-state (x, y, theta) UKF for data brought by users: odometry increments
+// (delta_s, delta_theta; a robot may turn in place), range-bearing observations of map
+// landmarks with a known id (association given) or an unknown one (nearest neighbour in
+// Mahalanobis distance among the map, then the chi-square gate), and range-only beacon ranges
+// (1-D update, gated). See docs/import_formats.md.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+
+#include "filter_internal.hpp"
+#include "lcmloc/core/angles.hpp"
+#include "lcmloc/core/ruler_model.hpp"
+#include "lcmloc/core/vehicle_model.hpp"
+
+namespace lcmloc::core {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr AngleMask kThetaMask = 1u << 2;
+constexpr AngleMask kBearingMask = 1u << 1;
+
+class LandmarkUkf final : public Filter {
+  using U = Ukf<3>;
+
+ public:
+  LandmarkUkf(const FilterConfig& c, const MarkerMap& map)
+      : cfg_(c), map_(map), gated_(c.gate.enabled), gate2_(gated_ ? c.gate.threshold(2) : kInf),
+        gate1_(gated_ ? c.gate.threshold(1) : kInf), ukf_(c.sigma, kThetaMask) {
+    for (std::size_t i = 0; i < map_.size(); ++i) index_.emplace(map_[i].id, i);
+    reset();
+  }
+
+  std::string name() const override { return "ukf_landmarks"; }
+  FilterState state() const override {
+    FilterState s;
+    stateInto(s);
+    return s;
+  }
+  void stateInto(FilterState& s) const override {
+    s.utime = utime_;
+    s.x = ukf_.x();
+    s.P = ukf_.P();
+    s.names = names_;
+    s.status = status_;
+  }
+  void initialize(const FilterState& from) override {
+    Eigen::VectorXd x(3);
+    Eigen::MatrixXd P(3, 3);
+    x = cfg_.initial_pose;
+    P = Mat3(cfg_.p0_diag.asDiagonal());
+    detail::copyMatching(from, names_, x, P);
+    ukf_.reset(x, P);
+    utime_ = from.utime;
+    status_ = FilterStatus::Ok;
+    consecutive_rejections_ = 0;
+  }
+  bool uses(Measurement m) const override {
+    return m == Measurement::Landmark || m == Measurement::Beacon;
+  }
+
+  void predict(const OdometryInput& odo) override {
+    const double dth = headingIncrement(odo, cfg_.wheelbase);
+    if (!std::isfinite(odo.delta_s) || !std::isfinite(dth)) return;
+    const double ds = odo.delta_s;
+    auto f = [ds, dth](const U::Vector& s) -> U::Vector { return propagatePose(s, ds, dth); };
+    U::Matrix Q = U::Matrix::Zero();
+    Q.diagonal() = detail::poseProcessNoise(cfg_, ds, dth);
+    if (ukf_.predict(f, Q)) utime_ = odo.utime;
+  }
+
+  /// The ruler is not this filter's sensor (uses() says so; the engine never calls this).
+  GateDecision update(const RulerDetection& det) override {
+    GateDecision d;
+    d.utime = det.utime;
+    d.sensor = det.sensor;
+    d.measurement_seq = det.seq;
+    d.reason = "not_used";
+    return d;
+  }
+
+  std::optional<GateDecision> update(const LandmarkObservation& obs) override {
+    GateDecision d = decision(obs.utime, obs.sensor, obs.seq, gate2_);
+    U::Sigmas X;
+    if (!std::isfinite(obs.range) || !(obs.range >= 0) || !std::isfinite(obs.bearing) ||
+        !ukf_.sigmaPoints(X)) {
+      d.reason = "bad_input";
+      return d;
+    }
+    const double rs = obs.range_std > 0 ? obs.range_std : cfg_.landmarks.range_std;
+    const double bs = obs.bearing_std > 0 ? obs.bearing_std : cfg_.landmarks.bearing_std;
+    const Mat2 R = Vec2(rs * rs, bs * bs).asDiagonal();
+    const Vec2 z(obs.range, wrapAngle(obs.bearing));
+    Innovation<3, 2> best, cand;
+    int best_id = -1;
+    auto h_of = [](const Marker& m) {
+      return [&m](const U::Vector& s) { return predictRangeBearing(s, m.x, m.y); };
+    };
+    if (obs.landmark_id >= 0) {
+      const auto it = index_.find(obs.landmark_id);
+      if (it == index_.end()) {
+        d.reason = "unknown_id";
+        d.marker_id = obs.landmark_id;
+        return d;
+      }
+      const Marker& m = map_[it->second];
+      if (ukf_.innovate<2>(X, h_of(m), R, z, kBearingMask, best)) best_id = m.id;
+    } else {
+      // Nearest neighbour: only landmarks whose distance from the predicted position can match
+      // the measured range within 4 sigma (position and range) are tried.
+      const auto& P = ukf_.P();
+      const double slack = 4.0 * std::sqrt(std::max(P(0, 0) + P(1, 1), 0.0) + rs * rs);
+      const Vec3 pose = ukf_.x();
+      for (const Marker& m : map_) {
+        const double dist = std::hypot(m.x - pose.x(), m.y - pose.y());
+        if (std::abs(dist - obs.range) > slack) continue;
+        if (!ukf_.innovate<2>(X, h_of(m), R, z, kBearingMask, cand)) continue;
+        if (best_id < 0 || cand.mahalanobis < best.mahalanobis) {
+          best = cand;
+          best_id = m.id;
+        }
+      }
+    }
+    return finish(d, best_id, best, gate2_);
+  }
+
+  std::optional<GateDecision> update(const BeaconRange& b) override {
+    GateDecision d = decision(b.utime, b.sensor, b.seq, gate1_);
+    U::Sigmas X;
+    if (!std::isfinite(b.range) || !(b.range >= 0) || !ukf_.sigmaPoints(X)) {
+      d.reason = "bad_input";
+      return d;
+    }
+    const auto it = index_.find(b.beacon_id);
+    if (it == index_.end()) {
+      d.reason = "unknown_id";
+      d.marker_id = b.beacon_id;
+      return d;
+    }
+    const Marker& m = map_[it->second];
+    const double rs = b.range_std > 0 ? b.range_std : cfg_.landmarks.beacon_std;
+    Eigen::Matrix<double, 1, 1> R, z;
+    R(0, 0) = rs * rs;
+    z(0, 0) = b.range;
+    auto h = [&m](const U::Vector& s) {
+      Eigen::Matrix<double, 1, 1> r;
+      r(0, 0) = std::hypot(m.x - s.x(), m.y - s.y());
+      return r;
+    };
+    Innovation<3, 1> in;
+    const int id = ukf_.innovate<1>(X, h, R, z, 0u, in) ? m.id : -1;
+    return finish(d, id, in, gate1_);
+  }
+
+ private:
+  void reset() {
+    ukf_.reset(cfg_.initial_pose, Mat3(cfg_.p0_diag.asDiagonal()));
+  }
+  static GateDecision decision(int64_t utime, const std::string& sensor, int64_t seq, double gate) {
+    GateDecision d;
+    d.utime = utime;
+    d.sensor = sensor;
+    d.measurement_seq = seq;
+    d.gate = gate;
+    return d;
+  }
+  template <int M>
+  GateDecision finish(GateDecision& d, int id, Innovation<3, M>& in, double gate) {
+    utime_ = std::max(utime_, d.utime);
+    if (id < 0) {
+      d.reason = "no_candidate";
+      if (gated_) onRejection();
+      return d;
+    }
+    d.marker_id = id;
+    d.innovation = in.v;
+    d.mahalanobis = in.mahalanobis;
+    if (gated_ && !(in.mahalanobis <= gate)) {
+      d.reason = "gate";
+      onRejection();
+      return d;
+    }
+    ukf_.correct(in);
+    d.accepted = true;
+    d.reason = gated_ ? "accepted" : "ungated";
+    consecutive_rejections_ = 0;
+    status_ = FilterStatus::Ok;
+    return d;
+  }
+  /// Same lock-out rule as the ruler filters (FilterConfig::lockout_rejections).
+  void onRejection() {
+    ++consecutive_rejections_;
+    if (cfg_.lockout_rejections > 0 && consecutive_rejections_ % cfg_.lockout_rejections == 0) {
+      status_ = FilterStatus::Lockout;
+      ukf_.scaleCovariance(cfg_.lockout_inflation);
+    }
+  }
+
+  FilterConfig cfg_;
+  MarkerMap map_;
+  std::unordered_map<int, std::size_t> index_;
+  bool gated_;
+  double gate2_, gate1_;
+  U ukf_;
+  std::vector<std::string> names_{"x", "y", "theta"};
+  int64_t utime_ = 0;
+  FilterStatus status_ = FilterStatus::Ok;
+  int consecutive_rejections_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Filter> detail::makeLandmarkFilter(const FilterConfig& cfg, const MarkerMap& map) {
+  if (cfg.type != "ukf_landmarks") return nullptr;
+  return std::make_unique<LandmarkUkf>(cfg, map);
+}
+
+}  // namespace lcmloc::core
