@@ -248,6 +248,7 @@ void parseFusion(KeyReader& root, FusionConfig& f) {
     checkFilterType(f.shadow[i], root.file(), "fusion.shadow[" + std::to_string(i) + "]");
   r.get("reorder_window", f.reorder_window, 0.0, 10.0);
   r.get("status_period", f.status_period, 0.01, 3600.0);
+  r.get("output_every", f.output_every, 1, 1000000);
   r.finish();
 }
 

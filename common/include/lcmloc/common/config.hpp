@@ -49,6 +49,9 @@ struct FusionConfig {
   std::vector<std::string> shadow;    ///< extra filter types run side by side (POSE_<TYPE>)
   double reorder_window = 0.05;       ///< canonical-order window of message time [s]
   double status_period = 1.0;         ///< FUSION_STATUS period of message time [s]
+  /// POSE after every N-th odometry message (and every measurement); the odometry in between is
+  /// composed and applied with one time update (core::EngineConfig::output_every). 1 = every one.
+  int output_every = 1;
 };
 
 struct LoggerConfig {
