@@ -70,12 +70,6 @@ Vec3 poseProcessNoise(const FilterConfig& c, double ds) {
   return c.pw_distance > 0 ? Vec3(c.pw_diag * (std::abs(ds) / c.pw_distance)) : c.pw_diag;
 }
 
-/// Process noise of a batch of steps: the sum of the steps' poseProcessNoise.
-Vec3 batchProcessNoise(const FilterConfig& c, const OdometryBatch& b) {
-  return c.pw_distance > 0 ? Vec3(c.pw_diag * (b.distance / c.pw_distance))
-                           : Vec3(c.pw_diag * static_cast<double>(b.steps));
-}
-
 /// Initial state and covariance of a filter with these state names.
 void initialState(const FilterConfig& c, const std::vector<std::string>& names,
                   Eigen::VectorXd& x, Eigen::MatrixXd& P) {
@@ -169,7 +163,9 @@ class DeadReckoningFilter final : public Filter {
     batch_.clear();
   }
   bool accumulate(const OdometryInput& odo) override {
-    if (isFinite(odo)) batch_.add(odo.delta_s, headingIncrement(odo, cfg_.wheelbase), odo.utime);
+    if (isFinite(odo))
+      batch_.add(odo.delta_s, headingIncrement(odo, cfg_.wheelbase), odo.utime,
+                 poseProcessNoise(cfg_, odo.delta_s));
     return true;
   }
   /// The Jacobians of eq. 1 are I + [0 0 -dy_k; 0 0 dx_k; 0 0 0] (world displacement of step k):
@@ -180,9 +176,9 @@ class DeadReckoningFilter final : public Filter {
     Mat3 F = Mat3::Identity();
     F(0, 2) = -s * batch_.dx - c * batch_.dy;
     F(1, 2) = c * batch_.dx - s * batch_.dy;
+    const Mat3 Q = batch_.noise(x_.z());
     x_ = batch_.apply(x_);
-    P_ = F * P_ * F.transpose();
-    P_.diagonal() += batchProcessNoise(cfg_, batch_);
+    P_ = F * P_ * F.transpose() + Q;
     utime_ = batch_.utime;
     batch_.clear();
   }
@@ -271,12 +267,14 @@ class RulerUkf final : public Filter {
     if constexpr (N != 3) {
       return false;
     } else {
-      if (isFinite(odo)) batch_.add(odo.delta_s, headingIncrement(odo, cfg_.wheelbase), odo.utime);
+      if (isFinite(odo))
+        batch_.add(odo.delta_s, headingIncrement(odo, cfg_.wheelbase), odo.utime,
+                   poseProcessNoise(cfg_, odo.delta_s));
       return true;
     }
   }
   /// One time update with the composed increment (the same mean as the steps one by one) and
-  /// the process noise of the whole travel.
+  /// the process noise of the steps as the remaining steps carry it (linearised at the mean).
   void applyAccumulated() override {
     if (batch_.empty()) return;
     const OdometryBatch& b = batch_;
@@ -286,7 +284,7 @@ class RulerUkf final : public Filter {
       return out;
     };
     typename U::Matrix Q = U::Matrix::Zero();
-    Q.template topLeftCorner<3, 3>().diagonal() = batchProcessNoise(cfg_, b);
+    Q.template topLeftCorner<3, 3>() = b.noise(ukf_.x()(2));
     if (ukf_.predict(f, Q)) utime_ = b.utime;
     batch_.clear();
   }

@@ -4,6 +4,13 @@
 // in the body frame of the pose where the batch starts: dead reckoning from the origin. Moving
 // a pose by the composed increment is, for the mean, exactly the same as moving it by each
 // increment in turn (SE(2) composition; equal up to floating-point rounding).
+//
+// Process noise: each step adds q = (qx, qy, qtheta) (world frame, diagonal) after its motion.
+// The heading noise of step k turns the rest of the batch's travel r_k (body frame) by a random
+// angle, moving the end point by J r_k per radian (J: rotation by +90 deg). The batch keeps the
+// moments of q_theta over the steps' end points d_k so that noise() returns, for the whole batch,
+// sum_k G_k diag(q_k) G_k' with G_k the Jacobian of the remaining steps: the covariance the
+// step-by-step linear propagation (dead reckoning) adds, exactly.
 #include <cmath>
 #include <cstdint>
 
@@ -15,12 +22,16 @@ namespace lcmloc::core {
 struct OdometryBatch {
   double dx = 0.0, dy = 0.0;  ///< translation, body frame of the batch's start pose [m]
   double dtheta = 0.0;        ///< heading change (not wrapped) [rad]
-  double distance = 0.0;      ///< sum of |ds| (for the process noise of the travel) [m]
+  double distance = 0.0;      ///< sum of |ds| [m]
   int steps = 0;              ///< increments composed
   int64_t utime = 0;          ///< utime of the last increment
+  Vec3 q_sum = Vec3::Zero();  ///< sum of the steps' process noise (qx, qy, qtheta)
+  Vec2 m1 = Vec2::Zero();     ///< sum of qtheta_k d_k
+  Mat2 m2 = Mat2::Zero();     ///< sum of qtheta_k d_k d_k'
 
-  /// Appends one increment (ds, dth) of eq. 1 taken at the end of the batch so far.
-  void add(double ds, double dth, int64_t t) {
+  /// Appends one increment (ds, dth) of eq. 1 taken at the end of the batch so far, followed by
+  /// process noise q (diagonal, world frame).
+  void add(double ds, double dth, int64_t t, const Vec3& q) {
     const double mid = dtheta + 0.5 * dth;
     dx += ds * std::cos(mid);
     dy += ds * std::sin(mid);
@@ -28,6 +39,10 @@ struct OdometryBatch {
     distance += std::abs(ds);
     ++steps;
     utime = t;
+    q_sum += q;
+    const Vec2 d(dx, dy);
+    m1 += q.z() * d;
+    m2 += q.z() * d * d.transpose();
   }
   bool empty() const { return steps == 0; }
   void clear() { *this = OdometryBatch{}; }
@@ -36,6 +51,22 @@ struct OdometryBatch {
   Pose apply(const Pose& pose) const {
     const double c = std::cos(pose.z()), s = std::sin(pose.z());
     return Pose(pose.x() + c * dx - s * dy, pose.y() + s * dx + c * dy, wrapAngle(pose.z() + dtheta));
+  }
+
+  /// Process noise of the whole batch for a batch starting at heading theta0 (world frame).
+  Mat3 noise(double theta0) const {
+    const Vec2 d(dx, dy);
+    const double s0 = q_sum.z();
+    const Mat2 A = s0 * d * d.transpose() - d * m1.transpose() - m1 * d.transpose() + m2;  // sum q r r'
+    const Vec2 b = s0 * d - m1;                                                           // sum q r
+    Mat2 RJ;  // rotation by theta0, then by +90 deg
+    const double c = std::cos(theta0), s = std::sin(theta0);
+    RJ << -s, -c, c, -s;
+    Mat3 Q = q_sum.asDiagonal();
+    Q.topLeftCorner<2, 2>() += RJ * A * RJ.transpose();
+    Q.topRightCorner<2, 1>() += RJ * b;
+    Q.bottomLeftCorner<1, 2>() += (RJ * b).transpose();
+    return Q;
   }
 };
 
