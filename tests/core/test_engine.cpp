@@ -322,6 +322,12 @@ TEST(OdometryBatch, ComposedIncrementMovesAPoseAsTheStepsOneByOne) {
   EXPECT_NEAR(wrapAngle(composed.z() - seq.z()), 0.0, 1e-12);
   EXPECT_EQ(b.steps, 50);
   EXPECT_EQ(b.utime, 49000);
+  for (double a = -0.06; a <= 0.06; a += 0.0007) {  // the polynomial range and both sides of it
+    double s, c;
+    OdometryBatch::sinCosSmall(a, s, c);
+    EXPECT_NEAR(s, std::sin(a), 4e-17) << a;
+    EXPECT_NEAR(c, std::cos(a), 2.3e-16) << a;
+  }
 }
 
 TEST(Engine, OutputEveryPublishesEveryNthOdometryAndBeforeMeasurementsAppliesTheBatch) {

@@ -28,13 +28,20 @@ struct OdometryBatch {
   Vec3 q_sum = Vec3::Zero();  ///< sum of the steps' process noise (qx, qy, qtheta)
   Vec2 m1 = Vec2::Zero();     ///< sum of qtheta_k d_k
   Mat2 m2 = Mat2::Zero();     ///< sum of qtheta_k d_k d_k'
+  double c_ = 1.0, s_ = 0.0;  ///< cos, sin of dtheta (by angle addition)
 
   /// Appends one increment (ds, dth) of eq. 1 taken at the end of the batch so far, followed by
   /// process noise q (diagonal, world frame).
   void add(double ds, double dth, int64_t t, const Vec3& q) {
-    const double mid = dtheta + 0.5 * dth;
-    dx += ds * std::cos(mid);
-    dy += ds * std::sin(mid);
+    // cos, sin of the midpoint heading dtheta + dth / 2 by angle addition from those of dtheta
+    // (no libm call per step for the usual small increments; see sinCosSmall).
+    double sh, chh;
+    sinCosSmall(0.5 * dth, sh, chh);
+    const double cm = c_ * chh - s_ * sh, sm = s_ * chh + c_ * sh;
+    dx += ds * cm;
+    dy += ds * sm;
+    c_ = cm * chh - sm * sh;  // advance by the second half
+    s_ = sm * chh + cm * sh;
     dtheta += dth;
     distance += std::abs(ds);
     ++steps;
@@ -43,6 +50,18 @@ struct OdometryBatch {
     const Vec2 d(dx, dy);
     m1 += q.z() * d;
     m2 += q.z() * d * d.transpose();
+  }
+  /// sin and cos of a: Taylor polynomials for |a| <= 0.05 rad (truncation error below
+  /// 1e-21, far under the rounding of the result), libm otherwise.
+  static void sinCosSmall(double a, double& s, double& c) {
+    if (std::abs(a) > 0.05) {
+      s = std::sin(a);
+      c = std::cos(a);
+      return;
+    }
+    const double a2 = a * a;
+    s = a * (1.0 - a2 / 6.0 * (1.0 - a2 / 20.0 * (1.0 - a2 / 42.0 * (1.0 - a2 / 72.0))));
+    c = 1.0 - a2 / 2.0 * (1.0 - a2 / 12.0 * (1.0 - a2 / 30.0 * (1.0 - a2 / 56.0 * (1.0 - a2 / 90.0))));
   }
   bool empty() const { return steps == 0; }
   void clear() { *this = OdometryBatch{}; }
