@@ -27,7 +27,7 @@ struct OdometryBatch {
   int64_t utime = 0;          ///< utime of the last increment
   Vec3 q_sum = Vec3::Zero();  ///< sum of the steps' process noise (qx, qy, qtheta)
   Vec2 m1 = Vec2::Zero();     ///< sum of qtheta_k d_k
-  Mat2 m2 = Mat2::Zero();     ///< sum of qtheta_k d_k d_k'
+  Mat2 m2 = Mat2::Zero();     ///< sum of qtheta_k d_k d_k' (upper triangle)
   double c_ = 1.0, s_ = 0.0;  ///< cos, sin of dtheta (by angle addition)
 
   /// Appends one increment (ds, dth) of eq. 1 taken at the end of the batch so far, followed by
@@ -47,9 +47,12 @@ struct OdometryBatch {
     ++steps;
     utime = t;
     q_sum += q;
-    const Vec2 d(dx, dy);
-    m1 += q.z() * d;
-    m2 += q.z() * d * d.transpose();
+    const double qx = q.z() * dx, qy = q.z() * dy;
+    m1.x() += qx;
+    m1.y() += qy;
+    m2(0, 0) += qx * dx;
+    m2(0, 1) += qx * dy;
+    m2(1, 1) += qy * dy;
   }
   /// sin and cos of a: Taylor polynomials for |a| <= 0.05 rad (truncation error below
   /// 1e-21, far under the rounding of the result), libm otherwise.
@@ -59,9 +62,11 @@ struct OdometryBatch {
       c = std::cos(a);
       return;
     }
+    constexpr double k3 = 1.0 / 6, k5 = 1.0 / 120, k7 = 1.0 / 5040, k9 = 1.0 / 362880;
+    constexpr double k2 = 1.0 / 2, k4 = 1.0 / 24, k6 = 1.0 / 720, k8 = 1.0 / 40320, k10 = 1.0 / 3628800;
     const double a2 = a * a;
-    s = a * (1.0 - a2 / 6.0 * (1.0 - a2 / 20.0 * (1.0 - a2 / 42.0 * (1.0 - a2 / 72.0))));
-    c = 1.0 - a2 / 2.0 * (1.0 - a2 / 12.0 * (1.0 - a2 / 30.0 * (1.0 - a2 / 56.0 * (1.0 - a2 / 90.0))));
+    s = a + a * a2 * (-k3 + a2 * (k5 + a2 * (-k7 + a2 * k9)));
+    c = 1.0 + a2 * (-k2 + a2 * (k4 + a2 * (-k6 + a2 * (k8 - a2 * k10))));
   }
   bool empty() const { return steps == 0; }
   void clear() { *this = OdometryBatch{}; }
@@ -76,6 +81,8 @@ struct OdometryBatch {
   Mat3 noise(double theta0) const {
     const Vec2 d(dx, dy);
     const double s0 = q_sum.z();
+    Mat2 m2 = this->m2;  // add() fills the upper triangle
+    m2(1, 0) = m2(0, 1);
     const Mat2 A = s0 * d * d.transpose() - d * m1.transpose() - m1 * d.transpose() + m2;  // sum q r r'
     const Vec2 b = s0 * d - m1;                                                           // sum q r
     Mat2 RJ;  // rotation by theta0, then by +90 deg
