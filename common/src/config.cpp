@@ -255,6 +255,7 @@ void parseFusion(KeyReader& root, FusionConfig& f) {
     const auto slash = root.file().rfind('/');
     if (slash != std::string::npos) f.map_file = root.file().substr(0, slash + 1) + f.map_file;
   }
+  r.get("output_every", f.output_every, 1, 1000000);
   r.finish();
 }
 

@@ -37,6 +37,7 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
   ec.filter = cfg.fusion.filter;
   ec.shadow = cfg.fusion.shadow;
   ec.reorder_window_us = static_cast<int64_t>(std::llround(cfg.fusion.reorder_window * 1e6));
+  ec.output_every = cfg.fusion.output_every;
   core::EngineOutputs out;
   out.on_state = [this](const std::string& f, bool active, const core::FilterState& s) { publishState(f, active, s); };
   out.on_decision = [this](const std::string& f, bool, const core::GateDecision& d) {

@@ -66,6 +66,7 @@ TEST(Config, PaperYamlSpellsOutTheDefaults) {
   EXPECT_EQ(f.gate.probability, 0.99);
   EXPECT_EQ(f.steer_bias_rw, fd.steer_bias_rw);
   EXPECT_EQ(cfg.fusion.reorder_window, def.fusion.reorder_window);
+  EXPECT_EQ(cfg.fusion.output_every, def.fusion.output_every);
   EXPECT_EQ(cfg.logger.queue_capacity, def.logger.queue_capacity);
 }
 
@@ -121,6 +122,15 @@ TEST(Config, WrongTypeAndRangeAreClear) {
   EXPECT_NE(errorOf("faults: [{kind: gremlin}]").find("faults[0].kind: unknown fault kind"), std::string::npos);
   EXPECT_NE(errorOf("vehicle: {speed: .nan}").find("expected a finite number"), std::string::npos);
   EXPECT_NE(errorOf("scenario: [1").find("test.yaml: YAML syntax error at line"), std::string::npos);
+}
+
+TEST(Config, OutputEveryIsAPositiveInteger) {
+  EXPECT_EQ(common::parseSystemConfig("", "e.yaml").fusion.output_every, 1);
+  EXPECT_EQ(common::parseSystemConfig("fusion: {output_every: 10}", "o.yaml").fusion.output_every, 10);
+  EXPECT_NE(errorOf("fusion: {output_every: 0}").find("test.yaml: fusion.output_every: value 0 out of range"),
+            std::string::npos) << errorOf("fusion: {output_every: 0}");
+  EXPECT_NE(errorOf("fusion: {output_every: 2.5}").find("fusion.output_every: expected an integer"),
+            std::string::npos);
 }
 
 TEST(Config, MissingFileNamesTheFile) {

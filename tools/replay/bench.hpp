@@ -10,6 +10,9 @@ struct BenchOptions {
   int repetitions = 3;
   std::string dir = "out/bench";
   bool keep_log = false;       ///< reuse dir/synthetic.lcmlog if it exists
+  /// fusion.output_every of the batched rows (measured in the same run as the default rows);
+  /// 1 = no batched rows.
+  int output_every = 10;
 };
 
 /// Generates the synthetic log, measures read+decode, dead_reckoning and ukf_gated replay

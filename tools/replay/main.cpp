@@ -51,6 +51,8 @@ int main(int argc, char** argv) {
   app.add_option("--bench-reps", bo.repetitions, "repetitions (medians are reported)")->check(CLI::PositiveNumber);
   app.add_option("--bench-dir", bo.dir, "where the synthetic log and bench.json go");
   app.add_flag("--bench-keep-log", bo.keep_log, "reuse the synthetic log of an earlier run if present");
+  app.add_option("--bench-output-every", bo.output_every,
+                 "fusion.output_every of the batched rows (1 = none)")->check(CLI::PositiveNumber);
   app.footer("--lcm-url is accepted for uniformity and unused: the replay reads and writes files only.");
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-replay", [&]() -> int {

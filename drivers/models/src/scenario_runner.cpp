@@ -99,7 +99,8 @@ void computeMetrics(FilterRun& run, const std::vector<TruthState>& truth, int64_
 
 }  // namespace
 
-ScenarioResult runScenario(const ScenarioConfig& sc, const std::vector<core::FilterConfig>& filters) {
+ScenarioResult runScenario(const ScenarioConfig& sc, const std::vector<core::FilterConfig>& filters,
+                           int output_every) {
   ScenarioResult res;
   const Path path(sc.path);
   res.map = makeMarkerMap(path, sc.markers);
@@ -117,6 +118,7 @@ ScenarioResult runScenario(const ScenarioConfig& sc, const std::vector<core::Fil
     run->result.filter = fc.type;
     core::EngineConfig ec;
     ec.filter = fc;
+    ec.output_every = output_every;
     run->engine = std::make_unique<core::FusionEngine>(ec, res.map, outputsFor(run.get()));
     runs.push_back(std::move(run));
   }

@@ -28,11 +28,6 @@ int typeRank(const EngineInput& in) {
   }
 }
 
-OrderKey orderKey(const EngineInput& in) {
-  return OrderKey{in.utime, typeRank(in) * 1024 + static_cast<int>(stableHash(in.channel) % 1024),
-                  in.seq};
-}
-
 bool isFinite(const OdometryInput& o) {
   return std::isfinite(o.delta_s) && std::isfinite(o.steering) && std::isfinite(o.delta_theta);
 }
@@ -78,6 +73,17 @@ struct FusionEngine::Impl {
     if (out.on_event) out.on_event(name, detail, utime);
   }
 
+  /// orderKey() with the channel hash of the previous input reused when the channel is the same.
+  std::string hashed_channel;
+  uint32_t channel_hash = 0;
+  OrderKey orderKey(const EngineInput& in) {
+    if (in.channel != hashed_channel || hashed_channel.empty()) {
+      hashed_channel = in.channel;
+      channel_hash = stableHash(in.channel);
+    }
+    return OrderKey{in.utime, typeRank(in) * 1024 + static_cast<int>(channel_hash % 1024), in.seq};
+  }
+
   FilterState scratch;  ///< reused for every published state (no allocations per message)
   void emitState(const Filter& f, bool is_active) {
     if (!out.on_state) return;
@@ -93,8 +99,11 @@ struct FusionEngine::Impl {
 
   void process(const EngineInput& in) {
     ++counters.processed;
+    const bool odometry = std::holds_alternative<OdometryInput>(in.payload);
+    if (cfg.output_every > 1 && !odometry) applyAccumulated();  // measurements see all odometry
     std::visit([&](const auto& p) { handle(in, p); }, in.payload);
-    const FilterStatus now = active->state().status;
+    if (cfg.output_every > 1 && !odometry) unpublished = false;
+    const FilterStatus now = active->status();
     if (now != last_status) {
       if (now == FilterStatus::Lockout)
         event("lockout", active->name() + ": consecutive gate rejections, covariance inflated",
@@ -111,10 +120,38 @@ struct FusionEngine::Impl {
             in.utime);
       return;
     }
+    if (cfg.output_every > 1) return handleBatched(odo);
     forEachFilter([&](Filter& f, bool is_active) {
       f.predict(odo);
       emitState(f, is_active);
     });
+  }
+
+  // Output decimation with batched time update (EngineConfig::output_every > 1).
+  int odometry_since_output = 0;  ///< odometry messages since the last regular output
+  bool accumulated = false;       ///< some filter holds composed odometry not yet applied
+  bool unpublished = false;       ///< odometry processed whose state was not published yet
+  void applyAccumulated() {
+    if (!accumulated) return;
+    forEachFilter([](Filter& f, bool) { f.applyAccumulated(); });
+    accumulated = false;
+  }
+  void handleBatched(const OdometryInput& odo) {
+    forEachFilter([&](Filter& f, bool) {
+      if (f.accumulate(odo))
+        accumulated = true;
+      else
+        f.predict(odo);
+    });
+    unpublished = true;
+    if (++odometry_since_output < cfg.output_every) return;
+    odometry_since_output = 0;
+    publishAll();
+  }
+  void publishAll() {
+    applyAccumulated();
+    forEachFilter([&](Filter& f, bool is_active) { emitState(f, is_active); });
+    unpublished = false;
   }
 
   void handle(const EngineInput&, const RulerDetection& det) {
@@ -223,12 +260,12 @@ FusionEngine::FusionEngine(FusionEngine&&) noexcept = default;
 FusionEngine& FusionEngine::operator=(FusionEngine&&) noexcept = default;
 
 bool FusionEngine::push(EngineInput in) {
-  const OrderKey key = orderKey(in);
-  const bool duplicate = impl_->buffer.contains(key);
-  const std::string channel = in.channel;
-  const int64_t seq = in.seq, utime = in.utime;
-  if (!impl_->buffer.push(key, std::move(in))) {
+  const OrderKey key = impl_->orderKey(in);
+  if (!impl_->buffer.push(key, std::move(in))) {  // refused: `in` is untouched
     ++impl_->counters.too_old;
+    const bool duplicate = impl_->buffer.contains(key);
+    const std::string& channel = in.channel;
+    const int64_t seq = in.seq, utime = in.utime;
     std::string detail = channel + " seq " + std::to_string(seq) + " utime " +
                          std::to_string(utime);
     if (duplicate)
@@ -245,6 +282,7 @@ bool FusionEngine::push(EngineInput in) {
 
 void FusionEngine::flush() {
   impl_->buffer.flush([this](const OrderKey&, const EngineInput& e) { impl_->process(e); });
+  if (impl_->unpublished) impl_->publishAll();  // output_every > 1: the state after the last input
 }
 
 void FusionEngine::initialize(const FilterState& state) {

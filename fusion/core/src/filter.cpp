@@ -7,6 +7,7 @@
 
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/chi2.hpp"
+#include "lcmloc/core/odometry_batch.hpp"
 #include "filter_internal.hpp"
 #include "lcmloc/core/ruler_model.hpp"
 #include "lcmloc/core/vehicle_model.hpp"
@@ -161,6 +162,7 @@ class DeadReckoningFilter final : public Filter {
     s.names = names_;
     s.status = FilterStatus::DeadReckoning;
   }
+  FilterStatus status() const override { return FilterStatus::DeadReckoning; }
   void initialize(const FilterState& from) override {
     Eigen::VectorXd x;
     Eigen::MatrixXd P;
@@ -169,6 +171,27 @@ class DeadReckoningFilter final : public Filter {
     x_ = x;
     P_ = P;
     utime_ = from.utime;
+    batch_.clear();
+  }
+  bool accumulate(const OdometryInput& odo) override {
+    if (isFinite(odo))
+      batch_.add(odo.delta_s, headingIncrement(odo, cfg_.wheelbase), odo.utime,
+                 poseProcessNoise(cfg_, odo.delta_s));
+    return true;
+  }
+  /// The Jacobians of eq. 1 are I + [0 0 -dy_k; 0 0 dx_k; 0 0 0] (world displacement of step k):
+  /// their product over the batch is the same form with the batch's world displacement, exact.
+  void applyAccumulated() override {
+    if (batch_.empty()) return;
+    const double c = std::cos(x_.z()), s = std::sin(x_.z());
+    Mat3 F = Mat3::Identity();
+    F(0, 2) = -s * batch_.dx - c * batch_.dy;
+    F(1, 2) = c * batch_.dx - s * batch_.dy;
+    const Mat3 Q = batch_.noise(x_.z());
+    x_ = batch_.apply(x_);
+    P_ = F * P_ * F.transpose() + Q;
+    utime_ = batch_.utime;
+    batch_.clear();
   }
   void predict(const OdometryInput& odo) override {
     if (!isFinite(odo)) return;
@@ -195,6 +218,7 @@ class DeadReckoningFilter final : public Filter {
   Vec3 x_;
   Mat3 P_;
   int64_t utime_ = 0;
+  OdometryBatch batch_;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -235,6 +259,7 @@ class RulerUkf final : public Filter {
     s.names = names_;
     s.status = status_;
   }
+  FilterStatus status() const override { return status_; }
 
   void initialize(const FilterState& from) override {
     Eigen::VectorXd x;
@@ -245,6 +270,34 @@ class RulerUkf final : public Filter {
     utime_ = from.utime;
     status_ = FilterStatus::Ok;
     consecutive_rejections_ = 0;
+    batch_.clear();
+  }
+
+  /// Batching needs a process model that does not depend on the state: (x, y, theta) only.
+  bool accumulate(const OdometryInput& odo) override {
+    if constexpr (N != 3) {
+      return false;
+    } else {
+      if (isFinite(odo))
+        batch_.add(odo.delta_s, headingIncrement(odo, cfg_.wheelbase), odo.utime,
+                   poseProcessNoise(cfg_, odo.delta_s));
+      return true;
+    }
+  }
+  /// One time update with the composed increment (the same mean as the steps one by one) and
+  /// the process noise of the steps as the remaining steps carry it (linearised at the mean).
+  void applyAccumulated() override {
+    if (batch_.empty()) return;
+    const OdometryBatch& b = batch_;
+    auto f = [&b](const typename U::Vector& s) {
+      typename U::Vector out = s;
+      out.template head<3>() = b.apply(s.template head<3>());
+      return out;
+    };
+    typename U::Matrix Q = U::Matrix::Zero();
+    Q.template topLeftCorner<3, 3>() = b.noise(ukf_.x()(2));
+    if (ukf_.predict(f, Q)) utime_ = b.utime;
+    batch_.clear();
   }
 
   void predict(const OdometryInput& odo) override {
@@ -359,6 +412,7 @@ class RulerUkf final : public Filter {
   int64_t utime_ = 0;
   FilterStatus status_ = FilterStatus::Ok;
   int consecutive_rejections_ = 0;
+  OdometryBatch batch_;
 };
 
 }  // namespace

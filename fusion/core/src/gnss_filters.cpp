@@ -264,7 +264,7 @@ class GnssFilterBase : public Filter {
     P(kSpeed, kSpeed) = g_.speed_std0 * g_.speed_std0;
     P(kDistance, kDistance) = g_.encoder_std * g_.encoder_std;
   }
-  FilterStatus status() const {
+  FilterStatus status() const override {
     if (gps_lock_.active() || mag_lock_.active()) return FilterStatus::Lockout;
     const auto timeout = static_cast<int64_t>(g_.coast_timeout * 1e6);
     if (!have_fix_ || utime_ - last_fix_utime_ > timeout) return FilterStatus::DeadReckoning;

@@ -74,15 +74,22 @@ void LogBus::subscribeRaw(const std::string& channel, RawHandler handler) {
   // LCM channel regexes are POSIX extended and match the whole channel name.
   subs_.push_back({std::regex("^(" + channel + ")$", std::regex::extended), std::move(handler)});
   route_.clear();
+  last_channel_ = nullptr;
+  last_route_ = nullptr;
 }
 
 const std::vector<std::size_t>& LogBus::handlersFor(const std::string& channel) {
+  if (last_channel_ && *last_channel_ == channel) return *last_route_;
   auto it = route_.find(channel);
-  if (it != route_.end()) return it->second;
-  std::vector<std::size_t> idx;
-  for (std::size_t i = 0; i < subs_.size(); ++i)
-    if (std::regex_match(channel, subs_[i].re)) idx.push_back(i);
-  return route_.emplace(channel, std::move(idx)).first->second;
+  if (it == route_.end()) {
+    std::vector<std::size_t> idx;
+    for (std::size_t i = 0; i < subs_.size(); ++i)
+      if (std::regex_match(channel, subs_[i].re)) idx.push_back(i);
+    it = route_.emplace(channel, std::move(idx)).first;
+  }
+  last_channel_ = &it->first;  // map nodes are stable until route_.clear()
+  last_route_ = &it->second;
+  return it->second;
 }
 
 bool LogBus::subscribed(const std::string& channel) { return !handlersFor(channel).empty(); }

@@ -54,6 +54,9 @@ struct FusionConfig {
   /// Map CSV (id,x,y; docs/import_formats.md) of markers, landmarks and beacons; a relative path
   /// is relative to the config file's directory. "" = the scenario's markers along the path.
   std::string map_file;
+  /// POSE after every N-th odometry message (and every measurement); the odometry in between is
+  /// composed and applied with one time update (core::EngineConfig::output_every). 1 = every one.
+  int output_every = 1;
 };
 
 struct LoggerConfig {

@@ -38,7 +38,9 @@ struct ScenarioResult {
 };
 
 /// Runs the scenario once with each filter config (each in its own engine, same sensor data).
+/// output_every: core::EngineConfig::output_every of the engines (the track then holds the
+/// published states only).
 ScenarioResult runScenario(const ScenarioConfig& scenario,
-                           const std::vector<core::FilterConfig>& filters);
+                           const std::vector<core::FilterConfig>& filters, int output_every = 1);
 
 }  // namespace lcmloc::models

@@ -50,6 +50,12 @@ struct EngineConfig {
   /// beacon (by payload type);
   /// inputs of one type on different channels are ordered by a stable hash of the channel name,
   /// then by seq.
+  /// Output decimation (fusion.output_every): 1 = a state after every odometry message. N > 1 =
+  /// a state after every N-th odometry message (and after every measurement, as always); the
+  /// odometry in between is composed and applied with one time update by the filters that can
+  /// (Filter::accumulate), always before the next measurement or command is processed.
+  /// activeState() then does not include odometry composed since the last output.
+  int output_every = 1;
 };
 
 class FusionEngine {

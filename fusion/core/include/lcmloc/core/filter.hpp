@@ -137,6 +137,14 @@ class Filter {
   virtual std::optional<GateDecision> update(const LandmarkObservation&) { return std::nullopt; }
   /// One range-only beacon measurement (default: ignored).
   virtual std::optional<GateDecision> update(const BeaconRange&) { return std::nullopt; }
+  /// Status only: what state().status returns, without copying the state (per-message path).
+  virtual FilterStatus status() const { return state().status; }
+  /// Batched time update (fusion.output_every > 1): adds one odometry increment to a pending
+  /// SE(2) increment instead of updating the state. False when this filter cannot batch (the
+  /// caller then calls predict()). state() does not include a pending increment until
+  /// applyAccumulated() applies it with one time update.
+  virtual bool accumulate(const OdometryInput&) { return false; }
+  virtual void applyAccumulated() {}
 };
 
 /// Builds a filter of cfg.type over the marker map. Throws std::invalid_argument for an unknown

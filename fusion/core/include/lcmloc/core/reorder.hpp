@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <climits>
 #include <cstdint>
-#include <deque>
 #include <functional>
 #include <tuple>
 #include <utility>
@@ -28,10 +27,12 @@ class ReorderBuffer {
   explicit ReorderBuffer(int64_t window_us) : window_us_(window_us) {}
 
   /// Inserts an item. Returns false (and drops it) when it is older than what has already been
-  /// released (key <= last released), or is a duplicate key.
-  bool push(const OrderKey& key, T item) {
+  /// released (key <= last released), or is a duplicate key; a refused item is left untouched.
+  bool push(const OrderKey& key, const T& item) { return push(key, T(item)); }
+  bool push(const OrderKey& key, T&& item) {
     if (released_any_ && !(last_released_ < key)) return false;
-    if (items_.empty() || items_.back().first < key) {  // the usual case: in order
+    if (empty() || items_.back().first < key) {  // the usual case: in order
+      compact();
       items_.emplace_back(key, std::move(item));
     } else {
       const auto it = lowerBound(key);
@@ -45,19 +46,20 @@ class ReorderBuffer {
   /// Releases, in canonical order, every item older than newest - window.
   template <typename F>
   void releaseReady(F&& sink) {
-    while (!items_.empty() && items_.front().first.utime < newest_utime_ - window_us_) pop(sink);
+    while (!empty() && items_[head_].first.utime < newest_utime_ - window_us_) pop(sink);
   }
 
   /// Releases everything (end of input / shutdown).
   template <typename F>
   void flush(F&& sink) {
-    while (!items_.empty()) pop(sink);
+    while (!empty()) pop(sink);
   }
 
-  std::size_t size() const { return items_.size(); }
+  std::size_t size() const { return items_.size() - head_; }
+  bool empty() const { return head_ == items_.size(); }
   bool contains(const OrderKey& key) const {
     const auto it = lowerBound(key);
-    return it != items_.end() && !(key < it->first);
+    return it != items_.cend() && !(key < it->first);
   }
   /// Key of the last released item (meaningful once anything was released).
   bool releasedAny() const { return released_any_; }
@@ -66,28 +68,37 @@ class ReorderBuffer {
 
  private:
   using Item = std::pair<OrderKey, T>;
-  typename std::deque<Item>::const_iterator lowerBound(const OrderKey& key) const {
-    return std::lower_bound(items_.begin(), items_.end(), key,
+  typename std::vector<Item>::const_iterator lowerBound(const OrderKey& key) const {
+    return std::lower_bound(items_.cbegin() + static_cast<std::ptrdiff_t>(head_), items_.cend(), key,
                             [](const Item& a, const OrderKey& k) { return a.first < k; });
   }
-  typename std::deque<Item>::iterator lowerBound(const OrderKey& key) {
-    return std::lower_bound(items_.begin(), items_.end(), key,
+  typename std::vector<Item>::iterator lowerBound(const OrderKey& key) {
+    return std::lower_bound(items_.begin() + static_cast<std::ptrdiff_t>(head_), items_.end(), key,
                             [](const Item& a, const OrderKey& k) { return a.first < k; });
   }
   template <typename F>
   void pop(F& sink) {
-    last_released_ = items_.front().first;
+    last_released_ = items_[head_].first;
     released_any_ = true;
-    const OrderKey k = items_.front().first;
-    T v = std::move(items_.front().second);
-    items_.pop_front();
+    const OrderKey k = items_[head_].first;
+    T v = std::move(items_[head_].second);
+    ++head_;
     sink(k, v);
+  }
+  /// Drops the released items at the front before the storage would grow: the vector's
+  /// storage is reused, no allocation per item (an item can be large: a few hundred bytes).
+  void compact() {
+    if (head_ == 0 || items_.size() < items_.capacity()) return;
+    items_.erase(items_.begin(), items_.begin() + static_cast<std::ptrdiff_t>(head_));
+    head_ = 0;
   }
   int64_t window_us_;
   int64_t newest_utime_ = INT64_MIN;
   bool released_any_ = false;
   OrderKey last_released_;
-  std::deque<Item> items_;  ///< sorted by key (inputs arrive nearly in order: appends)
+  /// Sorted by key from head_ on (inputs arrive nearly in order: appends); [0, head_) released.
+  std::vector<Item> items_;
+  std::size_t head_ = 0;
 };
 
 }  // namespace lcmloc::core

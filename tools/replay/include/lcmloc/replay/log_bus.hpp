@@ -54,6 +54,9 @@ class LogBus : public common::MessageBus {
   };
   std::vector<Sub> subs_;
   std::map<std::string, std::vector<std::size_t>> route_;  ///< channel -> matching subs (cached)
+  /// The last route_ entry looked up (most events are on the channel of the event before).
+  const std::string* last_channel_ = nullptr;
+  const std::vector<std::size_t>* last_route_ = nullptr;
   std::unique_ptr<class LogWriter> writer_;
   int64_t written_ = 0;
   std::vector<std::pair<std::string, int64_t>> per_channel_;
