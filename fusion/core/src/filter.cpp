@@ -174,9 +174,10 @@ class DeadReckoningFilter final : public Filter {
     batch_.clear();
   }
   bool accumulate(const OdometryInput& odo) override {
-    if (isFinite(odo))
-      batch_.add(odo.delta_s, headingIncrement(odo, cfg_.wheelbase), odo.utime,
-                 poseProcessNoise(cfg_, odo.delta_s));
+    if (isFinite(odo)) {
+      const double dth = headingIncrement(odo, cfg_.wheelbase);
+      batch_.add(odo.delta_s, dth, odo.utime, poseProcessNoise(cfg_, odo.delta_s, dth));
+    }
     return true;
   }
   /// The Jacobians of eq. 1 are I + [0 0 -dy_k; 0 0 dx_k; 0 0 0] (world displacement of step k):
@@ -278,9 +279,10 @@ class RulerUkf final : public Filter {
     if constexpr (N != 3) {
       return false;
     } else {
-      if (isFinite(odo))
-        batch_.add(odo.delta_s, headingIncrement(odo, cfg_.wheelbase), odo.utime,
-                   poseProcessNoise(cfg_, odo.delta_s));
+      if (isFinite(odo)) {
+        const double dth = headingIncrement(odo, cfg_.wheelbase);
+        batch_.add(odo.delta_s, dth, odo.utime, poseProcessNoise(cfg_, odo.delta_s, dth));
+      }
       return true;
     }
   }
