@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "lcmloc/common/yaml_reader.hpp"
+#include "config_ins.hpp"
 #include "lcmloc/core/filter.hpp"
 
 namespace lcmloc::common {
@@ -230,6 +231,7 @@ void parseChannels(KeyReader& root, ChannelConfig& c) {
   r.get("heartbeat", c.heartbeat);
   r.get("imu", c.imu);
   r.get("gps", c.gps);
+  r.get("vision", c.vision);
   r.finish();
 }
 
@@ -248,6 +250,7 @@ void parseFusion(KeyReader& root, FusionConfig& f) {
     checkFilterType(f.shadow[i], root.file(), "fusion.shadow[" + std::to_string(i) + "]");
   r.get("reorder_window", f.reorder_window, 0.0, 10.0);
   r.get("status_period", f.status_period, 0.01, 3600.0);
+  ins_config::parseLandmarks(r, f.landmarks);
   r.finish();
 }
 
@@ -342,6 +345,7 @@ core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterC
     n.get("course_std", g.course_std, 0.0, 10.0);
     n.finish();
   }
+  ins_config::parseInsFilter(r, c.ins);
   r.finish();
   return c;
 }
@@ -370,6 +374,7 @@ SystemConfig parseSystemConfig(const std::string& yaml_text, const std::string& 
   parseChannels(root, cfg.channels);
   parseFusion(root, cfg.fusion);
   parseLogger(root, cfg.logger);
+  ins_config::parseInsSim(root, cfg.ins_sim);
   root.finish();
   return cfg;
 }

@@ -36,6 +36,7 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
   ec.filter = cfg.fusion.filter;
   ec.shadow = cfg.fusion.shadow;
   ec.reorder_window_us = static_cast<int64_t>(std::llround(cfg.fusion.reorder_window * 1e6));
+  ec.landmarks = cfg.fusion.landmarks;
   core::EngineOutputs out;
   out.on_state = [this](const std::string& f, bool active, const core::FilterState& s) { publishState(f, active, s); };
   out.on_decision = [this](const std::string& f, bool, const core::GateDecision& d) {
@@ -70,6 +71,9 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
       ch.imu, [this](const std::string& c, const lcmloc::imu_t& m, int64_t) { onImu(c, m); }, err);
   bus_.subscribe<lcmloc::gps_fix_t>(
       ch.gps, [this](const std::string& c, const lcmloc::gps_fix_t& m, int64_t) { onGps(c, m); }, err);
+  bus_.subscribe<lcmloc::landmark_bearings_t>(
+      ch.vision, [this](const std::string& c, const lcmloc::landmark_bearings_t& m, int64_t) { onBearings(c, m); },
+      err);
   bus_.subscribe<lcmloc::fusion_control_t>(
       ch.control, [this](const std::string& c, const lcmloc::fusion_control_t& m, int64_t) { onControl(c, m); },
       err);
@@ -176,6 +180,14 @@ void FusionDaemon::onGps(const std::string& ch, const lcmloc::gps_fix_t& m) {
   received(ch, m.seq);
   std::string why;
   auto in = common::toCore(m, ch, frame_, &why);
+  if (!in) return reject(ch, m.seq, m.utime, why);
+  push({ch, m.seq, m.utime, *in});
+}
+
+void FusionDaemon::onBearings(const std::string& ch, const lcmloc::landmark_bearings_t& m) {
+  received(ch, m.seq);
+  std::string why;
+  auto in = common::toCore(m, ch, &why);
   if (!in) return reject(ch, m.seq, m.utime, why);
   push({ch, m.seq, m.utime, *in});
 }

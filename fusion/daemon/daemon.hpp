@@ -18,6 +18,7 @@
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/imu_t.hpp"
+#include "lcmloc/landmark_bearings_t.hpp"
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
@@ -59,6 +60,7 @@ class FusionDaemon {
   void onControl(const std::string& ch, const lcmloc::fusion_control_t& m);
   void onImu(const std::string& ch, const lcmloc::imu_t& m);
   void onGps(const std::string& ch, const lcmloc::gps_fix_t& m);
+  void onBearings(const std::string& ch, const lcmloc::landmark_bearings_t& m);
   void onDecodeError(const std::string& ch, const std::string& why);
 
   bool received(const std::string& ch, int64_t seq);     ///< counts and checks the seq gap

@@ -19,4 +19,8 @@ void copyMatching(const FilterState& from, const std::vector<std::string>& names
 /// std::invalid_argument for an invalid configuration.
 std::unique_ptr<Filter> makeGnssFilter(const FilterConfig& cfg);
 
+/// The odometry/INS filters ("odo_ins", "odo_ins_uncal"); nullptr for another type. Throws
+/// std::invalid_argument for an invalid configuration.
+std::unique_ptr<Filter> makeOdoInsFilter(const FilterConfig& cfg);
+
 }  // namespace lcmloc::core::detail

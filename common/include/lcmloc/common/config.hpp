@@ -2,6 +2,7 @@
 // YAML configuration -> plain config structs. One file describes a whole system run
 // (config/paper.yaml); each process reads the sections it needs. Unknown keys, wrong types and
 // out-of-range values raise ConfigError naming the file, the key path and the reason.
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -10,6 +11,7 @@
 
 #include "lcmloc/common/geodesy.hpp"
 #include "lcmloc/core/filter.hpp"
+#include "lcmloc/models/ins_sim.hpp"
 #include "lcmloc/models/scenario_config.hpp"
 
 namespace lcmloc::common {
@@ -33,6 +35,7 @@ struct ChannelConfig {
   std::string heartbeat = "HEARTBEAT";
   std::string imu = "IMU";
   std::string gps = "GPS";
+  std::string vision = "VISION";  ///< landmark_bearings_t (three-landmark fix)
 };
 
 /// Where lcmloc-gps takes its fixes from (the `gps` section; the simulated receiver's model is
@@ -49,6 +52,9 @@ struct FusionConfig {
   std::vector<std::string> shadow;    ///< extra filter types run side by side (POSE_<TYPE>)
   double reorder_window = 0.05;       ///< canonical-order window of message time [s]
   double status_period = 1.0;         ///< FUSION_STATUS period of message time [s]
+  /// Landmark map for the three-landmark fix (`fusion.landmarks: [{id, x, y}, ...]`, local
+  /// metres, x east, y north).
+  std::map<int, core::Vec2> landmarks;
 };
 
 struct LoggerConfig {
@@ -72,6 +78,7 @@ struct SystemConfig {
   LoggerConfig logger;
   Datum datum;                        ///< origin of the local frame for lat/lon conversions
   GpsDriverConfig gps_driver;
+  models::InsSimConfig ins_sim;       ///< `ins_sim`: lcmloc-ins-sim and lcmloc-ins-experiment
 };
 
 /// Reads a system config file. Missing sections take defaults; throws ConfigError.

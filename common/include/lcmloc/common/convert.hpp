@@ -12,6 +12,7 @@
 #include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/imu_t.hpp"
+#include "lcmloc/landmark_bearings_t.hpp"
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
@@ -43,5 +44,9 @@ lcmloc::pose_t toLcm(const core::FilterState& s, const std::string& filter, int6
 void toLcm(const core::FilterState& s, const std::string& filter, int64_t seq, lcmloc::pose_t* out);
 lcmloc::gate_decision_t toLcm(const core::GateDecision& d, const std::string& filter, int64_t seq);
 core::FilterState toCore(const lcmloc::pose_t& m);
+/// Landmark bearings (VISION); nullopt (why set) when utime is negative, the count does not
+/// match the arrays or a bearing is NaN/Inf. Unknown ids are the engine's to refuse.
+std::optional<core::BearingsInput> toCore(const lcmloc::landmark_bearings_t& m, const std::string& channel,
+                                          std::string* why = nullptr);
 
 }  // namespace lcmloc::common

@@ -3,12 +3,14 @@
 // commands. Middleware-free; the daemon feeds it from LCM, the offline replay from a log file,
 // and both therefore compute the same outputs for the same input messages in the same order.
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <variant>
 #include <vector>
 
 #include "lcmloc/core/filter.hpp"
+#include "lcmloc/core/landmark_fix.hpp"
 #include "lcmloc/core/reorder.hpp"
 
 namespace lcmloc::core {
@@ -25,7 +27,7 @@ struct EngineInput {
   int64_t seq = 0;
   int64_t utime = 0;
   /// Alternatives are only ever appended (the index is part of the canonical tie-break).
-  std::variant<OdometryInput, RulerDetection, ControlCommand, ImuInput, GpsInput> payload;
+  std::variant<OdometryInput, RulerDetection, ControlCommand, ImuInput, GpsInput, BearingsInput> payload;
 };
 
 /// Outputs are delivered through callbacks, in processing order.
@@ -47,6 +49,13 @@ struct EngineConfig {
   /// Canonical tie-break rank at equal utime: control < odometry < ruler < imu < gps (by payload type);
   /// inputs of one type on different channels are ordered by a stable hash of the channel name,
   /// then by seq.
+  /// Landmark map (id -> x east, y north [m]) for three-landmark fixes from BearingsInput, and
+  /// the fix's options (bearing noise default, condition limit). A BearingsInput is turned into
+  /// a pose fix by damped least squares started from the active filter's pose and handed to
+  /// every filter's applyFix; refused (decision reason "bad_input" or "geometry", event
+  /// "bad_input" or "refused") on unknown ids, NaN, not three bearings or the danger circle.
+  std::map<int, Vec2> landmarks;
+  landmark::FixOptions fix;
 };
 
 class FusionEngine {
