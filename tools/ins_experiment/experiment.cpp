@@ -79,6 +79,7 @@ RunResult run(const std::string& name, const models::InsSimConfig& cfg, const co
       in.payload = m;
       engine.push(std::move(in));
     }
+    engine.flush();  // the state of this step (compared with this step's truth)
     auto it = latest.find("odo_ins");
     auto iu = latest.find("odo_ins_uncal");
     if (it == latest.end() || iu == latest.end() || it->second.x.size() < 4) continue;

@@ -3,6 +3,8 @@
 // time (Fig. 1) and position error of the calibrated odometry/INS against the traditional
 // integration (Fig. 2), for a hard start and a gentle start. Optionally writes the sensor log of
 // the first run (GROUND_TRUTH, IMU, ODOMETRY) for lcmloc-replay.
+#include <filesystem>
+
 #include <lcm/lcm-cpp.hpp>
 #include <spdlog/spdlog.h>
 
@@ -50,6 +52,8 @@ int main(int argc, char** argv) {
       int64_t ev = 0, truth_seq = 0, imu_seq = 0, odo_seq = 0;
       ins_experiment::StepSink sink;
       if (i == 0 && !log.empty()) {
+        const auto parent = std::filesystem::path(log).parent_path();
+        if (!parent.empty()) std::filesystem::create_directories(parent);
         lf = std::make_unique<lcm::LogFile>(log, "w");
         if (!lf->good()) throw std::runtime_error("cannot create '" + log + "'");
         sink = [&](const models::InsSimStep& st) {
