@@ -231,7 +231,7 @@ bool writeReport(const std::vector<RunResult>& runs, const models::InsSimConfig&
   gp << "set terminal pngcairo size 900,600 noenhanced\nset grid\n"
      << "set output 'fig1_scale.png'\nset title 'Fig. 1: odometer scale-error estimate, first 60 s of motion'\n"
      << "set xlabel 'time since the vehicle started [s]'\nset ylabel '|K_est - K_true|, filter 1 sigma'\n"
-     << "set logscale y\nset xrange [0:60]\nset key top right\nplot ";
+     << "set logscale y\nset format y '%g'\nset xrange [0:60]\nset key top right\nplot ";
   const char* colors[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd"};
   for (std::size_t i = 0; i < runs.size(); ++i)
     gp << (i ? ", " : "") << "'scale_" << runs[i].name << ".dat' using 2:5 with lines lw 2 lc rgb '"
@@ -244,7 +244,7 @@ bool writeReport(const std::vector<RunResult>& runs, const models::InsSimConfig&
     gp << (i ? ", " : "") << "'scale_" << runs[i].name << ".dat' using 1:5 with lines lc rgb '" << colors[i % 4]
        << "' title '" << runs[i].name << ": |error|'";
   gp << "\nset output 'fig2_position.png'\nset title 'Fig. 2: position error, calibrated vs traditional'\n"
-     << "set xlabel 't [s]'\nset ylabel 'horizontal error [m]'\nset autoscale\nset logscale y\nset key top left\nplot ";
+     << "set xlabel 't [s]'\nset ylabel 'horizontal error [m]'\nset autoscale\nset yrange [0.01:*]\nset format y '%g'\nset logscale y\nset key top left\nplot ";
   if (!runs.empty()) {
     const std::string f = "'position_" + runs[0].name + ".dat'";
     gp << f << " using 1:3 with lines lw 2 lc rgb '#1f77b4' title 'odo_ins (calibrated, closed loop)', " << f
