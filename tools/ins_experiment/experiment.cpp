@@ -44,7 +44,6 @@ RunResult run(const std::string& name, const models::InsSimConfig& cfg, const co
   int64_t odo_seq = 0, imu_seq = 0;
   double motion_start = -1, next_record = 0, next_progress = 0.1;
   bool start_recorded = false, ten_recorded = false, sixty_recorded = false;
-  double k_prev_state = 0;
   // Dead reckoning with the odo_ins heading: frozen scale estimate (after the calibration
   // stage) and no scale estimate (traditional).
   core::Vec2 dr_cal = core::Vec2::Zero(), dr_uncal = core::Vec2::Zero();
@@ -129,7 +128,6 @@ RunResult run(const std::string& name, const models::InsSimConfig& cfg, const co
       if (start_recorded && k_std < std_at_start / 10.0 && std_candidate < 0) std_candidate = tm;
       if (tm <= opt.early_window) r.scale.push_back({t, st.scale_error, k_est, k_std});
     }
-    (void)k_prev_state;
     const double ec_ = std::hypot(fc.x[0] - st.truth.x, fc.x[1] - st.truth.y);
     const double eu = std::hypot(fu.x[0] - st.truth.x, fu.x[1] - st.truth.y);
     r.max_err_cal = std::max(r.max_err_cal, ec_);
