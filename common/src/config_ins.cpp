@@ -15,8 +15,9 @@ void parseInsSim(KeyReader& root, models::InsSimConfig& c) {
   if (c.profile != "paper" && c.profile != "custom")
     throw ConfigError(root.file(), "ins_sim.profile", "unknown profile '" + c.profile + "' (valid: paper, custom)");
   r.get("start", c.start);
-  if (c.start != "hard" && c.start != "gentle")
-    throw ConfigError(root.file(), "ins_sim.start", "unknown start '" + c.start + "' (valid: hard, gentle)");
+  if (!models::insStartValid(c.start))
+    throw ConfigError(root.file(), "ins_sim.start",
+                      "unknown start '" + c.start + "' (valid: hard, gentle, gentle_turn, gentle_stopgo, steady)");
   YAML::Node segs = r.child("segments");
   if (segs && !segs.IsNull()) {
     const std::string kp = r.keyPath("segments");

@@ -230,16 +230,16 @@ bool writeReport(const std::vector<RunResult>& runs, const models::InsSimConfig&
      << "set output 'fig1_scale.png'\nset title 'Fig. 1: odometer scale-error estimate, first 60 s of motion'\n"
      << "set xlabel 'time since the vehicle started [s]'\nset ylabel '|K_est - K_true|, filter 1 sigma'\n"
      << "set logscale y\nset format y '%g'\nset xrange [0:60]\nset key top right\nplot ";
-  const char* colors[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd"};
+  const char* colors[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e"};
   for (std::size_t i = 0; i < runs.size(); ++i)
     gp << (i ? ", " : "") << "'scale_" << runs[i].name << ".dat' using 2:5 with lines lw 2 lc rgb '"
-       << colors[i % 4] << "' title '" << runs[i].name << ": |error|', 'scale_" << runs[i].name
-       << ".dat' using 2:6 with lines dt 2 lc rgb '" << colors[i % 4] << "' title '" << runs[i].name
+       << colors[i % 5] << "' title '" << runs[i].name << ": |error|', 'scale_" << runs[i].name
+       << ".dat' using 2:6 with lines dt 2 lc rgb '" << colors[i % 5] << "' title '" << runs[i].name
        << ": sigma'";
   gp << "\nset output 'fig1b_scale_run.png'\nset title 'Fig. 1b: scale-error estimate over the run'\n"
      << "set xlabel 't [s]'\nset autoscale x\nplot ";
   for (std::size_t i = 0; i < runs.size(); ++i)
-    gp << (i ? ", " : "") << "'scale_" << runs[i].name << ".dat' using 1:5 with lines lc rgb '" << colors[i % 4]
+    gp << (i ? ", " : "") << "'scale_" << runs[i].name << ".dat' using 1:5 with lines lc rgb '" << colors[i % 5]
        << "' title '" << runs[i].name << ": |error|'";
   gp << "\nset output 'fig2_position.png'\nset title 'Fig. 2: position error, calibrated vs traditional'\n"
      << "set xlabel 't [s]'\nset ylabel 'horizontal error [m]'\nset autoscale\nset yrange [0.01:*]\nset format y '%g'\nset logscale y\nset key top left\nplot ";

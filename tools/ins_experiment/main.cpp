@@ -26,7 +26,7 @@ int main(int argc, char** argv) {
   uint64_t seed = 0;
   ins_experiment::Options eo;
   app.add_option("--out", out, "output directory")->capture_default_str();
-  app.add_option("--starts", starts, "runs: start profiles (hard, gentle)")->delimiter(',')->capture_default_str();
+  app.add_option("--starts", starts, "runs: start profiles (hard, gentle, gentle_turn, gentle_stopgo, steady)")->delimiter(',')->capture_default_str();
   app.add_option("--duration", duration, "override ins_sim.duration [s]")->check(CLI::PositiveNumber);
   app.add_option("--seed", seed, "override ins_sim.seed");
   app.add_option("--calibration-stage", eo.calibration_stage,
@@ -42,8 +42,8 @@ int main(int argc, char** argv) {
     std::vector<ins_experiment::RunResult> runs;
     for (std::size_t i = 0; i < starts.size(); ++i) {
       const std::string& s = starts[i];
-      if (s != "hard" && s != "gentle") {
-        spdlog::error("--starts: unknown start '{}' (valid: hard, gentle)", s);
+      if (!models::insStartValid(s)) {
+        spdlog::error("--starts: unknown start '{}' (valid: hard, gentle, gentle_turn, gentle_stopgo, steady)", s);
         return common::kExitConfigError;
       }
       models::InsSimConfig c = ic;
@@ -80,11 +80,11 @@ int main(int argc, char** argv) {
       if (lf) spdlog::info("sensor log: {} ({} events)", log, ev);
     }
     const bool plotted = ins_experiment::writeReport(runs, ic, eo, out);
-    std::printf("%-14s %9s %10s %12s %12s %9s %10s %12s %12s %12s %12s\n", "run", "dist[km]", "|dK|first",
+    std::printf("%-20s %9s %10s %12s %12s %9s %10s %12s %12s %12s %12s\n", "run", "dist[km]", "|dK|first",
                 "|dK|10s", "sigma10s", "t_1ord[s]", "|dK|final", "odo_ins[m]", "uncal[m]", "dr_cal[m]",
                 "dr_trad[m]");
     for (const auto& r : runs)
-      std::printf("%-14s %9.2f %10.2e %12.2e %12.2e %9.1f %10.2e %12.2f %12.2f %12.2f %12.2f\n", r.name.c_str(),
+      std::printf("%-20s %9.2f %10.2e %12.2e %12.2e %9.1f %10.2e %12.2f %12.2f %12.2f %12.2f\n", r.name.c_str(),
                   r.distance_m / 1000, r.k_err_at_start, r.k_err_10s, r.k_std_10s, r.t_one_order_s, r.k_err_final,
                   r.final_err_cal, r.final_err_uncal, r.final_err_dr_cal, r.final_err_dr_uncal);
     std::printf("report: %s/report.json%s\n", out.c_str(),

@@ -15,6 +15,11 @@ void require(bool ok, const std::string& what) {
 }
 }  // namespace
 
+bool insStartValid(const std::string& start) {
+  return start == "hard" || start == "gentle" || start == "gentle_turn" || start == "gentle_stopgo" ||
+         start == "steady";
+}
+
 std::vector<InsMotionSegment> insProfile(const InsSimConfig& cfg) {
   if (cfg.profile == "custom") return cfg.segments;
   std::vector<InsMotionSegment> p;
@@ -22,7 +27,20 @@ std::vector<InsMotionSegment> insProfile(const InsSimConfig& cfg) {
   add(2.0, 0.0, 0.0);  // standing
   if (cfg.start == "gentle") {
     add(60.0, 0.2, 0.0);  // steady gentle acceleration from rest to 12 m/s
-    add(40.0, 0.0, 0.0);
+  } else if (cfg.start == "gentle_turn") {
+    add(2.0, 0.2, 0.0);   // the same with an early S-turn at walking speed
+    add(3.0, 0.2, 15.0);
+    add(3.0, 0.2, -15.0);
+    add(52.0, 0.2, 0.0);
+  } else if (cfg.start == "gentle_stopgo") {
+    for (int i = 0; i < 2; ++i) {  // two moderate stop-and-go pulses, then 0.5 m/s^2 to 12 m/s
+      add(3.0, 0.5, 0.0);
+      add(3.0, -0.5, 0.0);
+      add(1.0, 0.0, 0.0);
+    }
+    add(24.0, 0.5, 0.0);
+  } else if (cfg.start == "steady") {
+    add(12.0, 1.0, 0.0);  // 1 m/s^2 from rest to 12 m/s
   } else {
     add(4.0, 3.0, 0.0);    // hard start to 12 m/s
     add(3.0, 0.0, 10.0);   // early turn left 30 deg ...
@@ -31,7 +49,11 @@ std::vector<InsMotionSegment> insProfile(const InsSimConfig& cfg) {
     add(4.0, -3.0, 0.0);   // stop ...
     add(3.0, 0.0, 0.0);
     add(4.0, 3.0, 0.0);    // ... and go
-    add(73.0, 0.0, 0.0);
+  }
+  {
+    double t0 = 0.0;
+    for (const auto& s : p) t0 += s.duration;
+    add(std::max(1.0, 102.0 - t0), 0.0, 0.0);  // cruise at 12 m/s until 102 s
   }
   add(7.0, 1.0, 0.0);  // speeding up to 19 m/s
   double t = 0.0;
@@ -66,7 +88,7 @@ InsSim::InsSim(const InsSimConfig& cfg, int64_t start_utime)
   require(cfg.odometry_divider >= 1, "odometry_divider must be >= 1");
   require(cfg.duration > 0, "duration must be > 0");
   require(cfg.profile == "paper" || cfg.profile == "custom", "profile must be paper or custom");
-  require(cfg.start == "hard" || cfg.start == "gentle", "start must be hard or gentle");
+  require(insStartValid(cfg.start), "start must be one of hard, gentle, gentle_turn, gentle_stopgo, steady");
   require(cfg.profile != "custom" || !cfg.segments.empty(), "the custom profile needs segments");
   require(std::abs(cfg.latitude) < 89.0, "latitude must be within (-89, 89)");
   require(cfg.gyro_tau > 0 && cfg.accel_tau > 0 && cfg.scale_tau > 0, "correlation times must be > 0");

@@ -35,8 +35,10 @@ struct InsSimConfig {
   /// "paper": §II, 3600 s, about 65 km with starting, speeding, turning (the start below);
   /// "custom": the segments list.
   std::string profile = "paper";
-  /// Start of the paper profile: "hard" (3 m/s^2 for 4 s, an early 10 deg/s turn, one
-  /// stop-and-go) or "gentle" (0.2 m/s^2 from rest to 12 m/s, no early turn).
+  /// Start of the paper profile (all reach 12 m/s, cruise until 102 s, then the same run):
+  /// "hard" (3 m/s^2 for 4 s, an early 10 deg/s turn, one hard stop-and-go), "gentle" (0.2 m/s^2
+  /// from rest to 12 m/s), "gentle_turn" (the same with a 15 deg/s S-turn at 2-8 s),
+  /// "gentle_stopgo" (two 0.5 m/s^2 stop-and-go pulses, then 0.5 m/s^2), "steady" (1 m/s^2).
   std::string start = "hard";
   std::vector<InsMotionSegment> segments;  ///< "custom" profile
   double latitude = 40.0, longitude = 116.0, height = 0.0;  ///< start [deg, deg, m]
@@ -57,6 +59,8 @@ struct InsSimConfig {
   std::vector<std::pair<double, double>> imu_dropouts;
 };
 
+/// Whether start names a start of the paper profile.
+bool insStartValid(const std::string& start);
 /// The §II motion profile (or the custom one) as segments.
 std::vector<InsMotionSegment> insProfile(const InsSimConfig& cfg);
 
