@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "lcmloc/common/yaml_reader.hpp"
+#include "config_ins.hpp"
 #include "lcmloc/core/filter.hpp"
 
 namespace lcmloc::common {
@@ -232,6 +233,7 @@ void parseChannels(KeyReader& root, ChannelConfig& c) {
   r.get("gps", c.gps);
   r.get("landmarks", c.landmarks);
   r.get("beacons", c.beacons);
+  r.get("vision", c.vision);
   r.finish();
 }
 
@@ -256,6 +258,7 @@ void parseFusion(KeyReader& root, FusionConfig& f) {
     if (slash != std::string::npos) f.map_file = root.file().substr(0, slash + 1) + f.map_file;
   }
   r.get("output_every", f.output_every, 1, 1000000);
+  ins_config::parseLandmarks(r, f.landmarks);
   r.finish();
 }
 
@@ -358,6 +361,7 @@ core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterC
     l.get("beacon_std", c.landmarks.beacon_std, 1e-9, 1e6);
     l.finish();
   }
+  ins_config::parseInsFilter(r, c.ins);
   r.finish();
   return c;
 }
@@ -386,6 +390,7 @@ SystemConfig parseSystemConfig(const std::string& yaml_text, const std::string& 
   parseChannels(root, cfg.channels);
   parseFusion(root, cfg.fusion);
   parseLogger(root, cfg.logger);
+  ins_config::parseInsSim(root, cfg.ins_sim);
   root.finish();
   return cfg;
 }

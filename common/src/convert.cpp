@@ -317,4 +317,24 @@ std::optional<core::BeaconRange> toCore(const lcmloc::beacon_range_t& m, const s
   return b;
 }
 
+std::optional<core::BearingsInput> toCore(const lcmloc::landmark_bearings_t& m, const std::string& channel,
+                                          std::string* why) {
+  if (!validUtime(m.utime, why)) return std::nullopt;
+  if (m.count < 0 || static_cast<std::size_t>(m.count) != m.landmark_ids.size() ||
+      static_cast<std::size_t>(m.count) != m.bearings.size()) {
+    fail(why, "count does not match the landmark_ids/bearings arrays");
+    return std::nullopt;
+  }
+  for (double b : m.bearings)
+    if (!finiteField(b, "bearings[]", why)) return std::nullopt;
+  core::BearingsInput in;
+  in.utime = m.utime;
+  in.seq = m.seq;
+  in.sensor = channel;
+  in.ids.assign(m.landmark_ids.begin(), m.landmark_ids.end());
+  in.bearings.assign(m.bearings.begin(), m.bearings.end());
+  in.bearing_std = m.bearing_std;
+  return in;
+}
+
 }  // namespace lcmloc::common

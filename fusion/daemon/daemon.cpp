@@ -38,6 +38,7 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
   ec.shadow = cfg.fusion.shadow;
   ec.reorder_window_us = static_cast<int64_t>(std::llround(cfg.fusion.reorder_window * 1e6));
   ec.output_every = cfg.fusion.output_every;
+  ec.landmarks = cfg.fusion.landmarks;
   core::EngineOutputs out;
   out.on_state = [this](const std::string& f, bool active, const core::FilterState& s) { publishState(f, active, s); };
   out.on_decision = [this](const std::string& f, bool, const core::GateDecision& d) {
@@ -78,14 +79,17 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
       ch.landmarks, [this](const std::string& c, const lcmloc::landmark_obs_t& m, int64_t) { onLandmark(c, m); }, err);
   bus_.subscribe<lcmloc::beacon_range_t>(
       ch.beacons, [this](const std::string& c, const lcmloc::beacon_range_t& m, int64_t) { onBeacon(c, m); }, err);
+  bus_.subscribe<lcmloc::landmark_bearings_t>(
+      ch.vision, [this](const std::string& c, const lcmloc::landmark_bearings_t& m, int64_t) { onBearings(c, m); },
+      err);
   bus_.subscribe<lcmloc::fusion_control_t>(
       ch.control, [this](const std::string& c, const lcmloc::fusion_control_t& m, int64_t) { onControl(c, m); },
       err);
 
-  spdlog::info("filter {} (shadow: {}), {} markers, reorder window {:.3f} s; in: {}, {}, {}, {}, {}, {}, {}; out: {}, {}, {}",
+  spdlog::info("filter {} (shadow: {}), {} markers, reorder window {:.3f} s; in: {}, {}, {}, {}, {}, {}, {}, {}; out: {}, {}, {}",
                cfg.fusion.filter.type, cfg.fusion.shadow.empty() ? "none" : fmt::format("{}", fmt::join(cfg.fusion.shadow, ", ")),
                map.size(), cfg.fusion.reorder_window, ch.odometry, fmt::format("{}", fmt::join(ch.magruler, ", ")),
-               ch.imu, ch.gps, ch.landmarks, ch.beacons, ch.control, ch.pose, ch.gate, ch.status);
+               ch.imu, ch.gps, ch.landmarks, ch.beacons, ch.vision, ch.control, ch.pose, ch.gate, ch.status);
   if (!hold_) publishStatus("started", "filter " + engine_->activeFilter(), 0);
 }
 
@@ -197,6 +201,14 @@ void FusionDaemon::onLandmark(const std::string& ch, const lcmloc::landmark_obs_
 }
 
 void FusionDaemon::onBeacon(const std::string& ch, const lcmloc::beacon_range_t& m) {
+  received(ch, m.seq);
+  std::string why;
+  auto in = common::toCore(m, ch, &why);
+  if (!in) return reject(ch, m.seq, m.utime, why);
+  push({ch, m.seq, m.utime, *in});
+}
+
+void FusionDaemon::onBearings(const std::string& ch, const lcmloc::landmark_bearings_t& m) {
   received(ch, m.seq);
   std::string why;
   auto in = common::toCore(m, ch, &why);

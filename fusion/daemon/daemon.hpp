@@ -20,6 +20,7 @@
 #include "lcmloc/imu_t.hpp"
 #include "lcmloc/landmark_obs_t.hpp"
 #include "lcmloc/beacon_range_t.hpp"
+#include "lcmloc/landmark_bearings_t.hpp"
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
@@ -63,6 +64,7 @@ class FusionDaemon {
   void onGps(const std::string& ch, const lcmloc::gps_fix_t& m);
   void onLandmark(const std::string& ch, const lcmloc::landmark_obs_t& m);
   void onBeacon(const std::string& ch, const lcmloc::beacon_range_t& m);
+  void onBearings(const std::string& ch, const lcmloc::landmark_bearings_t& m);
   void onDecodeError(const std::string& ch, const std::string& why);
 
   bool received(const std::string& ch, int64_t seq);     ///< counts and checks the seq gap

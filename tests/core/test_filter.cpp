@@ -56,7 +56,7 @@ void drive(Filter& f, double metres, int64_t& utime) {
 
 TEST(FilterFactory, TypesUnknownTypeAndBadConfig) {
   const auto types = filterTypes();
-  ASSERT_EQ(types.size(), 7u);  // 4 magnetic-ruler filters + tvekf, ukf_gps + ukf_landmarks
+  ASSERT_EQ(types.size(), 9u);  // 4 magnetic-ruler filters + tvekf, ukf_gps + ukf_landmarks + odo_ins, odo_ins_uncal
   for (const auto& t : types) EXPECT_EQ(makeFilter(config(t), {})->name(), t);
   try {
     makeFilter(config("kalman_magic"), {});

@@ -1,6 +1,8 @@
 #include "lcmloc/core/engine.hpp"
 
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <stdexcept>
 #include <type_traits>
 
@@ -22,9 +24,10 @@ int typeRank(const EngineInput& in) {
     case 0: return 1;  // odometry
     case 1: return 2;  // ruler
     case 3: return 3;  // imu
+    case 4: return 4;  // gps
     case 5: return 5;  // landmark
     case 6: return 6;  // beacon
-    default: return 4; // gps
+    default: return 7; // bearings
   }
 }
 
@@ -195,6 +198,7 @@ struct FusionEngine::Impl {
   void handle(const EngineInput& in, const BeaconRange& m) {
     handleAbsolute(in, m, Measurement::Beacon, "beacon range");
   }
+  void handle(const EngineInput& in, const BearingsInput& b) { landmarkFix(in, b); }
 
   void handle(const EngineInput& in, const ControlCommand& cmd) {
     std::visit([&](const auto& c) { control(in.utime, c); }, cmd);
@@ -233,6 +237,8 @@ struct FusionEngine::Impl {
     event("ack", "reset " + active->name(), utime);
   }
 
+  void landmarkFix(const EngineInput& in, const BearingsInput& b);
+
   void control(int64_t utime, const SetPose& c) {
     if (!c.pose.allFinite() || !c.stddev.allFinite() || !(c.stddev.array() > 0).all()) {
       event("refused", "set_pose: pose must be finite and stddev > 0", utime);
@@ -251,6 +257,66 @@ struct FusionEngine::Impl {
     event("ack", "set_pose", utime);
   }
 };
+
+void FusionEngine::Impl::landmarkFix(const EngineInput& in, const BearingsInput& b) {
+  GateDecision d;
+  d.utime = in.utime;
+  d.sensor = b.sensor.empty() ? in.channel : b.sensor;
+  d.measurement_seq = in.seq;
+  d.gate = std::numeric_limits<double>::infinity();
+  auto refuse = [&](const std::string& reason, const std::string& ev, const std::string& why) {
+    d.reason = reason;
+    if (out.on_decision) out.on_decision(active->name(), true, d);
+    ++counters.rejected;
+    event(ev, in.channel + " seq " + std::to_string(in.seq) + ": landmark fix refused: " + why, in.utime);
+  };
+  if (b.ids.size() != b.bearings.size())
+    return refuse("bad_input", "bad_input", "ids and bearings differ in count");
+  for (double a : b.bearings)
+    if (!std::isfinite(a)) return refuse("bad_input", "bad_input", "non-finite bearing");
+  for (int id : b.ids)
+    if (!cfg.landmarks.count(id))
+      return refuse("bad_input", "bad_input", "landmark " + std::to_string(id) + " not in the map");
+  if (b.ids.size() != 3) return refuse("bad_input", "bad_input", "need exactly three bearings");
+  const FilterState prior = active->state();
+  if (!prior.x.head<3>().allFinite()) return refuse("bad_input", "bad_input", "filter pose not finite");
+  // Bearings CCW from the body x (forward) axis -> clockwise from the body axis (landmark_fix);
+  // theta CCW from east -> heading clockwise from north.
+  std::vector<landmark::Bearing> bs;
+  for (std::size_t i = 0; i < b.ids.size(); ++i) bs.push_back({b.ids[i], -b.bearings[i]});
+  landmark::FixOptions o = cfg.fix;
+  if (std::isfinite(b.bearing_std) && b.bearing_std > 0) o.sigma_bearing = b.bearing_std;
+  const double psi_prior = wrapAngle(M_PI / 2 - prior.x[2]);
+  const landmark::FixResult r =
+      landmark::leastSquaresFix(cfg.landmarks, bs, prior.x.head<2>(), psi_prior, o);
+  if (!r.ok) return refuse("geometry", "refused", r.error);
+  PoseFix fix;
+  fix.utime = in.utime;
+  fix.pose = Vec3(r.position.x(), r.position.y(), wrapAngle(M_PI / 2 - r.heading));
+  Mat3 J = Mat3::Identity();
+  J(2, 2) = -1.0;
+  fix.cov = J * r.covariance * J.transpose();
+  fix.source = in.channel;
+  d.innovation = fix.pose - prior.x.head<3>();
+  d.innovation[2] = wrapAngle(d.innovation[2]);
+  const Mat3 S = prior.P.topLeftCorner<3, 3>() + fix.cov;
+  d.mahalanobis = d.innovation.dot(S.ldlt().solve(Eigen::VectorXd(d.innovation)));
+  d.reason = "fix";
+  forEachFilter([&](Filter& f, bool is_active) {
+    GateDecision fd = d;
+    fd.accepted = f.applyFix(fix);
+    if (!fd.accepted) fd.reason = "bad_input";
+    if (is_active) ++(fd.accepted ? counters.accepted : counters.rejected);
+    if (out.on_decision) out.on_decision(f.name(), is_active, fd);
+    emitState(f, is_active);
+  });
+  char detail[200];
+  std::snprintf(detail, sizeof detail,
+                "landmark fix (x %.3f, y %.3f, theta %.6f), moved by (%.3f, %.3f, %.6f), condition %.1f",
+                fix.pose[0], fix.pose[1], fix.pose[2], d.innovation[0], d.innovation[1], d.innovation[2],
+                r.condition);
+  event("fix", in.channel + " seq " + std::to_string(in.seq) + ": " + detail, in.utime);
+}
 
 FusionEngine::FusionEngine(EngineConfig cfg, MarkerMap map, EngineOutputs out)
     : impl_(std::make_unique<Impl>(std::move(cfg), std::move(map), std::move(out))) {}

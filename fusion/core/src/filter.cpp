@@ -420,7 +420,21 @@ class RulerUkf final : public Filter {
 }  // namespace
 
 std::vector<std::string> filterTypes() {
-  return {"dead_reckoning", "ukf", "ukf_gated", "ukf_calib", "tvekf", "ukf_gps", "ukf_landmarks"};
+  return {"dead_reckoning", "ukf", "ukf_gated", "ukf_calib", "tvekf", "ukf_gps", "ukf_landmarks", "odo_ins",
+          "odo_ins_uncal"};
+}
+
+bool Filter::applyFix(const PoseFix& fix) {
+  if (!fix.pose.allFinite() || !fix.cov.allFinite()) return false;
+  FilterState s = state();
+  s.utime = std::max(s.utime, fix.utime);
+  s.x.head<3>() = fix.pose;
+  s.x[2] = wrapAngle(s.x[2]);
+  s.P.topRows<3>().setZero();
+  s.P.leftCols<3>().setZero();
+  s.P.topLeftCorner<3, 3>() = 0.5 * (fix.cov + fix.cov.transpose());
+  initialize(s);
+  return true;
 }
 
 std::unique_ptr<Filter> makeFilter(const FilterConfig& cfg, const MarkerMap& map) {
@@ -431,8 +445,9 @@ std::unique_ptr<Filter> makeFilter(const FilterConfig& cfg, const MarkerMap& map
   if (cfg.type == "ukf_calib") return std::make_unique<RulerUkf<5>>(cfg.type, cfg, map, true);
   if (auto f = detail::makeGnssFilter(cfg)) return f;
   if (auto f = detail::makeLandmarkFilter(cfg, map)) return f;
+  if (auto f = detail::makeOdoInsFilter(cfg)) return f;
   throw std::invalid_argument("filter config: unknown type '" + cfg.type +
-                              "' (known: dead_reckoning, ukf, ukf_gated, ukf_calib, tvekf, ukf_gps, ukf_landmarks)");
+                              "' (known: dead_reckoning, ukf, ukf_gated, ukf_calib, tvekf, ukf_gps, ukf_landmarks, odo_ins, odo_ins_uncal)");
 }
 
 }  // namespace lcmloc::core

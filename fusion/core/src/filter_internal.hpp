@@ -25,5 +25,8 @@ std::unique_ptr<Filter> makeLandmarkFilter(const FilterConfig& cfg, const Marker
 /// Pose process noise of one odometry step (x, y, theta variances): Pw over pw_distance of
 /// travel plus pw_turn |dtheta| on the heading.
 Vec3 poseProcessNoise(const FilterConfig& c, double ds, double dtheta);
+/// The odometry/INS filters ("odo_ins", "odo_ins_uncal"); nullptr for another type. Throws
+/// std::invalid_argument for an invalid configuration.
+std::unique_ptr<Filter> makeOdoInsFilter(const FilterConfig& cfg);
 
 }  // namespace lcmloc::core::detail

@@ -165,6 +165,7 @@ OdoInsFilter::OdoInsFilter(const InsState& s0, const Options& o) : o_(o), ins_(s
   for (int i = 0; i < 2; ++i) P_(kNabX + i, kNabX + i) = g.accel_markov * g.accel_markov;
   P_(kKc, kKc) = g.odo_scale * g.odo_scale;
   P_(kKr, kKr) = g.odo_white * g.odo_white;  // Markov part starts small, grows over tau
+  if (!o.estimate_scale) P_(kKc, kKc) = P_(kKr, kKr) = 0.0;
 }
 
 double OdoInsFilter::scaleStd() const {
@@ -191,7 +192,7 @@ bool OdoInsFilter::propagate(const Vec3& gyro_b, const Vec3& accel_b, double dt)
   Q.block<2, 2>(kDvE, kDvE) = Ca * Ca.transpose() * g.accel_white * g.accel_white * dt;
   for (int i = 0; i < 3; ++i) Q(kEpsX + i, kEpsX + i) = 2 * g.gyro_markov * g.gyro_markov / g.gyro_tau * dt;
   for (int i = 0; i < 2; ++i) Q(kNabX + i, kNabX + i) = 2 * g.accel_markov * g.accel_markov / g.accel_tau * dt;
-  Q(kKr, kKr) = 2 * g.odo_scale * g.odo_scale / g.odo_tau * dt;
+  Q(kKr, kKr) = o_.estimate_scale ? 2 * g.odo_markov * g.odo_markov / g.odo_tau * dt : 0.0;
   P_ = Phi * P_ * Phi.transpose() + Q;
   P_ = 0.5 * (P_ + P_.transpose());
   return true;
@@ -202,10 +203,14 @@ Vec3 OdoInsFilter::calibratedOdometerVelocity(double raw_speed) const {
 }
 
 bool OdoInsFilter::updateOdometer(double raw_speed) {
-  if (!std::isfinite(raw_speed)) return false;
+  return updateOdometerMean(raw_speed, ins_.state().v);
+}
+
+bool OdoInsFilter::updateOdometerMean(double raw_speed, const Vec3& v_ins_mean) {
+  if (!std::isfinite(raw_speed) || !v_ins_mean.allFinite()) return false;
   InsState& s = ins_.state();
   const Vec3 v_odo = calibratedOdometerVelocity(raw_speed);
-  const Vec2 z = s.v.head<2>() - v_odo.head<2>();
+  const Vec2 z = v_ins_mean.head<2>() - v_odo.head<2>();
   const HMat H = measurementMatrix(s.v, o_.attitude_term, o_.paper_exact_h);
   const double rv = o_.meas_vel_std * o_.meas_vel_std + std::pow(o_.grade.odo_white * raw_speed, 2);
   const Eigen::Matrix2d S = H * P_ * H.transpose() + rv * Eigen::Matrix2d::Identity();

@@ -2,6 +2,7 @@
 // YAML configuration -> plain config structs. One file describes a whole system run
 // (config/paper.yaml); each process reads the sections it needs. Unknown keys, wrong types and
 // out-of-range values raise ConfigError naming the file, the key path and the reason.
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -10,6 +11,7 @@
 
 #include "lcmloc/common/geodesy.hpp"
 #include "lcmloc/core/filter.hpp"
+#include "lcmloc/models/ins_sim.hpp"
 #include "lcmloc/models/scenario_config.hpp"
 
 namespace lcmloc::common {
@@ -35,6 +37,7 @@ struct ChannelConfig {
   std::string gps = "GPS";
   std::string landmarks = "LANDMARKS";  ///< landmark_obs_t
   std::string beacons = "BEACONS";      ///< beacon_range_t
+  std::string vision = "VISION";  ///< landmark_bearings_t (three-landmark fix)
 };
 
 /// Where lcmloc-gps takes its fixes from (the `gps` section; the simulated receiver's model is
@@ -57,6 +60,9 @@ struct FusionConfig {
   /// POSE after every N-th odometry message (and every measurement); the odometry in between is
   /// composed and applied with one time update (core::EngineConfig::output_every). 1 = every one.
   int output_every = 1;
+  /// Landmark map for the three-landmark fix (`fusion.landmarks: [{id, x, y}, ...]`, local
+  /// metres, x east, y north).
+  std::map<int, core::Vec2> landmarks;
 };
 
 struct LoggerConfig {
@@ -80,6 +86,7 @@ struct SystemConfig {
   LoggerConfig logger;
   Datum datum;                        ///< origin of the local frame for lat/lon conversions
   GpsDriverConfig gps_driver;
+  models::InsSimConfig ins_sim;       ///< `ins_sim`: lcmloc-ins-sim and lcmloc-ins-experiment
 };
 
 /// Reads a system config file. Missing sections take defaults; throws ConfigError.

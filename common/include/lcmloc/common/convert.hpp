@@ -14,6 +14,7 @@
 #include "lcmloc/imu_t.hpp"
 #include "lcmloc/landmark_obs_t.hpp"
 #include "lcmloc/beacon_range_t.hpp"
+#include "lcmloc/landmark_bearings_t.hpp"
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
@@ -52,5 +53,9 @@ std::optional<core::LandmarkObservation> toCore(const lcmloc::landmark_obs_t& m,
 /// Beacon range; nullopt (why set) when a field is NaN/Inf or the range or std is negative.
 std::optional<core::BeaconRange> toCore(const lcmloc::beacon_range_t& m, const std::string& channel,
                                         std::string* why = nullptr);
+/// Landmark bearings (VISION); nullopt (why set) when utime is negative, the count does not
+/// match the arrays or a bearing is NaN/Inf. Unknown ids are the engine's to refuse.
+std::optional<core::BearingsInput> toCore(const lcmloc::landmark_bearings_t& m, const std::string& channel,
+                                          std::string* why = nullptr);
 
 }  // namespace lcmloc::common

@@ -3,12 +3,14 @@
 // commands. Middleware-free; the daemon feeds it from LCM, the offline replay from a log file,
 // and both therefore compute the same outputs for the same input messages in the same order.
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <variant>
 #include <vector>
 
 #include "lcmloc/core/filter.hpp"
+#include "lcmloc/core/landmark_fix.hpp"
 #include "lcmloc/core/reorder.hpp"
 
 namespace lcmloc::core {
@@ -26,7 +28,7 @@ struct EngineInput {
   int64_t utime = 0;
   /// Alternatives are only ever appended (the index is part of the canonical tie-break).
   std::variant<OdometryInput, RulerDetection, ControlCommand, ImuInput, GpsInput, LandmarkObservation,
-               BeaconRange>
+               BeaconRange, BearingsInput>
       payload;
 };
 
@@ -56,6 +58,13 @@ struct EngineConfig {
   /// (Filter::accumulate), always before the next measurement or command is processed.
   /// activeState() then does not include odometry composed since the last output.
   int output_every = 1;
+  /// Landmark map (id -> x east, y north [m]) for three-landmark fixes from BearingsInput, and
+  /// the fix's options (bearing noise default, condition limit). A BearingsInput is turned into
+  /// a pose fix by damped least squares started from the active filter's pose and handed to
+  /// every filter's applyFix; refused (decision reason "bad_input" or "geometry", event
+  /// "bad_input" or "refused") on unknown ids, NaN, not three bearings or the danger circle.
+  std::map<int, Vec2> landmarks;
+  landmark::FixOptions fix;
 };
 
 class FusionEngine {

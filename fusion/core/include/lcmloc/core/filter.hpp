@@ -54,6 +54,32 @@ struct GnssConfig {
   double course_std = 0.02;        ///< extra 1 sigma of a course measurement [rad]
 };
 
+/// Parameters of the odometry/INS filters ("odo_ins", "odo_ins_uncal"; Wang & Wang §II; see
+/// docs/ins_experiment.md). Sensor grade defaults: §II of the paper.
+struct InsFilterConfig {
+  double latitude = 40.0;          ///< start (and local-frame origin) [deg]
+  double longitude = 116.0;        ///< [deg]
+  double height = 0.0;             ///< [m]
+  Vec3 init_att_std{0.5, 0.5, 3.0};  ///< initial attitude error 1 sigma (E, N, U) [arcmin]
+  double init_vel_std = 0.01;      ///< [m/s]
+  double init_pos_std = 0.1;       ///< [m]
+  double meas_vel_std = 0.01;      ///< odometer velocity measurement noise [m/s]
+  double gyro_markov = 0.1;        ///< gyro drift, first-order Markov 1 sigma [deg/h]
+  double gyro_tau = 1800.0;        ///< [s]
+  double gyro_white = 0.03;        ///< [deg/h] (std of a 1 s average)
+  double accel_markov = 1e-4;      ///< accelerometer bias, first-order Markov 1 sigma [g]
+  double accel_tau = 800.0;        ///< [s]
+  double accel_white = 1e-4;       ///< [g] (std of a 1 s average)
+  double odo_scale = 0.005;        ///< odometer scale error 1 sigma (constant part, initial)
+  double odo_markov = 0.005;       ///< Markov part 1 sigma (its process noise)
+  double odo_tau = 3600.0;         ///< [s]
+  double odo_white = 0.0003;       ///< white scale noise
+  bool attitude_term = true;       ///< heading coupling of the odometer velocity in H
+  bool paper_exact_h = false;      ///< the paper's printed H (no dKr column, no heading term)
+  double max_imu_gap = 0.1;        ///< IMU interval beyond this is a dropout: coast, report [s]
+  double max_coast = 5.0;          ///< longest dropout bridged by holding the last sample [s]
+};
+
 /// Parameters shared by every filter of the magnetic-ruler family (defaults: the paper, §4,
 /// as read in docs/paper_000_reading.md).
 struct FilterConfig {
@@ -102,6 +128,8 @@ struct FilterConfig {
     double bearing_std = 0.02;    ///< landmark bearing, 1 sigma [rad]
     double beacon_std = 0.1;      ///< beacon range, 1 sigma [m]
   } landmarks;
+  /// "odo_ins" and "odo_ins_uncal" only (they also use initial_pose for the start heading).
+  InsFilterConfig ins;
 };
 
 /// Measurement kinds a filter may use (Filter::uses).
@@ -145,6 +173,10 @@ class Filter {
   /// applyAccumulated() applies it with one time update.
   virtual bool accumulate(const OdometryInput&) { return false; }
   virtual void applyAccumulated() {}
+  /// Re-initializes from an absolute pose fix (three-landmark fix): default sets x, y, theta
+  /// and their covariance like SetPose (cross-covariances to other states zeroed). Returns
+  /// false when the fix was not applied.
+  virtual bool applyFix(const PoseFix& fix);
 };
 
 /// Builds a filter of cfg.type over the marker map. Throws std::invalid_argument for an unknown

@@ -89,6 +89,7 @@ struct ImuGrade {
   double accel_white = 1e-4 * 9.78;        ///< [m/s^2]
   double odo_scale = 0.005;                ///< initial scale error std (constant part)
   double odo_tau = 3600.0;                 ///< [s]
+  double odo_markov = 0.005;               ///< Markov part (dKr) 1 sigma (drives its process noise)
   double odo_white = 0.0003;               ///< white scale noise
 };
 
@@ -125,6 +126,8 @@ public:
     double meas_vel_std = 0.01;   ///< additive velocity noise [m/s]
     bool attitude_term = true;
     bool paper_exact_h = false;
+    /// false: the traditional integration that ignores the scale error (dKc, dKr held at 0).
+    bool estimate_scale = true;
   };
   OdoInsFilter(const InsState& s0, const Options& o);
 
@@ -133,6 +136,17 @@ public:
   bool propagate(const Vec3& gyro_b, const Vec3& accel_b, double dt);
   /// Odometer update with the raw forward speed [m/s] along body y. Returns false on bad input.
   bool updateOdometer(double raw_speed);
+  /// Odometer update over an interval: raw_speed is the odometer's mean speed over it and
+  /// v_ins_mean the INS's mean ENU velocity over the same interval (removes the lag between an
+  /// odometer increment and the INS velocity at its end under acceleration). The measurement
+  /// matrix uses the current filter-corrected INS velocity. Returns false on bad input.
+  bool updateOdometerMean(double raw_speed, const Vec3& v_ins_mean);
+
+  /// Mutable access for re-initialization (landmark fix): the navigation state and the error
+  /// covariance.
+  InsState& mutableState() { return ins_.state(); }
+  StateMat& mutableCovariance() { return P_; }
+  void setScaleEstimate(double k) { k_ = k; }
 
   const InsState& state() const { return ins_.state(); }
   /// Estimated total odometer scale error K: true speed = raw / (1 + K).

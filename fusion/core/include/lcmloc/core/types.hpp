@@ -112,4 +112,24 @@ struct GateDecision {
   std::string reason;          ///< "accepted", "ungated", "gate", "no_candidate", "bad_input"
 };
 
+/// Bearings to known landmarks (channel VISION), as landmark_bearings_t: each bearing is the
+/// angle from the body x (forward) axis to the landmark, CCW positive [rad].
+struct BearingsInput {
+  int64_t utime = 0;
+  int64_t seq = 0;
+  std::string sensor = "VISION";
+  std::vector<int> ids;
+  std::vector<double> bearings;
+  double bearing_std = 0.0;  ///< 1-sigma [rad]; <= 0 or NaN: the engine's default
+};
+
+/// An absolute pose (x, y, theta) with its covariance, e.g. from a three-landmark fix, used to
+/// re-initialize a filter (Filter::applyFix).
+struct PoseFix {
+  int64_t utime = 0;
+  Vec3 pose = Vec3::Zero();
+  Mat3 cov = Mat3::Identity();
+  std::string source;  ///< what produced it (for decisions and events)
+};
+
 }  // namespace lcmloc::core

@@ -1,0 +1,16 @@
+#pragma once
+// Config sections of the odometry/INS/vision method (seeds/004): `ins_sim`, `fusion.filter.ins`
+// and `fusion.landmarks`. Internal to common/src (called from config.cpp).
+#include <map>
+
+#include "lcmloc/common/yaml_reader.hpp"
+#include "lcmloc/core/filter.hpp"
+#include "lcmloc/models/ins_sim.hpp"
+
+namespace lcmloc::common::ins_config {
+
+void parseInsSim(KeyReader& root, models::InsSimConfig& c);
+void parseInsFilter(KeyReader& filter, core::InsFilterConfig& c);
+void parseLandmarks(KeyReader& fusion, std::map<int, core::Vec2>& landmarks);
+
+}  // namespace lcmloc::common::ins_config

@@ -1,0 +1,289 @@
+// The odometry/INS filters of Wang & Wang §II behind the Filter interface:
+//   "odo_ins"        the 14-state closed-loop Kalman filter with online odometer scale
+//                    calibration (ins::OdoInsFilter, eq. 2-8);
+//   "odo_ins_uncal"  the traditional odometry/INS integration that ignores the scale error
+//                    (the same filter with dKc, dKr held at 0).
+// IMU samples (Filter::update(ImuInput)) drive the INS; odometry increments (predict) are queued
+// and applied as velocity measurements once the INS has reached their time, with the INS mean
+// velocity over the same interval. See docs/ins_experiment.md.
+#include <cmath>
+#include <deque>
+#include <stdexcept>
+
+#include "filter_internal.hpp"
+#include "lcmloc/core/angles.hpp"
+#include "lcmloc/core/ins.hpp"
+
+namespace lcmloc::core {
+namespace {
+
+using ins::StateMat;
+
+constexpr double kDeg = M_PI / 180.0;
+constexpr double kG = 9.78;  ///< g of the sensor grade (as ins::ImuGrade)
+constexpr int64_t kMaxStepUs = 20000;  ///< longest INS step while bridging a gap [us]
+constexpr std::size_t kMaxPending = 10000;
+
+void check(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument("filter config: " + what);
+}
+
+class OdoInsAdapter : public Filter {
+ public:
+  OdoInsAdapter(const FilterConfig& cfg, bool estimate_scale)
+      : cfg_(cfg), name_(cfg.type), kf_(startState(cfg), options(cfg, estimate_scale)) {
+    const InsFilterConfig& c = cfg.ins;
+    lat0_ = c.latitude * kDeg;
+    lon0_ = c.longitude * kDeg;
+    const ins::Radii r = ins::radii(lat0_);
+    sy_ = r.rm + c.height;
+    sx_ = (r.rn + c.height) * std::cos(lat0_);
+    // Start position from initial_pose (x, y) in the local frame.
+    ins::InsState& s = kf_.mutableState();
+    s.lat = lat0_ + cfg.initial_pose[1] / sy_;
+    s.lon = lon0_ + cfg.initial_pose[0] / sx_;
+    names_ = {"x", "y", "theta", "odo_scale_error"};
+  }
+
+  std::string name() const override { return name_; }
+
+  FilterState state() const override {
+    FilterState s;
+    stateInto(s);
+    return s;
+  }
+
+  void stateInto(FilterState& out) const override {
+    const ins::InsState& s = kf_.state();
+    out.utime = utime_;
+    out.x.resize(4);
+    out.x << (s.lon - lon0_) * sx_, (s.lat - lat0_) * sy_, theta(), kf_.scaleEstimate();
+    Eigen::Matrix<double, 4, ins::kN> J = Eigen::Matrix<double, 4, ins::kN>::Zero();
+    J(0, ins::kDLon) = sx_;
+    J(1, ins::kDL) = sy_;
+    J(2, ins::kPhiU) = -1.0;
+    J(3, ins::kKc) = J(3, ins::kKr) = 1.0;
+    out.P = J * kf_.covariance() * J.transpose();
+    out.names = names_;
+    out.status = status_;
+  }
+
+  void initialize(const FilterState& from) override {
+    if (from.x.size() < 3 || from.P.rows() != from.x.size() || from.P.cols() != from.x.size() ||
+        !from.x.allFinite() || !from.P.allFinite())
+      throw std::invalid_argument(name_ + ": malformed initial state");
+    setPose(from.x.head<3>(), from.P.topLeftCorner<3, 3>());
+    for (std::size_t i = 3; i < from.names.size() && static_cast<Eigen::Index>(i) < from.x.size(); ++i)
+      if (from.names[i] == "odo_scale_error" && estimate_scale_) kf_.setScaleEstimate(from.x[i]);
+    utime_ = std::max(utime_, from.utime);
+  }
+
+  bool applyFix(const PoseFix& fix) override {
+    if (!fix.pose.allFinite() || !fix.cov.allFinite()) return false;
+    setPose(fix.pose, fix.cov);
+    utime_ = std::max(utime_, fix.utime);
+    return true;
+  }
+
+  void predict(const OdometryInput& odo) override {
+    if (!std::isfinite(odo.delta_s)) return;
+    utime_ = std::max(utime_, odo.utime);
+    if (!have_imu_) return;  // the INS has not started: nothing to compare the odometer with
+    if (odo.utime <= last_odo_utime_) return;
+    pending_.push_back(odo);
+    if (pending_.size() > kMaxPending) pending_.pop_front();
+    if (pending_.front().utime <= ins_utime_) {
+      applyPending();
+      return;
+    }
+    // IMU missing for longer than max_imu_gap: coast on the last sample and keep correcting.
+    if (odo.utime - ins_utime_ > gapUs()) {
+      if (status_ != FilterStatus::DeadReckoning) coast_started_ = ins_utime_;
+      status_ = FilterStatus::DeadReckoning;
+      advanceTo(odo.utime, last_gyro_, last_accel_);
+    }
+  }
+
+  bool uses(Measurement m) const override { return m == Measurement::Imu; }
+
+  GateDecision update(const RulerDetection& det) override {
+    GateDecision d;
+    d.utime = det.utime;
+    d.sensor = det.sensor;
+    d.measurement_seq = det.seq;
+    d.reason = "unused";
+    return d;
+  }
+
+  std::optional<GateDecision> update(const ImuInput& m) override {
+    GateDecision d;
+    d.utime = m.utime;
+    d.sensor = m.sensor;
+    d.measurement_seq = m.seq;
+    d.gate = std::numeric_limits<double>::infinity();
+    if (!m.gyro.allFinite() || !m.accel.allFinite()) {
+      d.reason = "bad_input";
+      return d;
+    }
+    // imu_t body frame (x forward, y left, z up) -> INS body frame (x right, y forward, z up).
+    const ins::Vec3 w(-m.gyro.y(), m.gyro.x(), m.gyro.z());
+    const ins::Vec3 f(-m.accel.y(), m.accel.x(), m.accel.z());
+    if (!have_imu_) {
+      have_imu_ = true;
+      ins_utime_ = last_imu_utime_ = m.utime;
+      last_odo_utime_ = std::max(last_odo_utime_, m.utime);
+      while (!pending_.empty() && pending_.front().utime <= m.utime) pending_.pop_front();
+      last_gyro_ = w;
+      last_accel_ = f;
+      status_ = FilterStatus::Ok;
+      utime_ = std::max(utime_, m.utime);
+      return std::nullopt;
+    }
+    if (m.utime <= last_imu_utime_) {
+      d.reason = "bad_input";  // time does not advance
+      return d;
+    }
+    const bool gap = m.utime - last_imu_utime_ > gapUs();
+    const int64_t gap_from = status_ == FilterStatus::DeadReckoning ? coast_started_ : last_imu_utime_;
+    if (m.utime > ins_utime_) advanceTo(m.utime, w, f);
+    last_imu_utime_ = m.utime;
+    last_gyro_ = w;
+    last_accel_ = f;
+    utime_ = std::max(utime_, m.utime);
+    if (!gap) return std::nullopt;
+    status_ = FilterStatus::Ok;
+    ++gaps_;
+    d.reason = "imu_gap";
+    d.accepted = true;  // used, after coasting over the gap
+    d.innovation = Eigen::VectorXd::Constant(1, (m.utime - gap_from) * 1e-6);  // gap length [s]
+    return d;
+  }
+
+ private:
+  static ins::InsState startState(const FilterConfig& cfg) {
+    ins::InsState s;
+    s.lat = cfg.ins.latitude * kDeg;
+    s.lon = cfg.ins.longitude * kDeg;
+    s.h = cfg.ins.height;
+    s.q_bn = Eigen::Quaterniond(ins::cbnFromHeading(M_PI / 2 - cfg.initial_pose[2]));
+    return s;
+  }
+
+  static ins::OdoInsFilter::Options options(const FilterConfig& cfg, bool estimate_scale) {
+    const InsFilterConfig& c = cfg.ins;
+    check(std::abs(c.latitude) < 89.0, "ins.latitude must be within (-89, 89) deg");
+    check(std::isfinite(c.longitude) && std::isfinite(c.height), "ins.longitude and ins.height must be finite");
+    check(c.init_att_std.allFinite() && (c.init_att_std.array() > 0).all(), "ins.init_att_std must be > 0");
+    check(c.init_vel_std > 0 && c.init_pos_std > 0 && c.meas_vel_std > 0,
+          "ins.init_vel_std, ins.init_pos_std and ins.meas_vel_std must be > 0");
+    check(c.gyro_tau > 0 && c.accel_tau > 0 && c.odo_tau > 0, "ins.*_tau must be > 0");
+    check(c.gyro_markov >= 0 && c.gyro_white >= 0 && c.accel_markov >= 0 && c.accel_white >= 0 &&
+              c.odo_scale >= 0 && c.odo_markov >= 0 && c.odo_white >= 0,
+          "ins sensor grade values must be >= 0");
+    check(c.max_imu_gap > 0, "ins.max_imu_gap must be > 0");
+    ins::OdoInsFilter::Options o;
+    o.grade.gyro_markov = c.gyro_markov * ins::kDegPerHour;
+    o.grade.gyro_tau = c.gyro_tau;
+    o.grade.gyro_white = c.gyro_white * ins::kDegPerHour;
+    o.grade.accel_markov = c.accel_markov * kG;
+    o.grade.accel_tau = c.accel_tau;
+    o.grade.accel_white = c.accel_white * kG;
+    o.grade.odo_scale = c.odo_scale;
+    o.grade.odo_tau = c.odo_tau;
+    o.grade.odo_markov = c.odo_markov;
+    o.grade.odo_white = c.odo_white;
+    o.init_att_std = c.init_att_std * ins::kArcMin;
+    o.init_vel_std = c.init_vel_std;
+    o.init_pos_std = c.init_pos_std;
+    o.meas_vel_std = c.meas_vel_std;
+    o.attitude_term = c.attitude_term;
+    o.paper_exact_h = c.paper_exact_h;
+    o.estimate_scale = estimate_scale;
+    return o;
+  }
+
+  double theta() const { return wrapAngle(M_PI / 2 - ins::headingOf(kf_.state().cbn())); }
+  int64_t gapUs() const { return static_cast<int64_t>(std::llround(cfg_.ins.max_imu_gap * 1e6)); }
+
+  /// Re-initializes position and heading (covariance: the given 3x3 over x, y, theta, cross terms
+  /// to the other error states zeroed). The body-frame velocity is kept (rotated with the heading).
+  void setPose(const Vec3& pose, const Mat3& cov) {
+    ins::InsState& s = kf_.mutableState();
+    const ins::Vec3 v_b = s.cbn().transpose() * s.v;
+    const double dtheta = wrapAngle(pose[2] - theta());
+    s.q_bn = (Eigen::Quaterniond(Eigen::AngleAxisd(dtheta, ins::Vec3::UnitZ())) * s.q_bn).normalized();
+    s.v = s.cbn() * v_b;
+    s.lat = lat0_ + pose[1] / sy_;
+    s.lon = lon0_ + pose[0] / sx_;
+    StateMat& P = kf_.mutableCovariance();
+    const int idx[3] = {ins::kDLon, ins::kDL, ins::kPhiU};
+    const double scale[3] = {1.0 / sx_, 1.0 / sy_, -1.0};
+    for (int i : idx) {
+      P.row(i).setZero();
+      P.col(i).setZero();
+    }
+    const Mat3 c = 0.5 * (cov + cov.transpose());
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) P(idx[a], idx[b]) = scale[a] * scale[b] * c(a, b);
+  }
+
+  /// Propagates the INS to t with one sample (held over the interval, in steps of at most
+  /// kMaxStepUs when bridging a gap) and applies the queued odometer increments on the way.
+  void advanceTo(int64_t t, const ins::Vec3& w, const ins::Vec3& f) {
+    while (ins_utime_ < t) {
+      int64_t next = std::min(t, ins_utime_ + kMaxStepUs);
+      if (!pending_.empty() && pending_.front().utime > ins_utime_ && pending_.front().utime < next)
+        next = pending_.front().utime;
+      const double dt = (next - ins_utime_) * 1e-6;
+      const ins::Vec3 v0 = kf_.state().v;
+      if (kf_.propagate(w, f, dt)) {
+        v_sum_ += 0.5 * (v0 + kf_.state().v) * dt;
+        t_sum_ += dt;
+      }
+      ins_utime_ = next;
+      applyPending();
+    }
+  }
+
+  void applyPending() {
+    while (!pending_.empty() && pending_.front().utime <= ins_utime_) {
+      const OdometryInput o = pending_.front();
+      pending_.pop_front();
+      const double dt = (o.utime - last_odo_utime_) * 1e-6;
+      if (dt <= 0) continue;
+      last_odo_utime_ = o.utime;
+      const double raw_speed = o.delta_s / dt;
+      const ins::Vec3 v_mean = t_sum_ > 0.5 * dt ? ins::Vec3(v_sum_ / t_sum_) : kf_.state().v;
+      kf_.updateOdometerMean(raw_speed, v_mean);
+      v_sum_.setZero();
+      t_sum_ = 0.0;
+    }
+  }
+
+  FilterConfig cfg_;
+  std::string name_;
+  ins::OdoInsFilter kf_;
+  bool estimate_scale_ = cfg_.type == "odo_ins";
+  double lat0_ = 0, lon0_ = 0, sx_ = 1, sy_ = 1;
+  std::vector<std::string> names_;
+  int64_t utime_ = 0, ins_utime_ = 0, last_imu_utime_ = 0, last_odo_utime_ = INT64_MIN, coast_started_ = 0;
+  bool have_imu_ = false;
+  ins::Vec3 last_gyro_ = ins::Vec3::Zero(), last_accel_ = ins::Vec3::Zero();
+  ins::Vec3 v_sum_ = ins::Vec3::Zero();
+  double t_sum_ = 0.0;
+  std::deque<OdometryInput> pending_;
+  FilterStatus status_ = FilterStatus::Uninitialized;
+  int64_t gaps_ = 0;
+};
+
+}  // namespace
+
+namespace detail {
+std::unique_ptr<Filter> makeOdoInsFilter(const FilterConfig& cfg) {
+  if (cfg.type == "odo_ins") return std::make_unique<OdoInsAdapter>(cfg, true);
+  if (cfg.type == "odo_ins_uncal") return std::make_unique<OdoInsAdapter>(cfg, false);
+  return nullptr;
+}
+}  // namespace detail
+
+}  // namespace lcmloc::core

@@ -1,0 +1,292 @@
+// The odo_ins filter behind the Filter interface and the engine: IMU + odometry in, pose out;
+// bad input (NaN IMU sample, IMU dropout); the three-landmark fix through the engine
+// re-initializes the filter (position and heading jump to the fix, covariance reset).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "lcmloc/core/angles.hpp"
+#include "lcmloc/core/engine.hpp"
+#include "lcmloc/core/ins.hpp"
+#include "lcmloc/core/landmark_fix.hpp"
+
+using namespace lcmloc::core;
+
+namespace {
+
+constexpr double kLat = 40.0 * M_PI / 180.0, kLon = 116.0 * M_PI / 180.0;
+
+FilterConfig insConfig(double theta0 = M_PI / 2) {
+  FilterConfig c;
+  c.type = "odo_ins";
+  c.initial_pose = Vec3(0.0, 0.0, theta0);
+  return c;
+}
+
+/// IMU sample (imu_t frame: x forward, y left, z up) of a vehicle standing at 40 N with heading
+/// theta (CCW from east).
+ImuInput standingImu(int64_t utime, double theta) {
+  ins::InsState s;
+  s.lat = kLat;
+  s.lon = kLon;
+  s.q_bn = Eigen::Quaterniond(ins::cbnFromHeading(M_PI / 2 - theta));
+  ins::Vec3 w, f;
+  ins::idealImu(s, ins::Vec3::Zero(), ins::Vec3::Zero(), &w, &f);
+  ImuInput m;
+  m.utime = utime;
+  m.gyro = Vec3(w.y(), -w.x(), w.z());
+  m.accel = Vec3(f.y(), -f.x(), f.z());
+  return m;
+}
+
+struct Recorder {
+  std::vector<std::pair<std::string, std::string>> events;
+  std::vector<GateDecision> decisions;
+  EngineOutputs outputs() {
+    EngineOutputs o;
+    o.on_event = [this](const std::string& e, const std::string& d, int64_t) { events.emplace_back(e, d); };
+    o.on_decision = [this](const std::string&, bool active, const GateDecision& d) {
+      if (active) decisions.push_back(d);
+    };
+    return o;
+  }
+  bool hasEvent(const std::string& e) const {
+    for (const auto& x : events)
+      if (x.first == e) return true;
+    return false;
+  }
+};
+
+EngineInput input(const std::string& ch, int64_t seq, int64_t utime, decltype(EngineInput::payload) p) {
+  EngineInput in;
+  in.channel = ch;
+  in.seq = seq;
+  in.utime = utime;
+  in.payload = std::move(p);
+  return in;
+}
+
+/// Feeds n standing IMU samples and zero odometry at 100 Hz from utime t0.
+void stand(FusionEngine& e, int64_t t0, int n, double theta, int64_t* seq) {
+  for (int k = 0; k < n; ++k) {
+    const int64_t t = t0 + k * 10000;
+    OdometryInput o;
+    o.utime = t;
+    e.push(input("ODOMETRY", (*seq), t, o));
+    e.push(input("IMU", (*seq)++, t, standingImu(t, theta)));
+  }
+}
+
+}  // namespace
+
+TEST(OdoInsFilter, RegisteredAndReportsPoseAndScale) {
+  const auto types = filterTypes();
+  EXPECT_NE(std::find(types.begin(), types.end(), "odo_ins"), types.end());
+  EXPECT_NE(std::find(types.begin(), types.end(), "odo_ins_uncal"), types.end());
+  auto f = makeFilter(insConfig(0.3), {});
+  const FilterState s = f->state();
+  ASSERT_EQ(s.x.size(), 4);
+  EXPECT_EQ(s.names[3], "odo_scale_error");
+  EXPECT_NEAR(s.x[2], 0.3, 1e-12);
+  EXPECT_EQ(s.status, FilterStatus::Uninitialized);  // no IMU sample yet
+  EXPECT_NEAR(std::sqrt(s.P(3, 3)), 0.005 * std::sqrt(1 + 0.0003 * 0.0003 / 0.005 / 0.005), 1e-6);
+  FilterConfig bad = insConfig();
+  bad.ins.meas_vel_std = 0.0;
+  EXPECT_THROW(makeFilter(bad, {}), std::invalid_argument);
+}
+
+TEST(OdoInsFilter, StandingStaysPutThroughTheEngine) {
+  Recorder rec;
+  EngineConfig ec;
+  ec.filter = insConfig(0.7);
+  ec.reorder_window_us = 0;
+  FusionEngine e(ec, {}, rec.outputs());
+  int64_t seq = 0;
+  stand(e, 1000000, 6000, 0.7, &seq);  // 60 s
+  e.flush();
+  const FilterState s = e.activeState();
+  EXPECT_EQ(s.status, FilterStatus::Ok);
+  EXPECT_LT(std::hypot(s.x[0], s.x[1]), 0.01);
+  EXPECT_NEAR(s.x[2], 0.7, 1e-4);
+  EXPECT_TRUE(rec.events.empty());
+}
+
+TEST(OdoInsFilter, NanImuSampleRefusedStateUnchanged) {
+  Recorder rec;
+  EngineConfig ec;
+  ec.filter = insConfig();
+  ec.reorder_window_us = 0;
+  FusionEngine e(ec, {}, rec.outputs());
+  int64_t seq = 0;
+  stand(e, 1000000, 100, M_PI / 2, &seq);
+  const FilterState before = e.activeState();
+  ImuInput bad = standingImu(2000000, M_PI / 2);
+  bad.accel.x() = std::nan("");
+  e.push(input("IMU", seq++, 2000000, bad));
+  e.flush();
+  EXPECT_TRUE(rec.hasEvent("bad_input"));
+  EXPECT_EQ(e.activeState().x, before.x);
+  // The filter itself refuses it too (when driven directly).
+  auto f = makeFilter(insConfig(), {});
+  f->update(standingImu(0, M_PI / 2));
+  const auto d = f->update(bad);
+  ASSERT_TRUE(d.has_value());
+  EXPECT_EQ(d->reason, "bad_input");
+  EXPECT_FALSE(d->accepted);
+}
+
+TEST(OdoInsFilter, ImuDropoutCoastsOnOdometryAndIsReported) {
+  Recorder rec;
+  EngineConfig ec;
+  ec.filter = insConfig();
+  ec.reorder_window_us = 0;
+  std::vector<FilterStatus> statuses;
+  EngineOutputs out = rec.outputs();
+  out.on_state = [&](const std::string&, bool, const FilterState& s) { statuses.push_back(s.status); };
+  FusionEngine e(ec, {}, out);
+  int64_t seq = 0;
+  stand(e, 1000000, 100, M_PI / 2, &seq);
+  // 2 s of odometry without IMU samples.
+  for (int k = 0; k < 200; ++k) {
+    OdometryInput o;
+    o.utime = 2000000 + k * 10000;
+    e.push(input("ODOMETRY", seq++, o.utime, o));
+  }
+  EXPECT_EQ(e.activeState().status, FilterStatus::DeadReckoning);
+  EXPECT_GE(e.activeState().utime, 3900000);
+  stand(e, 4000000, 100, M_PI / 2, &seq);
+  e.flush();
+  int gaps = 0;
+  for (const auto& d : rec.decisions)
+    if (d.reason == "imu_gap") {
+      ++gaps;
+      ASSERT_EQ(d.innovation.size(), 1);
+      EXPECT_NEAR(d.innovation[0], 2.0, 0.05);  // gap length [s]
+    }
+  EXPECT_EQ(gaps, 1);
+  const FilterState s = e.activeState();
+  EXPECT_EQ(s.status, FilterStatus::Ok);
+  EXPECT_LT(std::hypot(s.x[0], s.x[1]), 0.05);
+  EXPECT_TRUE(s.x.allFinite());
+}
+
+namespace {
+std::map<int, Vec2> triangle(double side) {
+  const double r = side / std::sqrt(3.0);
+  std::map<int, Vec2> m;
+  for (int i = 0; i < 3; ++i) {
+    const double a = M_PI / 2 + i * 2 * M_PI / 3;
+    m[i + 1] = Vec2(r * std::cos(a), r * std::sin(a));
+  }
+  return m;
+}
+/// Bearings (CCW from the body x axis) from pose (p, theta) to the landmarks.
+BearingsInput bearingsFrom(const Vec2& p, double theta, const std::map<int, Vec2>& map, int64_t utime) {
+  BearingsInput b;
+  b.utime = utime;
+  for (const auto& [id, lm] : map) {
+    b.ids.push_back(id);
+    b.bearings.push_back(wrapAngle(std::atan2(lm.y() - p.y(), lm.x() - p.x()) - theta));
+  }
+  b.bearing_std = 30.0 * ins::kArcSec;
+  return b;
+}
+}  // namespace
+
+TEST(OdoInsFilter, LandmarkFixThroughTheEngineReinitializes) {
+  // The filter believes it is at (0, 0) heading north; the vehicle really stands 500 m east and
+  // 500 m south of that, heading 30' further left (INS error (500, -500) m, -30').
+  const auto map = triangle(1000.0);
+  Recorder rec;
+  EngineConfig ec;
+  const Vec2 p_true(12.0, -7.0);
+  const double theta_true = M_PI / 2 + 30.0 * ins::kArcMin;
+  ec.filter = insConfig(M_PI / 2);
+  ec.filter.initial_pose = Vec3(p_true.x() - 500.0, p_true.y() + 500.0, M_PI / 2);
+  ec.reorder_window_us = 0;
+  ec.landmarks = map;
+  FusionEngine e(ec, {}, rec.outputs());
+  int64_t seq = 0;
+  stand(e, 1000000, 100, M_PI / 2, &seq);
+  const FilterState before = e.activeState();
+  ASSERT_GT(std::hypot(before.x[0] - p_true.x(), before.x[1] - p_true.y()), 700.0);
+  e.push(input("VISION", 0, 2000000, bearingsFrom(p_true, theta_true, map, 2000000)));
+  e.flush();
+  const FilterState after = e.activeState();
+  EXPECT_NEAR(after.x[0], p_true.x(), 1e-3);
+  EXPECT_NEAR(after.x[1], p_true.y(), 1e-3);
+  EXPECT_NEAR(wrapAngle(after.x[2] - theta_true), 0.0, 1e-6);
+  // Covariance of (x, y, theta) reset to the fix's (Cramér-Rao) covariance, heading sign flipped.
+  const Mat3 crb = landmark::cramerRao(p_true, {map.at(1), map.at(2), map.at(3)}, 30.0 * ins::kArcSec);
+  Mat3 J = Mat3::Identity();
+  J(2, 2) = -1;
+  const Mat3 expect = J * crb * J.transpose();
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) EXPECT_NEAR(after.P(i, j), expect(i, j), 1e-6 * expect.norm()) << i << "," << j;
+  ASSERT_FALSE(rec.decisions.empty());
+  EXPECT_EQ(rec.decisions.back().reason, "fix");
+  EXPECT_TRUE(rec.decisions.back().accepted);
+  EXPECT_TRUE(rec.hasEvent("fix"));
+  // The INS keeps running from the fix: standing still, it stays there.
+  stand(e, 2010000, 300, theta_true, &seq);
+  e.flush();
+  const FilterState later = e.activeState();
+  EXPECT_LT(std::hypot(later.x[0] - p_true.x(), later.x[1] - p_true.y()), 0.05);
+  EXPECT_NEAR(wrapAngle(later.x[2] - theta_true), 0.0, 1e-4);
+}
+
+TEST(OdoInsFilter, LandmarkFixRefusals) {
+  const auto map = triangle(1000.0);
+  Recorder rec;
+  EngineConfig ec;
+  ec.filter = insConfig();
+  ec.reorder_window_us = 0;
+  ec.landmarks = map;
+  FusionEngine e(ec, {}, rec.outputs());
+  int64_t seq = 0;
+  stand(e, 1000000, 50, M_PI / 2, &seq);
+  const FilterState before = e.activeState();
+  // Unknown landmark id.
+  BearingsInput b = bearingsFrom(Vec2(0, 0), M_PI / 2, map, 1500000);
+  b.ids[1] = 42;
+  e.push(input("VISION", 1, 1500000, b));
+  e.flush();
+  ASSERT_FALSE(rec.decisions.empty());
+  EXPECT_EQ(rec.decisions.back().reason, "bad_input");
+  EXPECT_FALSE(rec.decisions.back().accepted);
+  // NaN bearing.
+  b = bearingsFrom(Vec2(0, 0), M_PI / 2, map, 1500000);
+  b.bearings[0] = std::nan("");
+  e.push(input("VISION", 2, 1500000, b));
+  e.flush();
+  EXPECT_EQ(rec.decisions.back().reason, "bad_input");
+  // Vehicle on the danger circle (the circle through the three landmarks).
+  const double r = 1000.0 / std::sqrt(3.0);
+  const Vec2 on_circle(r * std::cos(0.3), r * std::sin(0.3));
+  FusionEngine e2(ec, {}, rec.outputs());
+  FilterState s = e2.activeState();
+  s.x.head<2>() = on_circle;
+  e2.initialize(s);
+  e2.push(input("VISION", 3, 1600000, bearingsFrom(on_circle, M_PI / 2, map, 1600000)));
+  e2.flush();
+  EXPECT_EQ(rec.decisions.back().reason, "geometry");
+  EXPECT_TRUE(rec.hasEvent("refused"));
+  EXPECT_EQ(e.activeState().x, before.x);
+}
+
+TEST(OdoInsFilter, DefaultApplyFixSetsPoseOfOtherFilters) {
+  FilterConfig c;
+  c.type = "dead_reckoning";
+  auto f = makeFilter(c, {});
+  PoseFix fix;
+  fix.utime = 5;
+  fix.pose = Vec3(3.0, 4.0, 0.5);
+  fix.cov = Mat3::Identity() * 0.04;
+  EXPECT_TRUE(f->applyFix(fix));
+  const FilterState s = f->state();
+  EXPECT_EQ(s.x.head<3>(), fix.pose);
+  EXPECT_NEAR(s.P(0, 0), 0.04, 1e-12);
+  fix.pose[0] = std::nan("");
+  EXPECT_FALSE(f->applyFix(fix));
+}
