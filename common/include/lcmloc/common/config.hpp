@@ -33,6 +33,7 @@ struct ChannelConfig {
   std::string heartbeat = "HEARTBEAT";
   std::string imu = "IMU";
   std::string gps = "GPS";
+  std::string vision = "VISION";
 };
 
 /// Where lcmloc-gps takes its fixes from (the `gps` section; the simulated receiver's model is

@@ -6,12 +6,14 @@
 #include "lcmloc/common/geodesy.hpp"
 #include "lcmloc/core/types.hpp"
 #include "lcmloc/models/gnss_sensors.hpp"
+#include "lcmloc/models/vision_sensor.hpp"
 #include "lcmloc/models/world.hpp"
 #include "lcmloc/fault_event_t.hpp"
 #include "lcmloc/gate_decision_t.hpp"
 #include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/imu_t.hpp"
+#include "lcmloc/landmark_bearings_t.hpp"
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
@@ -43,5 +45,7 @@ lcmloc::pose_t toLcm(const core::FilterState& s, const std::string& filter, int6
 void toLcm(const core::FilterState& s, const std::string& filter, int64_t seq, lcmloc::pose_t* out);
 lcmloc::gate_decision_t toLcm(const core::GateDecision& d, const std::string& filter, int64_t seq);
 core::FilterState toCore(const lcmloc::pose_t& m);
+/// Bearings to landmarks -> landmark_bearings_t (channel VISION).
+lcmloc::landmark_bearings_t toLcm(const models::VisionSample& s, int64_t seq);
 
 }  // namespace lcmloc::common
