@@ -30,6 +30,15 @@ std::map<int, Eigen::Vector2d> landmarkMap(const std::vector<Landmark>& landmark
   return m;
 }
 
+std::vector<core::landmark::Bearing> toFixBearings(const VisionSample& s) {
+  std::vector<core::landmark::Bearing> b;
+  for (std::size_t i = 0; i < s.ids.size() && i < s.bearings.size(); ++i)
+    b.push_back({s.ids[i], core::wrapAngle(-s.bearings[i])});
+  return b;
+}
+
+double toFixHeading(double heading) { return core::wrapAngle(0.5 * M_PI - heading); }
+
 VisionSensor::VisionSensor(const VisionSensorConfig& cfg, std::vector<Landmark> landmarks, uint64_t seed)
     : cfg_(cfg), landmarks_(std::move(landmarks)), rng_(seed) {
   if (!(cfg_.rate_hz > 0.0) || !std::isfinite(cfg_.rate_hz)) throw std::invalid_argument("vision.rate_hz: must be > 0");

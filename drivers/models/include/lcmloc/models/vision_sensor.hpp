@@ -12,6 +12,8 @@
 
 #include <Eigen/Core>
 
+#include "lcmloc/core/landmark_fix.hpp"
+
 namespace lcmloc::models {
 
 struct TruthState;
@@ -45,6 +47,13 @@ void validateLandmarks(const std::vector<Landmark>& landmarks);
 
 /// The map as the landmark fix takes it (id -> position).
 std::map<int, Eigen::Vector2d> landmarkMap(const std::vector<Landmark>& landmarks);
+
+/// The bearings in the landmark fix's convention (core::landmark: clockwise from the body axis,
+/// i.e. alpha = -bearing), in the sample's order.
+std::vector<core::landmark::Bearing> toFixBearings(const VisionSample& s);
+/// Heading CCW from east (this project's frames) <-> heading clockwise from north (the fix's
+/// psi, the paper's eq. 9-13); the map is its own inverse.
+double toFixHeading(double heading);
 
 class VisionSensor {
  public:
