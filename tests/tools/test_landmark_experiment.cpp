@@ -3,9 +3,13 @@
 // position figure fits; the uncorrected triangle is as good as the fix only at the centre.
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 
@@ -129,4 +133,42 @@ TEST(LandmarkExperiment, SensorOutOfRangeRefusedWithReason) {
   o.off_centre = Eigen::Vector2d(0.3, 0.2);
   o.runs = 0;
   EXPECT_THROW(run(cfg.scenario.vision, o), std::invalid_argument);
+}
+
+TEST(LandmarkExperiment, CommandWritesReportAndRefusesBadInput) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "lcmloc_landmark_experiment_cmd";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  auto runCmd = [&](const std::string& args) {
+    const std::string cmd = std::string(LCMLOC_LANDMARK_EXPERIMENT_BIN) + " " + args + " > '" +
+                            (dir / "out.txt").string() + "' 2>&1";
+    const int st = std::system(cmd.c_str());
+    std::ifstream in(dir / "out.txt");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return std::make_pair(WIFEXITED(st) ? WEXITSTATUS(st) : -1, ss.str());
+  };
+  auto [rc, out] = runCmd("--runs 30 --seed 4 --out '" + (dir / "r").string() + "'");
+  EXPECT_EQ(rc, 0) << out;
+  EXPECT_NE(out.find("apart_off_centre"), std::string::npos) << out;
+  EXPECT_NE(out.find("120/120 runs"), std::string::npos) << out;  // progress, 4 cases x 30
+  std::ifstream rep(dir / "r" / "report.json");
+  ASSERT_TRUE(rep.good());
+  const auto j = nlohmann::json::parse(rep);
+  EXPECT_EQ(j["options"]["seed"], 4);
+  EXPECT_EQ(j["options"]["runs"], 30);
+  std::tie(rc, out) = runCmd("--help");
+  EXPECT_EQ(rc, 0);
+  EXPECT_NE(out.find("--runs"), std::string::npos);
+  std::tie(rc, out) = runCmd("--runs 0");
+  EXPECT_NE(rc, 0);
+  std::ofstream(dir / "bad.yaml") << "vision: {resolution: -1}\n";
+  std::tie(rc, out) = runCmd("--config '" + (dir / "bad.yaml").string() + "'");
+  EXPECT_EQ(rc, 2) << out;
+  EXPECT_NE(out.find("vision.resolution"), std::string::npos) << out;
+  std::tie(rc, out) = runCmd("--off-centre 1.0,0 --out '" + (dir / "r2").string() + "'");
+  EXPECT_EQ(rc, 1) << out;
+  EXPECT_NE(out.find("danger circle"), std::string::npos) << out;
+  fs::remove_all(dir);
 }

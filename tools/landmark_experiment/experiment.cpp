@@ -84,6 +84,7 @@ void finish(MethodStats& s, double paper_position) {
     s.pos_mean += e.norm() / n;
     s.pos_max = std::max(s.pos_max, e.norm());
     within += std::abs(e.x()) < paper_position && std::abs(e.y()) < paper_position;
+    s.axis_within_paper += Vec2(std::abs(e.x()) < paper_position, std::abs(e.y()) < paper_position) / n;
   }
   s.axis_rms = s.axis_rms.cwiseSqrt();
   s.pos_rms = std::sqrt(se / n);
@@ -334,6 +335,8 @@ bool writeReport(const Result& r, const std::string& dir) {
                  {"east_rms_m", m.axis_rms.x()},
                  {"north_rms_m", m.axis_rms.y()},
                  {"within_paper_fraction", m.within_paper},
+                 {"east_within_paper_fraction", m.axis_within_paper.x()},
+                 {"north_within_paper_fraction", m.axis_within_paper.y()},
                  {"position_rms_over_crb", c.crb_pos_rms > 0 ? m.pos_rms / c.crb_pos_rms : 0.0}};
       if (!m.first_refusal.empty()) jm["first_refusal"] = m.first_refusal;
       if (m.method != "uncorrected")

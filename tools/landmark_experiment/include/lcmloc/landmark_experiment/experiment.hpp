@@ -46,6 +46,7 @@ struct MethodStats {
   Eigen::Vector2d axis_mean = Eigen::Vector2d::Zero();  ///< bias (east, north) [m]
   Eigen::Vector2d axis_rms = Eigen::Vector2d::Zero();   ///< (east, north) [m]
   double within_paper = 0;             ///< fraction of runs with both |e_east|, |e_north| < paper_position
+  Eigen::Vector2d axis_within_paper = Eigen::Vector2d::Zero();  ///< same per axis (east, north)
   // Heading error (fix - truth) [rad]; not defined for "uncorrected" (it keeps the INS heading).
   double heading_mean = 0, heading_std = 0, heading_rms = 0, heading_p95 = 0;
   std::vector<Eigen::Vector2d> pos_errors;  ///< per accepted run (east, north) [m]
