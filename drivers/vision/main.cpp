@@ -3,6 +3,8 @@
 // -> VISION (landmark_bearings_t).
 #include <spdlog/spdlog.h>
 
+#include <cmath>
+
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/convert.hpp"
 #include "lcmloc/common/process.hpp"
@@ -29,12 +31,16 @@ int main(int argc, char** argv) {
 
     common::Bus bus(opts.lcm_url);
     common::SeqTracker gaps;
-    int64_t received = 0, seq = 0, empty = 0;
+    int64_t received = 0, seq = 0, empty = 0, bad = 0;
     bus.subscribe<lcmloc::ground_truth_t>(
         cfg.channels.ground_truth, [&](const std::string& ch, const lcmloc::ground_truth_t& m, int64_t) {
           ++received;
           if (int64_t missing = gaps.observe(ch, m.seq))
             spdlog::warn("{}: {} message(s) missing before seq {}", ch, missing, m.seq);
+          if (!std::isfinite(m.x) || !std::isfinite(m.y) || !std::isfinite(m.heading)) {
+            if (bad++ < 5) spdlog::warn("{}: non-finite pose at utime {}: no observation", ch, m.utime);
+            return;
+          }
           if (auto s = sensor.sample(common::toCore(m))) {
             if (s->ids.empty() && empty++ == 0)
               spdlog::info("no landmark within {} m at utime {}", sc.vision.max_range, s->utime);
@@ -43,7 +49,7 @@ int main(int argc, char** argv) {
         });
     common::Heartbeat hb(bus, cfg.channels.heartbeat, "lcmloc-vision", [&] {
       return common::Heartbeat::Counters{{"received", received}, {"published", seq}, {"empty", empty},
-                                         {"gaps", gaps.gaps()}, {"decode_errors", bus.decodeErrors()}};
+                                         {"bad_truth", bad}, {"gaps", gaps.gaps()}, {"decode_errors", bus.decodeErrors()}};
     });
     spdlog::info("{} -> {} at {} Hz, {} landmark(s), noise {:.1f}\" (1 sigma), resolution {:.1f}\", max range {} m",
                  cfg.channels.ground_truth, cfg.channels.vision, sc.vision.rate_hz, sc.landmarks.size(),
@@ -53,8 +59,8 @@ int main(int argc, char** argv) {
       hb.tick();
       bus.handle(100);
     }
-    spdlog::info("stopping: {} ground-truth samples in, {} observations out ({} with no landmark), {} gaps",
-                 received, seq, empty, gaps.gaps());
+    spdlog::info("stopping: {} ground-truth samples in ({} non-finite), {} observations out ({} with no landmark), {} gaps",
+                 received, bad, seq, empty, gaps.gaps());
     hb.publish("stopping");
     return common::kExitOk;
   });

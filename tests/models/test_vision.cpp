@@ -125,6 +125,15 @@ TEST(VisionSensor, RateAndMaxRange) {
     }
   }
   EXPECT_EQ(when, (std::vector<int64_t>{1000000, 1500000, 2000000, 2500000, 3000000}));
+  TruthState nan_truth;
+  nan_truth.utime = 9000000;
+  nan_truth.x = NAN;
+  EXPECT_FALSE(s.sample(nan_truth).has_value());  // non-finite truth: no observation
+  nan_truth.x = 0;
+  nan_truth.heading = INFINITY;
+  EXPECT_FALSE(s.sample(nan_truth).has_value());
+  nan_truth.heading = 0;
+  EXPECT_TRUE(s.sample(nan_truth).has_value());
   VisionSensor far(c, {{6, 0, 200}}, 1);
   EXPECT_TRUE(far.observe(0, 0, 0).ids.empty());
 }

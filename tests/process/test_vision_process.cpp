@@ -64,6 +64,7 @@ landmarks:
     t.y = -1.5 * k;
     t.heading = std::remainder(0.05 * k - 2.0, 2 * kPi);
     t.speed = 3.0;
+    if (k % 25 == 20) t.x = NAN;  // bad truth: skipped, the next sample observed instead
   });
   ASSERT_GE(got.size(), 8u) << vision.output();
   for (std::size_t i = 0; i < got.size(); ++i) {
@@ -78,6 +79,7 @@ landmarks:
     const auto it = sent.find(m.utime);
     ASSERT_NE(it, sent.end()) << "utime " << m.utime << " was not a ground-truth time";
     const auto& t = it->second;
+    EXPECT_TRUE(std::isfinite(t.x)) << "observation from a non-finite pose at utime " << m.utime;
     const double lx[3] = {1000, 0, -700}, ly[3] = {0, 1000, -700};
     for (int j = 0; j < 3; ++j) {
       const double want = std::remainder(std::atan2(ly[j] - t.y, lx[j] - t.x) - t.heading, 2 * kPi);
@@ -88,6 +90,7 @@ landmarks:
   }
   vision.signal(SIGINT);
   EXPECT_EQ(vision.wait(5s).value_or(-1), 0) << vision.output();
+  EXPECT_NE(vision.output().find("non-finite pose"), std::string::npos) << vision.output();
 }
 
 TEST_F(VisionProcess, PaperSensorNoiseAndResolution) {

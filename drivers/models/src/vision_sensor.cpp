@@ -81,6 +81,7 @@ VisionSample VisionSensor::observe(double x, double y, double heading, int64_t u
 }
 
 std::optional<VisionSample> VisionSensor::sample(const TruthState& truth) {
+  if (!std::isfinite(truth.x) || !std::isfinite(truth.y) || !std::isfinite(truth.heading)) return std::nullopt;
   const int64_t period = static_cast<int64_t>(std::llround(1e6 / cfg_.rate_hz));
   if (!started_) {
     started_ = true;

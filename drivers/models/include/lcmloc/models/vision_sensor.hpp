@@ -62,6 +62,7 @@ class VisionSensor {
 
   /// Fed every ground-truth sample; emits an observation at rate_hz (the first at the first
   /// sample). Landmarks out of range are left out; an observation with none is still emitted.
+  /// A truth sample with a non-finite position or heading gives nothing (and starts no clock).
   std::optional<VisionSample> sample(const TruthState& truth);
 
   /// One observation now from pose (x, y, heading CCW from east), drawing fresh noise.
