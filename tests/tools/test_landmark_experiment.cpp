@@ -11,9 +11,11 @@
 #include <sstream>
 #include <tuple>
 
+#include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 
 #include "lcmloc/common/config.hpp"
+#include "lcmloc/common/convert.hpp"
 #include "lcmloc/landmark_experiment/experiment.hpp"
 
 using namespace lcmloc;
@@ -170,5 +172,114 @@ TEST(LandmarkExperiment, CommandWritesReportAndRefusesBadInput) {
   std::tie(rc, out) = runCmd("--off-centre 1.0,0 --out '" + (dir / "r2").string() + "'");
   EXPECT_EQ(rc, 1) << out;
   EXPECT_NE(out.find("danger circle"), std::string::npos) << out;
+  fs::remove_all(dir);
+}
+
+namespace {
+/// 300 observations along a 60 m line through the centre of the "1000 m apart" triangle.
+std::vector<Observation> lineObservations(std::vector<models::Landmark>* lms) {
+  *lms = triangleLandmarks(Reading::kApart, 1000.0);
+  models::VisionSensor s(models::VisionSensorConfig{}, *lms, 21);
+  std::vector<Observation> obs;
+  for (int k = 0; k < 300; ++k) {
+    Observation o;
+    o.utime = 1000000 + k * 100000;
+    o.x = -30.0 + 0.2 * k;
+    o.y = 10.0;
+    o.heading = 0.3;
+    o.sample = s.observe(o.x, o.y, o.heading, o.utime);
+    obs.push_back(o);
+  }
+  return obs;
+}
+}  // namespace
+
+TEST(LandmarkExperiment, RecordedObservationsAgainstTheBound) {
+  std::vector<models::Landmark> lms;
+  auto obs = lineObservations(&lms);
+  obs[7].sample.ids.pop_back();  // a two-landmark observation: refused by the fix
+  obs[7].sample.bearings.pop_back();
+  Options o;
+  const Result r = runObservations(lms, obs, o);
+  ASSERT_EQ(r.cases.size(), 1u);
+  const auto& c = r.cases[0];
+  EXPECT_EQ(c.name, "log");
+  for (const char* m : {"triangle", "least_squares"}) {
+    const auto& s = get(c, m);
+    EXPECT_EQ(s.ok, 299) << m;
+    EXPECT_EQ(s.refused, 1) << m;
+    EXPECT_NE(s.first_refusal.find("need exactly three bearings"), std::string::npos) << s.first_refusal;
+    EXPECT_NEAR(s.pos_rms / c.crb_pos_rms, 1.0, 0.15) << m;
+    EXPECT_NEAR(s.heading_std / c.crb_heading_std, 1.0, 0.2) << m;
+  }
+  EXPECT_NEAR(c.crb_pos_rms, 0.098, 0.003);  // near the centre of the 577 m triangle
+  EXPECT_THROW(runObservations(lms, {}, o), std::invalid_argument);
+  EXPECT_THROW(runObservations({{1, 0, 0}, {1, 5, 5}, {2, 9, 9}}, obs, o), std::invalid_argument);
+}
+
+TEST(LandmarkExperiment, CommandSolvesARecordedLog) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "lcmloc_landmark_experiment_log";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::vector<models::Landmark> lms;
+  const auto obs = lineObservations(&lms);
+  {
+    lcm::LogFile log((dir / "run.lcmlog").string(), "w");
+    ASSERT_TRUE(log.good());
+    auto write = [&](const std::string& ch, const auto& msg, int64_t utime) {
+      std::vector<uint8_t> buf(static_cast<size_t>(msg.getEncodedSize()));
+      msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
+      lcm::LogEvent ev;
+      ev.eventnum = 0;
+      ev.timestamp = utime;
+      ev.channel = ch;
+      ev.datalen = static_cast<int32_t>(buf.size());
+      ev.data = buf.data();
+      ASSERT_EQ(log.writeEvent(&ev), 0);
+    };
+    for (std::size_t k = 0; k < obs.size(); ++k) {
+      models::TruthState t;
+      t.utime = obs[k].utime;
+      t.x = obs[k].x;
+      t.y = obs[k].y;
+      t.heading = obs[k].heading;
+      if (k != 5) write("GROUND_TRUTH", common::toLcm(t, static_cast<int64_t>(k)), t.utime);  // one without truth
+      write("VISION", common::toLcm(obs[k].sample, static_cast<int64_t>(k)), t.utime);
+    }
+  }
+  std::string map = "landmarks:\n";
+  for (const auto& l : lms)
+    map += "  - {id: " + std::to_string(l.id) + ", x: " + std::to_string(l.x) + ", y: " + std::to_string(l.y) + "}\n";
+  std::ofstream(dir / "map.yaml") << map;
+  std::ofstream(dir / "nomap.yaml") << "vision: {rate_hz: 1}\n";
+  auto runCmd = [&](const std::string& args) {
+    const std::string cmd = std::string(LCMLOC_LANDMARK_EXPERIMENT_BIN) + " " + args + " > '" +
+                            (dir / "out.txt").string() + "' 2>&1";
+    const int st = std::system(cmd.c_str());
+    std::ifstream in(dir / "out.txt");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return std::make_pair(WIFEXITED(st) ? WEXITSTATUS(st) : -1, ss.str());
+  };
+  const std::string log = "--log '" + (dir / "run.lcmlog").string() + "'";
+  auto [rc, out] = runCmd(log + " --config '" + (dir / "map.yaml").string() + "' --out '" + (dir / "r").string() + "'");
+  ASSERT_EQ(rc, 0) << out;
+  EXPECT_NE(out.find("299 observations with truth, 1 without"), std::string::npos) << out;
+  std::ifstream rep(dir / "r" / "report.json");
+  ASSERT_TRUE(rep.good());
+  const auto j = nlohmann::json::parse(rep);
+  ASSERT_EQ(j["cases"].size(), 1u);
+  EXPECT_EQ(j["cases"][0]["name"], "log");
+  EXPECT_EQ(j["cases"][0]["methods"]["least_squares"]["ok"], 299);
+  EXPECT_NEAR(j["cases"][0]["methods"]["least_squares"]["position_rms_over_crb"].get<double>(), 1.0, 0.15);
+  std::tie(rc, out) = runCmd(log + " --config '" + (dir / "nomap.yaml").string() + "' --out '" + (dir / "r2").string() + "'");
+  EXPECT_EQ(rc, 2) << out;
+  EXPECT_NE(out.find("landmarks: --log needs the landmark map"), std::string::npos) << out;
+  std::ofstream(dir / "empty.lcmlog") << "";
+  std::tie(rc, out) = runCmd("--log '" + (dir / "empty.lcmlog").string() + "' --config '" + (dir / "map.yaml").string() +
+                             "' --out '" + (dir / "r3").string() + "'");
+  EXPECT_EQ(rc, 1) << out;
+  EXPECT_NE(out.find("has no VISION message"), std::string::npos) << out;
   fs::remove_all(dir);
 }

@@ -247,6 +247,77 @@ Result run(const models::VisionSensorConfig& vision, const Options& opt) {
   return res;
 }
 
+Result runObservations(const std::vector<models::Landmark>& lms, const std::vector<Observation>& obs,
+                       const Options& opt) {
+  if (obs.empty()) throw std::invalid_argument("no observations");
+  const auto map = models::landmarkMap(lms);
+  Result res;
+  res.options = opt;
+  res.options.runs = static_cast<int>(obs.size());
+  res.sigma_effective = obs.front().sample.bearing_std;
+  res.vision.bearing_std = res.sigma_effective;
+  res.vision.resolution = 0.0;
+  if (!(res.sigma_effective > 0)) throw std::invalid_argument("observations carry no bearing_std");
+  CaseResult c;
+  c.name = "log";
+  c.centre = false;
+  for (const auto& l : lms) c.landmarks.emplace_back(l.x, l.y);
+  c.methods = {MethodStats{}, MethodStats{}};
+  c.methods[0].method = "triangle";
+  c.methods[1].method = "least_squares";
+  fix::FixOptions fo;
+  fo.sigma_bearing = res.sigma_effective;
+  Eigen::Matrix3d crb_sum = Eigen::Matrix3d::Zero();
+  int n_crb = 0;
+  Vec2 mean_pos = Vec2::Zero();
+  for (std::size_t k = 0; k < obs.size(); ++k) {
+    const auto& o = obs[k];
+    const Vec2 p(o.x, o.y);
+    const double psi = models::toFixHeading(o.heading);
+    const auto b = models::toFixBearings(o.sample);
+    const fix::FixResult r[2] = {fix::triangleFix(map, b, p + opt.ins_offset, psi + opt.ins_heading_error, fo),
+                                 fix::leastSquaresFix(map, b, p + opt.ins_offset, psi + opt.ins_heading_error, fo)};
+    for (int m = 0; m < 2; ++m) {
+      auto& st = c.methods[m];
+      if (!r[m].ok) {
+        if (st.refused++ == 0) st.first_refusal = r[m].error;
+        continue;
+      }
+      ++st.ok;
+      st.pos_errors.push_back(r[m].position - p);
+      st.heading_errors.push_back(core::wrapAngle(r[m].heading - psi));
+    }
+    if (r[1].ok) {
+      std::vector<Vec2> l3;
+      for (const auto& x : b) l3.push_back(map.at(x.landmark_id));
+      crb_sum += fix::cramerRao(p, l3, res.sigma_effective);
+      mean_pos += p;
+      c.condition = std::max(c.condition, r[1].condition);
+      ++n_crb;
+    }
+    if (opt.progress) opt.progress(static_cast<int64_t>(k + 1), static_cast<int64_t>(obs.size()));
+  }
+  for (auto& m : c.methods) finish(m, opt.paper_position);
+  if (n_crb > 0) {
+    c.crb = crb_sum / n_crb;
+    c.vehicle = mean_pos / n_crb;
+    c.crb_pos_rms = std::sqrt(c.crb(0, 0) + c.crb(1, 1));
+    c.crb_heading_std = std::sqrt(c.crb(2, 2));
+    c.crb_within_paper = boxProbability(c.crb.topLeftCorner<2, 2>(), opt.paper_position);
+    for (int i = 0; i < 3 && i < static_cast<int>(c.landmarks.size()); ++i)
+      c.ranges[i] = (c.landmarks[i] - c.vehicle).norm();
+  }
+  const auto& ls = c.methods[1];
+  std::ostringstream os;
+  os << obs.size() << " recorded observations, " << ls.ok << " fixed: position RMS " << fmt("%.3f", ls.pos_rms)
+     << " m (bound " << fmt("%.3f", c.crb_pos_rms) << " m), heading 2 sigma " << fmt("%.1f", 2 * ls.heading_std * kAs)
+     << "\" (bound " << fmt("%.1f", 2 * c.crb_heading_std * kAs) << "\").";
+  res.conclusion = os.str();
+  res.position_fit = "n/a";
+  res.cases.push_back(std::move(c));
+  return res;
+}
+
 std::string summaryTable(const Result& r) {
   std::ostringstream os;
   os << "runs " << r.options.runs << ", seed " << r.options.seed << ", bearing noise "
@@ -397,11 +468,15 @@ bool writeReport(const Result& r, const std::string& dir) {
       for (int k = 0; k < nb; ++k) f << -hmax + (k + 0.5) * w << ' ' << ht[k] << ' ' << hl[k] << '\n';
     }
     const double c2 = 2 * c.crb_heading_std * kAs, p2 = o.paper_heading_2sigma * kAs, pp = o.paper_position;
+    std::string title = "Fig. 5 (" + c.name + "): " + std::to_string(o.runs);
+    if (c.name == "log")
+      title += " recorded observations, CRB at their mean";
+    else
+      title += std::string(" runs, landmarks ") + (c.reading == Reading::kApart ? "" : "at ") + fmt("%g", o.distance) +
+               " m " + (c.reading == Reading::kApart ? "apart" : "from the centre") +
+               (c.centre ? ", vehicle at the centre" : ", vehicle off centre");
     gp << "set output '" << c.name << ".png'\n"
-       << "set multiplot layout 1,2 title 'Fig. 5 (" << c.name << "): " << o.runs << " runs, landmarks "
-       << (c.reading == Reading::kApart ? "" : "at ") << o.distance << " m "
-       << (c.reading == Reading::kApart ? "apart" : "from the centre") << (c.centre ? ", vehicle at the centre" : ", vehicle off centre")
-       << "'\n"
+       << "set multiplot layout 1,2 title '" << title << "'\n"
        << "set grid\nset size ratio -1\nset xlabel 'east error [m]'\nset ylabel 'north error [m]'\nset key below horizontal\n"
        << "set title 'position error'\n"
        << "set object 1 rect from " << -pp << "," << -pp << " to " << pp << "," << pp

@@ -4,13 +4,77 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <map>
+#include <stdexcept>
+
+#include <lcm/lcm-cpp.hpp>
 
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/process.hpp"
+#include "lcmloc/ground_truth_t.hpp"
+#include "lcmloc/landmark_bearings_t.hpp"
 #include "lcmloc/landmark_experiment/experiment.hpp"
 
 using namespace lcmloc;
+
+namespace {
+
+/// VISION observations of a log with the GROUND_TRUTH pose of the same utime. Undecodable or
+/// non-finite messages are counted and skipped; a VISION message with no truth at its time too.
+std::vector<landmark_experiment::Observation> readLog(const std::string& path, const common::ChannelConfig& ch) {
+  lcm::LogFile log(path, "r");
+  if (!log.good()) throw std::runtime_error("cannot open log '" + path + "'");
+  std::map<int64_t, lcmloc::ground_truth_t> truth;
+  std::vector<lcmloc::landmark_bearings_t> vision;
+  int64_t bad = 0;
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    if (ev->channel == ch.ground_truth) {
+      lcmloc::ground_truth_t m{};
+      if (m.decode(ev->data, 0, ev->datalen) < 0 || !std::isfinite(m.x) || !std::isfinite(m.y) ||
+          !std::isfinite(m.heading)) {
+        ++bad;
+        continue;
+      }
+      truth[m.utime] = m;
+    } else if (ev->channel == ch.vision) {
+      lcmloc::landmark_bearings_t m;
+      if (m.decode(ev->data, 0, ev->datalen) < 0) {
+        ++bad;
+        continue;
+      }
+      vision.push_back(m);
+    }
+  }
+  std::vector<landmark_experiment::Observation> obs;
+  int64_t no_truth = 0;
+  for (const auto& v : vision) {
+    const auto it = truth.find(v.utime);
+    if (it == truth.end()) {
+      ++no_truth;
+      continue;
+    }
+    landmark_experiment::Observation o;
+    o.utime = v.utime;
+    o.x = it->second.x;
+    o.y = it->second.y;
+    o.heading = it->second.heading;
+    o.sample.utime = v.utime;
+    o.sample.ids.assign(v.landmark_ids.begin(), v.landmark_ids.end());
+    o.sample.bearings = v.bearings;
+    o.sample.bearing_std = v.bearing_std;
+    obs.push_back(std::move(o));
+  }
+  spdlog::info("{}: {} {} and {} {} messages; {} observations with truth, {} without, {} bad messages", path,
+               truth.size(), ch.ground_truth, vision.size(), ch.vision, obs.size(), no_truth, bad);
+  if (obs.empty())
+    throw std::runtime_error("log '" + path + "' has no " + ch.vision + " message with " + ch.ground_truth +
+                             " at the same utime");
+  return obs;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -38,6 +102,12 @@ int main(int argc, char** argv) {
   app.add_option("--heading-error", heading_arcmin,
                  "INS heading error [arcmin], heading clockwise from north as in the paper")
       ->check(CLI::Range(-600.0, 600.0))->capture_default_str();
+  std::string log_file;
+  app.add_option("--log", log_file,
+                 "instead of the Monte Carlo: solve the VISION observations of a recorded run (e.g. "
+                 "lcmloc-launcher --system config/landmark_system.yaml) against its GROUND_TRUTH, with the "
+                 "config's `landmarks` map and the INS error above")
+      ->check(CLI::ExistingFile);
   app.add_option("--off-centre", off_centre, "off-centre vehicle east,north as fractions of the circumradius")
       ->delimiter(',')->expected(2)->capture_default_str();
 
@@ -56,13 +126,20 @@ int main(int argc, char** argv) {
       last = now;
       spdlog::info("{}/{} runs ({:.0f} %)", done, total, 100.0 * static_cast<double>(done) / static_cast<double>(total));
     };
-    spdlog::info("{} runs per case, seed {}, noise {:.1f}\", resolution {:.1f}\", distance {} m", eo.runs, eo.seed,
+    if (log_file.empty())
+      spdlog::info("{} runs per case, seed {}, noise {:.1f}\", resolution {:.1f}\", distance {} m", eo.runs, eo.seed,
                  v.bearing_std / models::kArcSec, v.resolution / models::kArcSec, eo.distance);
-    const auto r = landmark_experiment::run(v, eo);
+    if (!log_file.empty() && cfg.scenario.landmarks.empty())
+      throw common::ConfigError(cfg.file, "landmarks", "--log needs the landmark map of the recorded run");
+    const auto r = log_file.empty()
+                       ? landmark_experiment::run(v, eo)
+                       : landmark_experiment::runObservations(cfg.scenario.landmarks,
+                                                              readLog(log_file, cfg.channels), eo);
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const bool plotted = landmark_experiment::writeReport(r, out);
     std::fputs(landmark_experiment::summaryTable(r).c_str(), stdout);
-    std::printf("%d runs x 4 cases solved in %.2f s; report: %s/report.json%s\n", eo.runs, elapsed, out.c_str(),
+    std::printf("%d %s solved in %.2f s; report: %s/report.json%s\n", r.options.runs,
+                log_file.empty() ? "runs x 4 cases" : "observations", elapsed, out.c_str(),
                 plotted ? ", figures <case>.png" : " (gnuplot failed: no figures)");
     return common::kExitOk;
   });

@@ -91,6 +91,21 @@ std::vector<models::Landmark> triangleLandmarks(Reading r, double distance);
 /// Runs the experiment. Throws std::invalid_argument for bad options or vision config.
 Result run(const models::VisionSensorConfig& vision, const Options& opt);
 
+/// One recorded observation (e.g. VISION of a multi-process run) with the true pose at its time.
+struct Observation {
+  int64_t utime = 0;
+  double x = 0, y = 0, heading = 0;  ///< true pose, heading CCW from east [rad]
+  models::VisionSample sample;
+};
+
+/// The fix on recorded observations: the INS pose of each is the truth plus opt.ins_offset and
+/// opt.ins_heading_error. One case named "log"; its CRB fields are the root mean of the bounds at
+/// the observed poses (sigma: the observations' bearing_std). Observations without exactly three
+/// bearings are refused by the fix and counted. Throws std::invalid_argument for a bad map or
+/// an empty list.
+Result runObservations(const std::vector<models::Landmark>& map, const std::vector<Observation>& obs,
+                       const Options& opt);
+
 /// report.json, per-case data files and figures (gnuplot) into dir. Returns false when gnuplot
 /// failed (report.json is written anyway).
 bool writeReport(const Result& r, const std::string& dir);
