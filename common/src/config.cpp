@@ -278,6 +278,42 @@ void parseLogger(KeyReader& root, LoggerConfig& l) {
   r.finish();
 }
 
+// `vision` section: the simulated bearing sensor (seeds/004 §III). Angles in radians.
+void parseVision(KeyReader& root, models::VisionSensorConfig& v) {
+  KeyReader r(root.child("vision"), root.file(), "vision");
+  r.get("rate_hz", v.rate_hz, 1e-3, 1000.0);
+  r.get("bearing_std", v.bearing_std, 0.0, 1.0, "1 sigma [rad]");
+  r.get("resolution", v.resolution, 0.0, 0.1, "quantization step [rad], 0 = none");
+  r.get<uint64_t>("seed", v.seed);
+  r.get("max_range", v.max_range, 0.0, 1e7, "[m], 0 = no limit");
+  r.finish();
+}
+
+// Top-level `landmarks`: the landmark map, a list of {id, x, y} (x east, y north [m]); ids unique.
+void parseLandmarks(KeyReader& root, std::vector<models::Landmark>& out) {
+  YAML::Node n = root.child("landmarks");
+  if (!n) return;
+  out.clear();
+  if (n.IsNull()) return;
+  if (!n.IsSequence()) throw ConfigError(root.file(), "landmarks", "expected a list of {id, x, y}, got " + nodeText(n));
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    const std::string kp = "landmarks[" + std::to_string(i) + "]";
+    models::Landmark l;
+    KeyReader r(n[i], root.file(), kp);
+    if (!r.child("id")) throw ConfigError(root.file(), kp + ".id", "missing (every landmark needs an id)");
+    r.get("id", l.id);
+    if (!r.child("x") || !r.child("y")) throw ConfigError(root.file(), kp, "missing x or y");
+    r.get("x", l.x, -1e7, 1e7);
+    r.get("y", l.y, -1e7, 1e7);
+    r.finish();
+    for (std::size_t j = 0; j < out.size(); ++j)
+      if (out[j].id == l.id)
+        throw ConfigError(root.file(), kp + ".id",
+                          "duplicate landmark id " + std::to_string(l.id) + " (also landmarks[" + std::to_string(j) + "])");
+    out.push_back(l);
+  }
+}
+
 }  // namespace
 
 ConfigError::ConfigError(const std::string& file, const std::string& key, const std::string& reason)
@@ -391,6 +427,12 @@ SystemConfig parseSystemConfig(const std::string& yaml_text, const std::string& 
   parseFusion(root, cfg.fusion);
   parseLogger(root, cfg.logger);
   ins_config::parseInsSim(root, cfg.ins_sim);
+  parseVision(root, cfg.scenario.vision);
+  parseLandmarks(root, cfg.scenario.landmarks);
+  // One landmark map for the whole system: the fusion takes the top-level `landmarks` (the
+  // one lcmloc-vision observes) unless its own `fusion.landmarks` is given.
+  if (cfg.fusion.landmarks.empty())
+    for (const auto& l : cfg.scenario.landmarks) cfg.fusion.landmarks[l.id] = core::Vec2(l.x, l.y);
   root.finish();
   return cfg;
 }

@@ -337,4 +337,15 @@ std::optional<core::BearingsInput> toCore(const lcmloc::landmark_bearings_t& m, 
   return in;
 }
 
+lcmloc::landmark_bearings_t toLcm(const models::VisionSample& s, int64_t seq) {
+  lcmloc::landmark_bearings_t m;
+  m.utime = s.utime;
+  m.seq = seq;
+  m.count = static_cast<int32_t>(s.ids.size());
+  m.landmark_ids.assign(s.ids.begin(), s.ids.end());
+  m.bearings = s.bearings;
+  m.bearing_std = s.bearing_std;
+  return m;
+}
+
 }  // namespace lcmloc::common

@@ -61,7 +61,7 @@ struct FusionConfig {
   /// composed and applied with one time update (core::EngineConfig::output_every). 1 = every one.
   int output_every = 1;
   /// Landmark map for the three-landmark fix (`fusion.landmarks: [{id, x, y}, ...]`, local
-  /// metres, x east, y north).
+  /// metres, x east, y north). Empty in the file: the top-level `landmarks` (lcmloc-vision's).
   std::map<int, core::Vec2> landmarks;
 };
 

@@ -6,6 +6,7 @@
 #include "lcmloc/common/geodesy.hpp"
 #include "lcmloc/core/types.hpp"
 #include "lcmloc/models/gnss_sensors.hpp"
+#include "lcmloc/models/vision_sensor.hpp"
 #include "lcmloc/models/world.hpp"
 #include "lcmloc/fault_event_t.hpp"
 #include "lcmloc/gate_decision_t.hpp"
@@ -57,5 +58,7 @@ std::optional<core::BeaconRange> toCore(const lcmloc::beacon_range_t& m, const s
 /// match the arrays or a bearing is NaN/Inf. Unknown ids are the engine's to refuse.
 std::optional<core::BearingsInput> toCore(const lcmloc::landmark_bearings_t& m, const std::string& channel,
                                           std::string* why = nullptr);
+/// Bearings to landmarks -> landmark_bearings_t (channel VISION).
+lcmloc::landmark_bearings_t toLcm(const models::VisionSample& s, int64_t seq);
 
 }  // namespace lcmloc::common

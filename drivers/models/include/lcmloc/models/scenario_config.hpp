@@ -7,6 +7,7 @@
 
 #include "lcmloc/core/types.hpp"
 #include "lcmloc/models/gnss_sensors.hpp"
+#include "lcmloc/models/vision_sensor.hpp"
 
 namespace lcmloc::models {
 
@@ -88,6 +89,8 @@ struct ScenarioConfig {
   ImuSensorConfig imu;              ///< GPS + IMU method (seeds/002)
   GpsSensorConfig gps;
   std::vector<FaultConfig> faults{{"phantom_marker", 12.9, 0.10}, {"wrong_offset", 24.5, 0.35}};
+  VisionSensorConfig vision;        ///< bearings to landmarks (seeds/004 §III)
+  std::vector<Landmark> landmarks;  ///< landmark map (top-level `landmarks` key), ids unique
 };
 
 /// Arc length at which the vehicle stops: end_margin past the last marker, or the end of the
