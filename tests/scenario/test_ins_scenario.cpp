@@ -64,3 +64,40 @@ TEST(InsScenario, DeterministicForASeed) {
   EXPECT_EQ(a.final_err_cal, b.final_err_cal);
   EXPECT_EQ(a.k_err_10s, b.k_err_10s);
 }
+
+TEST(InsScenario, LandmarkFixesReinitializeAndThePoseKeepsUpWithTheInsBetweenFixes) {
+  // The landmarks and vision sensor of config/ins_vision_paper.yaml: a triangle 1000 m apart
+  // around the route at y = 3000 m, 1 Hz, 30" noise, 650 m range.
+  models::InsSimConfig c;
+  c.seed = 1;
+  c.duration = 260.0;  // the route of the 3600 s run up to 220 s
+  c.start = "hard";
+  core::FilterConfig f;
+  f.ins.odo_markov = c.scale_markov;
+  ins_experiment::Options o;
+  o.fixes = true;
+  o.vision.rate_hz = 1.0;
+  o.vision.bearing_std = 1.45444e-4;
+  o.vision.resolution = 6.78739e-5;
+  o.vision.max_range = 650.0;
+  o.landmarks = {{1, 557.350, 3000.0}, {2, -308.675, 3500.0}, {3, -308.675, 2500.0}};
+  const auto r = ins_experiment::run("hard", c, f, 1000000, o);
+  ASSERT_GE(r.fixes.size(), 7u);
+  EXPECT_EQ(r.fix_refused, 0);
+  const auto& first = r.fixes.front();
+  std::printf("%zu fixes, first at %.1f s: odo_ins %.3f -> %.3f m, uncal %.3f -> %.3f m\n", r.fixes.size(), first.t,
+              first.before_cal, first.after_cal, first.before_uncal, first.after_uncal);
+  EXPECT_GT(first.before_uncal, 5.0);  // 0.5 % scale error over ~2.9 km
+  EXPECT_LT(first.before_cal, first.before_uncal / 5.0);
+  double sum2 = 0, step = 0;
+  for (std::size_t i = 0; i < r.fixes.size(); ++i) {
+    const auto& p = r.fixes[i];
+    EXPECT_DOUBLE_EQ(p.after_cal, p.after_uncal);  // both filters re-initialized by the same fix
+    sum2 += p.after_cal * p.after_cal;
+    // 1 s (19 m) of odometry/INS after a fix adds next to nothing: the error just before the next
+    // fix is the error just after this one (a pose lagging one IMU interval would add ~v dt = 0.19 m).
+    if (i + 1 < r.fixes.size()) step += std::abs(r.fixes[i + 1].before_cal - p.after_cal);
+  }
+  EXPECT_LT(std::sqrt(sum2 / r.fixes.size()), 0.25);  // Cramér-Rao ~0.1 m at the centre
+  EXPECT_LT(step / (r.fixes.size() - 1), 0.03);
+}

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <iomanip>
 #include <map>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 
@@ -31,17 +32,50 @@ RunResult run(const std::string& name, const models::InsSimConfig& cfg, const co
   ec.filter.initial_pose = core::Vec3(0.0, 0.0, cfg.heading);
   ec.shadow = {"odo_ins_uncal"};
   ec.reorder_window_us = 0;  // inputs are produced in order
+  std::optional<models::VisionSensor> vision;
+  if (opt.fixes) {
+    ec.landmarks = models::landmarkMap(opt.landmarks);
+    vision.emplace(opt.vision, opt.landmarks, opt.vision_seed);
+  }
   std::map<std::string, core::FilterState> latest;
   core::EngineOutputs out;
   out.on_state = [&](const std::string& f, bool, const core::FilterState& s) { latest[f] = s; };
   out.on_decision = [&](const std::string& f, bool active, const core::GateDecision& d) {
     if (active && f == "odo_ins" && d.reason == "imu_gap") ++r.imu_gaps;
+    if (active && d.sensor == "VISION" && !d.accepted && d.reason != "bad_input") ++r.fix_refused;
   };
   core::FusionEngine engine(ec, {}, out);
+  // Vision at this step's truth; three bearings: the fix, with the errors before and after it.
+  auto fix = [&](const models::InsSimStep& st, int64_t& seq) {
+    const auto obs = vision->sample(st.truth);
+    if (!obs || obs->ids.size() != 3) return;
+    auto err = [&](const char* f) {
+      auto i = latest.find(f);
+      return i == latest.end() ? NAN : std::hypot(i->second.x[0] - st.truth.x, i->second.x[1] - st.truth.y);
+    };
+    FixPoint p{(st.truth.utime - start_utime) * 1e-6, st.truth.distance, err("odo_ins"), 0, err("odo_ins_uncal"), 0};
+    core::EngineInput in;
+    in.channel = "VISION";
+    in.seq = seq++;
+    in.utime = obs->utime;
+    core::BearingsInput b;
+    b.utime = obs->utime;
+    b.seq = in.seq;
+    b.ids = obs->ids;
+    b.bearings = obs->bearings;
+    b.bearing_std = obs->bearing_std;
+    in.payload = b;
+    engine.push(std::move(in));
+    engine.flush();
+    p.after_cal = err("odo_ins");
+    p.after_uncal = err("odo_ins_uncal");
+    r.fixes.push_back(p);
+  };
 
   const models::InsSimStep s0 = sim.initial();
   if (sink) sink(s0);
-  int64_t odo_seq = 0, imu_seq = 0;
+  if (vision) vision->sample(s0.truth);  // as lcmloc-vision: the first observation at the first truth
+  int64_t odo_seq = 0, imu_seq = 0, vision_seq = 0;
   double motion_start = -1, next_record = 0, next_progress = 0.1;
   bool start_recorded = false, ten_recorded = false, sixty_recorded = false;
   // Dead reckoning with the odo_ins heading: frozen scale estimate (after the calibration
@@ -79,6 +113,7 @@ RunResult run(const std::string& name, const models::InsSimConfig& cfg, const co
       engine.push(std::move(in));
     }
     engine.flush();  // the state of this step (compared with this step's truth)
+    if (vision) fix(st, vision_seq);
     auto it = latest.find("odo_ins");
     auto iu = latest.find("odo_ins_uncal");
     if (it == latest.end() || iu == latest.end() || it->second.x.size() < 4) continue;
@@ -213,6 +248,16 @@ bool writeReport(const std::vector<RunResult>& runs, const models::InsSimConfig&
           {"odo_ins_final_error_per_distance", r.distance_m > 0 ? r.final_err_cal / r.distance_m : 0.0},
           {"odo_ins_uncal_final_error_per_distance", r.distance_m > 0 ? r.final_err_uncal / r.distance_m : 0.0}}},
         {"imu_gaps", r.imu_gaps}};
+    if (opt.fixes) {
+      auto& f = j["runs"][r.name]["fixes"];
+      f["count"] = r.fixes.size();
+      f["refused"] = r.fix_refused;
+      f["list"] = nlohmann::json::array();
+      for (const auto& p : r.fixes)
+        f["list"].push_back({{"t_s", p.t}, {"distance_m", p.distance}, {"odo_ins_before_m", p.before_cal},
+                             {"odo_ins_after_m", p.after_cal}, {"odo_ins_uncal_before_m", p.before_uncal},
+                             {"odo_ins_uncal_after_m", p.after_uncal}});
+    }
     std::ofstream s(dir + "/scale_" + r.name + ".dat");
     s << "# t[s] t_from_motion_start[s] k_true k_est abs_err sigma\n" << std::setprecision(9);
     for (const auto& p : r.scale)

@@ -57,7 +57,12 @@ class OdoInsAdapter : public Filter {
     const ins::InsState& s = kf_.state();
     out.utime = utime_;
     out.x.resize(4);
-    out.x << (s.lon - lon0_) * sx_, (s.lat - lat0_) * sy_, theta(), kf_.scaleEstimate();
+    // The INS stands at ins_utime_; inputs already taken (e.g. the odometer increment of the next
+    // IMU interval, queued until that sample) label the state utime_: the pose at utime_ is the
+    // INS position carried forward with its velocity over the difference.
+    const double lead = leadS(utime_);
+    out.x << (s.lon - lon0_) * sx_ + s.v.x() * lead, (s.lat - lat0_) * sy_ + s.v.y() * lead, theta(),
+        kf_.scaleEstimate();
     Eigen::Matrix<double, 4, ins::kN> J = Eigen::Matrix<double, 4, ins::kN>::Zero();
     J(0, ins::kDLon) = sx_;
     J(1, ins::kDL) = sy_;
@@ -72,7 +77,7 @@ class OdoInsAdapter : public Filter {
     if (from.x.size() < 3 || from.P.rows() != from.x.size() || from.P.cols() != from.x.size() ||
         !from.x.allFinite() || !from.P.allFinite())
       throw std::invalid_argument(name_ + ": malformed initial state");
-    setPose(from.x.head<3>(), from.P.topLeftCorner<3, 3>());
+    setPose(from.x.head<3>(), from.P.topLeftCorner<3, 3>(), from.utime);
     for (std::size_t i = 3; i < from.names.size() && static_cast<Eigen::Index>(i) < from.x.size(); ++i)
       if (from.names[i] == "odo_scale_error" && estimate_scale_) kf_.setScaleEstimate(from.x[i]);
     utime_ = std::max(utime_, from.utime);
@@ -80,7 +85,7 @@ class OdoInsAdapter : public Filter {
 
   bool applyFix(const PoseFix& fix) override {
     if (!fix.pose.allFinite() || !fix.cov.allFinite()) return false;
-    setPose(fix.pose, fix.cov);
+    setPose(fix.pose, fix.cov, fix.utime);
     utime_ = std::max(utime_, fix.utime);
     return true;
   }
@@ -207,14 +212,19 @@ class OdoInsAdapter : public Filter {
 
   /// Re-initializes position and heading (covariance: the given 3x3 over x, y, theta, cross terms
   /// to the other error states zeroed). The body-frame velocity is kept (rotated with the heading).
-  void setPose(const Vec3& pose, const Mat3& cov) {
+  /// Seconds from the INS time to t (> 0 only while the INS runs and t is ahead of it).
+  double leadS(int64_t t) const { return have_imu_ && t > ins_utime_ ? (t - ins_utime_) * 1e-6 : 0.0; }
+
+  /// pose: valid at utime t (the INS position is set to it carried back to ins_utime_).
+  void setPose(const Vec3& pose, const Mat3& cov, int64_t t) {
     ins::InsState& s = kf_.mutableState();
     const ins::Vec3 v_b = s.cbn().transpose() * s.v;
     const double dtheta = wrapAngle(pose[2] - theta());
     s.q_bn = (Eigen::Quaterniond(Eigen::AngleAxisd(dtheta, ins::Vec3::UnitZ())) * s.q_bn).normalized();
     s.v = s.cbn() * v_b;
-    s.lat = lat0_ + pose[1] / sy_;
-    s.lon = lon0_ + pose[0] / sx_;
+    const double lead = leadS(t);
+    s.lat = lat0_ + (pose[1] - s.v.y() * lead) / sy_;
+    s.lon = lon0_ + (pose[0] - s.v.x() * lead) / sx_;
     StateMat& P = kf_.mutableCovariance();
     const int idx[3] = {ins::kDLon, ins::kDL, ins::kPhiU};
     const double scale[3] = {1.0 / sx_, 1.0 / sy_, -1.0};

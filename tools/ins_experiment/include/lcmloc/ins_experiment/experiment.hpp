@@ -11,6 +11,7 @@
 
 #include "lcmloc/core/filter.hpp"
 #include "lcmloc/models/ins_sim.hpp"
+#include "lcmloc/models/vision_sensor.hpp"
 
 namespace lcmloc::ins_experiment {
 
@@ -18,6 +19,20 @@ struct Options {
   double record_period = 1.0;    ///< position samples kept for the figures [s]
   double early_window = 60.0;    ///< scale samples kept at full rate after the motion starts [s]
   double calibration_stage = 60.0;  ///< dead reckoning freezes the scale estimate this long after the start [s]
+  /// Three-landmark fixes (seeds/004 §III): when set, a VisionSensor (lcmloc-vision's model) sees
+  /// `landmarks` from the truth and every observation with three bearings goes to the engine as
+  /// VISION, re-initializing odo_ins and odo_ins_uncal; the run reports the error before/after.
+  bool fixes = false;
+  models::VisionSensorConfig vision;
+  std::vector<models::Landmark> landmarks;
+  uint64_t vision_seed = 5;
+};
+
+/// One three-landmark fix: position errors just before and just after it.
+struct FixPoint {
+  double t, distance;
+  double before_cal, after_cal;      ///< odo_ins [m]
+  double before_uncal, after_uncal;  ///< odo_ins_uncal [m]
 };
 
 struct ScalePoint { double t, k_true, k_est, k_std; };
@@ -46,6 +61,8 @@ struct RunResult {
   double final_err_dr_cal = 0, final_err_dr_uncal = 0, final_heading_err_cal = 0;
   double k_frozen = 0;              ///< scale estimate used by the calibrated dead reckoning
   int imu_gaps = 0;                 ///< "imu_gap" decisions of odo_ins
+  int fix_refused = 0;              ///< observations with three bearings the engine did not apply
+  std::vector<FixPoint> fixes;      ///< Options::fixes
   std::vector<ScalePoint> scale;
   std::vector<PositionPoint> position;
 };
