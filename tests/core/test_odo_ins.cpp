@@ -275,6 +275,30 @@ TEST(OdoInsFilter, LandmarkFixRefusals) {
   EXPECT_EQ(e.activeState().x, before.x);
 }
 
+TEST(OdoInsFilter, FewerThanThreeLandmarksInViewIsADecisionWithoutAnEvent) {
+  const auto map = triangle(1000.0);
+  Recorder rec;
+  EngineConfig ec;
+  ec.filter = insConfig();
+  ec.reorder_window_us = 0;
+  ec.landmarks = map;
+  FusionEngine e(ec, {}, rec.outputs());
+  int64_t seq = 0;
+  stand(e, 1000000, 50, M_PI / 2, &seq);
+  const FilterState before = e.activeState();
+  BearingsInput b = bearingsFrom(Vec2(0, 0), M_PI / 2, map, 1500000);
+  b.ids.pop_back();
+  b.bearings.pop_back();
+  e.push(input("VISION", 1, 1500000, b));
+  e.flush();
+  ASSERT_FALSE(rec.decisions.empty());
+  EXPECT_EQ(rec.decisions.back().reason, "too_few_landmarks");
+  EXPECT_FALSE(rec.decisions.back().accepted);
+  EXPECT_FALSE(rec.hasEvent("bad_input"));
+  EXPECT_FALSE(rec.hasEvent("refused"));
+  EXPECT_EQ(e.activeState().x, before.x);
+}
+
 TEST(OdoInsFilter, DefaultApplyFixSetsPoseOfOtherFilters) {
   FilterConfig c;
   c.type = "dead_reckoning";

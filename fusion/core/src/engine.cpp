@@ -277,6 +277,13 @@ void FusionEngine::Impl::landmarkFix(const EngineInput& in, const BearingsInput&
   for (int id : b.ids)
     if (!cfg.landmarks.count(id))
       return refuse("bad_input", "bad_input", "landmark " + std::to_string(id) + " not in the map");
+  if (b.ids.size() < 3) {
+    // Fewer than three landmarks in view is a normal reading (the vehicle is away from them):
+    // a decision that says so, no event.
+    d.reason = "too_few_landmarks";
+    if (out.on_decision) out.on_decision(active->name(), true, d);
+    return;
+  }
   if (b.ids.size() != 3) return refuse("bad_input", "bad_input", "need exactly three bearings");
   const FilterState prior = active->state();
   if (!prior.x.head<3>().allFinite()) return refuse("bad_input", "bad_input", "filter pose not finite");

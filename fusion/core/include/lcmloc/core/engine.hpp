@@ -62,7 +62,9 @@ struct EngineConfig {
   /// the fix's options (bearing noise default, condition limit). A BearingsInput is turned into
   /// a pose fix by damped least squares started from the active filter's pose and handed to
   /// every filter's applyFix; refused (decision reason "bad_input" or "geometry", event
-  /// "bad_input" or "refused") on unknown ids, NaN, not three bearings or the danger circle.
+  /// "bad_input" or "refused") on unknown ids, NaN, more than three bearings or the danger circle;
+  /// fewer than three bearings (landmarks out of view) give decision reason "too_few_landmarks"
+  /// and no event.
   std::map<int, Vec2> landmarks;
   landmark::FixOptions fix;
 };
