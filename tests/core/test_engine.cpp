@@ -389,3 +389,27 @@ TEST(Engine, OutputEveryPublishesEveryNthOdometryAndBeforeMeasurementsAppliesThe
     EXPECT_EQ(b.P, again.last_state.at(f).P) << f;
   }
 }
+
+TEST(Engine, OutputEveryPublishesTheLastStateAtFlushAfterAnInputNoFilterUses) {
+  // An IMU sample that neither ukf_gated nor its shadow uses comes after odometry whose state was
+  // not published yet: the flush must still publish the state after the last odometry.
+  Recorder rec;
+  EngineConfig c = engineConfig("ukf_gated");
+  c.output_every = 10;
+  c.reorder_window_us = 0;
+  FusionEngine e(c, straightMap(3), rec.outputs());
+  int64_t seq = 0;
+  for (int k = 1; k <= 15; ++k) {
+    OdometryInput o;
+    o.utime = 10000 * k;
+    o.delta_s = 0.1;
+    ASSERT_TRUE(e.push(EngineInput{"ODOMETRY", ++seq, o.utime, o}));
+  }
+  ImuInput imu;
+  imu.utime = 155000;
+  ASSERT_TRUE(e.push(EngineInput{"IMU", ++seq, imu.utime, imu}));
+  e.flush();
+  const std::vector<std::string> expected = {"state:ukf_gated", "state:ukf_gated"};  // 10, flush
+  EXPECT_EQ(rec.log, expected);
+  EXPECT_EQ(rec.last_state.at("ukf_gated").utime, 150000);
+}

@@ -89,6 +89,7 @@ struct FusionEngine::Impl {
 
   FilterState scratch;  ///< reused for every published state (no allocations per message)
   void emitState(const Filter& f, bool is_active) {
+    if (is_active) unpublished = false;  // output_every > 1: the active state is out
     if (!out.on_state) return;
     f.stateInto(scratch);
     out.on_state(f.name(), is_active, scratch);
@@ -105,7 +106,6 @@ struct FusionEngine::Impl {
     const bool odometry = std::holds_alternative<OdometryInput>(in.payload);
     if (cfg.output_every > 1 && !odometry) applyAccumulated();  // measurements see all odometry
     std::visit([&](const auto& p) { handle(in, p); }, in.payload);
-    if (cfg.output_every > 1 && !odometry) unpublished = false;
     const FilterStatus now = active->status();
     if (now != last_status) {
       if (now == FilterStatus::Lockout)
