@@ -258,9 +258,9 @@ class RulerUkf final : public Filter {
     s.x = ukf_.x();
     s.P = ukf_.P();
     s.names = names_;
-    s.status = status_;
+    s.status = book_.status;
   }
-  FilterStatus status() const override { return status_; }
+  FilterStatus status() const override { return book_.status; }
 
   void initialize(const FilterState& from) override {
     Eigen::VectorXd x;
@@ -269,8 +269,7 @@ class RulerUkf final : public Filter {
     copyMatching(from, names_, x, P);
     ukf_.reset(x, P);
     utime_ = from.utime;
-    status_ = FilterStatus::Ok;
-    consecutive_rejections_ = 0;
+    book_.reset();
     batch_.clear();
   }
 
@@ -352,25 +351,7 @@ class RulerUkf final : public Filter {
       }
     }
     utime_ = std::max(utime_, det.utime);
-    if (best_id < 0) {
-      d.reason = "no_candidate";
-      if (gated_) onRejection();
-      return d;
-    }
-    d.marker_id = best_id;
-    d.innovation = best.v;
-    d.mahalanobis = best.mahalanobis;
-    if (gated_ && !(best.mahalanobis <= gate_)) {
-      d.reason = "gate";
-      onRejection();
-      return d;
-    }
-    ukf_.correct(best);
-    d.accepted = true;
-    d.reason = gated_ ? "accepted" : "ungated";
-    consecutive_rejections_ = 0;
-    status_ = FilterStatus::Ok;
-    return d;
+    return book_.finish(d, best_id, best, gate_, gated_, ukf_, cfg_);
   }
 
  private:
@@ -394,14 +375,6 @@ class RulerUkf final : public Filter {
   /// Lock-out: every lockout_rejections consecutive rejections (gate or no candidate) the
   /// status is Lockout and the covariance is inflated, so the estimate re-acquires the markers
   /// in a bounded number of rejections instead of drifting away from them for ever.
-  void onRejection() {
-    ++consecutive_rejections_;
-    if (cfg_.lockout_rejections > 0 && consecutive_rejections_ % cfg_.lockout_rejections == 0) {
-      status_ = FilterStatus::Lockout;
-      ukf_.scaleCovariance(cfg_.lockout_inflation);
-    }
-  }
-
   std::string name_;
   FilterConfig cfg_;
   MarkerMap map_;
@@ -412,8 +385,7 @@ class RulerUkf final : public Filter {
   double reach_radius_ = 0.0;  ///< radius around M enclosing the reachable window (no margin)
   std::vector<std::string> names_;
   int64_t utime_ = 0;
-  FilterStatus status_ = FilterStatus::Ok;
-  int consecutive_rejections_ = 0;
+  detail::GateBook book_;  ///< gate decisions and lock-out
   OdometryBatch batch_;
 };
 

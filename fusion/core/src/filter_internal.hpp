@@ -25,6 +25,51 @@ std::unique_ptr<Filter> makeLandmarkFilter(const FilterConfig& cfg, const Marker
 /// Pose process noise of one odometry step (x, y, theta variances): Pw over pw_distance of
 /// travel plus pw_turn |dtheta| on the heading.
 Vec3 poseProcessNoise(const FilterConfig& c, double ds, double dtheta);
+/// Gate decision, correction and lock-out bookkeeping of the gated UKFs (the magnetic-ruler
+/// filters and ukf_landmarks): FilterConfig::lockout_rejections consecutive rejections (gate or
+/// no candidate) declare a lock-out and inflate the covariance by lockout_inflation, again after
+/// every further lockout_rejections, until a measurement is accepted.
+struct GateBook {
+  FilterStatus status = FilterStatus::Ok;
+  int consecutive_rejections = 0;
+  void reset() {
+    status = FilterStatus::Ok;
+    consecutive_rejections = 0;
+  }
+  /// Completes d for the best candidate id (< 0: none) with innovation in; corrects ukf when the
+  /// innovation passes the gate (or the filter is ungated).
+  template <class Ukf, class Innov>
+  GateDecision& finish(GateDecision& d, int id, Innov& in, double gate, bool gated, Ukf& ukf,
+                       const FilterConfig& cfg) {
+    if (id < 0) {
+      d.reason = "no_candidate";
+      if (gated) reject(ukf, cfg);
+      return d;
+    }
+    d.marker_id = id;
+    d.innovation = in.v;
+    d.mahalanobis = in.mahalanobis;
+    if (gated && !(in.mahalanobis <= gate)) {
+      d.reason = "gate";
+      reject(ukf, cfg);
+      return d;
+    }
+    ukf.correct(in);
+    d.accepted = true;
+    d.reason = gated ? "accepted" : "ungated";
+    reset();
+    return d;
+  }
+  template <class Ukf>
+  void reject(Ukf& ukf, const FilterConfig& cfg) {
+    ++consecutive_rejections;
+    if (cfg.lockout_rejections > 0 && consecutive_rejections % cfg.lockout_rejections == 0) {
+      status = FilterStatus::Lockout;
+      ukf.scaleCovariance(cfg.lockout_inflation);
+    }
+  }
+};
+
 /// The odometry/INS filters ("odo_ins", "odo_ins_uncal"); nullptr for another type. Throws
 /// std::invalid_argument for an invalid configuration.
 std::unique_ptr<Filter> makeOdoInsFilter(const FilterConfig& cfg);

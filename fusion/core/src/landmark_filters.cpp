@@ -42,7 +42,7 @@ class LandmarkUkf final : public Filter {
     s.x = ukf_.x();
     s.P = ukf_.P();
     s.names = names_;
-    s.status = status_;
+    s.status = book_.status;
   }
   void initialize(const FilterState& from) override {
     Eigen::VectorXd x(3);
@@ -52,8 +52,7 @@ class LandmarkUkf final : public Filter {
     detail::copyMatching(from, names_, x, P);
     ukf_.reset(x, P);
     utime_ = from.utime;
-    status_ = FilterStatus::Ok;
-    consecutive_rejections_ = 0;
+    book_.reset();
   }
   bool uses(Measurement m) const override {
     return m == Measurement::Landmark || m == Measurement::Beacon;
@@ -167,33 +166,7 @@ class LandmarkUkf final : public Filter {
   template <int M>
   GateDecision finish(GateDecision& d, int id, Innovation<3, M>& in, double gate) {
     utime_ = std::max(utime_, d.utime);
-    if (id < 0) {
-      d.reason = "no_candidate";
-      if (gated_) onRejection();
-      return d;
-    }
-    d.marker_id = id;
-    d.innovation = in.v;
-    d.mahalanobis = in.mahalanobis;
-    if (gated_ && !(in.mahalanobis <= gate)) {
-      d.reason = "gate";
-      onRejection();
-      return d;
-    }
-    ukf_.correct(in);
-    d.accepted = true;
-    d.reason = gated_ ? "accepted" : "ungated";
-    consecutive_rejections_ = 0;
-    status_ = FilterStatus::Ok;
-    return d;
-  }
-  /// Same lock-out rule as the ruler filters (FilterConfig::lockout_rejections).
-  void onRejection() {
-    ++consecutive_rejections_;
-    if (cfg_.lockout_rejections > 0 && consecutive_rejections_ % cfg_.lockout_rejections == 0) {
-      status_ = FilterStatus::Lockout;
-      ukf_.scaleCovariance(cfg_.lockout_inflation);
-    }
+    return book_.finish(d, id, in, gate, gated_, ukf_, cfg_);
   }
 
   FilterConfig cfg_;
@@ -204,8 +177,7 @@ class LandmarkUkf final : public Filter {
   U ukf_;
   std::vector<std::string> names_{"x", "y", "theta"};
   int64_t utime_ = 0;
-  FilterStatus status_ = FilterStatus::Ok;
-  int consecutive_rejections_ = 0;
+  detail::GateBook book_;  ///< gate decisions and lock-out
 };
 
 }  // namespace
