@@ -44,6 +44,25 @@ int runGnuplot(const std::string& dir, const std::string& script) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+PlotResult& drawFigures(PlotResult& res, const std::string& dir, const std::string& script) {
+  if (!findInPath("gnuplot")) {
+    res.message = "gnuplot not found in PATH: no figures drawn (install gnuplot-nox); data files and " + script +
+                  " are in " + dir;
+    res.figures.clear();
+    return res;
+  }
+  const int rc = runGnuplot(dir, script);
+  if (rc != 0) {
+    res.message = "gnuplot failed (exit " + std::to_string(rc) + "): see " + dir + "/gnuplot.log";
+    res.figures.clear();
+    return res;
+  }
+  for (auto& f : res.figures) f = dir + "/" + f;
+  res.ok = true;
+  res.message = "figures written to " + dir;
+  return res;
+}
+
 namespace {
 
 const std::map<std::string, std::string> kColours{{"dead_reckoning", "#e69f00"},
@@ -236,21 +255,7 @@ PlotResult writePlots(const LogData& data, const Evaluation& ev, const core::Mar
     }
     gp << "set output\n";
   }
-  if (!findInPath("gnuplot")) {
-    res.message = "gnuplot not found in PATH: no figures drawn (install gnuplot-nox); data files and plot.gp are in " + dir;
-    res.figures.clear();
-    return res;
-  }
-  const int rc = runGnuplot(dir, "plot.gp");
-  if (rc != 0) {
-    res.message = "gnuplot failed (exit " + std::to_string(rc) + "): see " + dir + "/gnuplot.log";
-    res.figures.clear();
-    return res;
-  }
-  for (auto& f : res.figures) f = dir + "/" + f;
-  res.ok = true;
-  res.message = "figures written to " + dir;
-  return res;
+  return drawFigures(res, dir, "plot.gp");
 }
 
 }  // namespace lcmloc::eval

@@ -323,21 +323,7 @@ PlotResult writeTrajectoryPlots(const TrajectoryLog& log, const std::vector<Trac
     res.message = "nothing to plot";
     return res;
   }
-  if (!findInPath("gnuplot")) {
-    res.message = "gnuplot not found in PATH: no figures drawn (install gnuplot-nox); data files and evaluate.gp are in " + dir;
-    res.figures.clear();
-    return res;
-  }
-  const int rc = runGnuplot(dir, "evaluate.gp");
-  if (rc != 0) {
-    res.message = "gnuplot failed (exit " + std::to_string(rc) + "): see " + dir + "/gnuplot.log";
-    res.figures.clear();
-    return res;
-  }
-  for (auto& f : res.figures) f = dir + "/" + f;
-  res.ok = true;
-  res.message = "figures written to " + dir;
-  return res;
+  return drawFigures(res, dir, "evaluate.gp");
 }
 
 std::string tumLine(int64_t utime, double x, double y, double yaw) {
