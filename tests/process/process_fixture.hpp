@@ -3,11 +3,14 @@
 // (kept when the test fails, for its logs) and a udpm:// URL no other test uses.
 #include <unistd.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
 
 #include "child.hpp"
 
@@ -33,3 +36,29 @@ class ProcessFixture : public ::testing::Test {
   std::filesystem::path dir_;
   std::string url_;
 };
+
+/// One event of a log read back whole (channel and encoded message).
+struct LogEvent {
+  std::string channel;
+  std::vector<uint8_t> data;
+};
+
+/// Every event of a log file, in file order (empty when it cannot be opened).
+inline std::vector<LogEvent> readLog(const std::string& file) {
+  std::vector<LogEvent> out;
+  lcm::LogFile log(file, "r");
+  if (!log.good()) return out;
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    const auto* p = static_cast<const uint8_t*>(ev->data);
+    out.push_back({ev->channel, std::vector<uint8_t>(p, p + ev->datalen)});
+  }
+  return out;
+}
+
+/// Decodes one logged message of type T (a failed decode fails the test).
+template <typename T>
+T decode(const LogEvent& ev) {
+  T m;
+  EXPECT_GE(m.decode(ev.data.data(), 0, static_cast<int>(ev.data.size())), 0) << ev.channel;
+  return m;
+}

@@ -41,21 +41,6 @@ bool waitFor(lcmloc::common::Bus& bus, const std::function<bool()>& pred, std::c
   return pred();
 }
 
-struct LogEvent {
-  std::string channel;
-  std::vector<uint8_t> data;
-};
-
-std::vector<LogEvent> readLog(const std::string& file) {
-  std::vector<LogEvent> out;
-  lcm::LogFile log(file, "r");
-  if (!log.good()) return out;
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
-    const auto* p = static_cast<const uint8_t*>(ev->data);
-    out.push_back({ev->channel, std::vector<uint8_t>(p, p + ev->datalen)});
-  }
-  return out;
-}
 
 int64_t seqOf(const std::vector<uint8_t>& d) {
   uint64_t v = 0;
@@ -63,12 +48,6 @@ int64_t seqOf(const std::vector<uint8_t>& d) {
   return static_cast<int64_t>(v);
 }
 
-template <typename T>
-T decode(const LogEvent& ev) {
-  T m;
-  EXPECT_GE(m.decode(ev.data.data(), 0, static_cast<int>(ev.data.size())), 0) << ev.channel;
-  return m;
-}
 
 }  // namespace
 

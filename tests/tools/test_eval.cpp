@@ -25,6 +25,7 @@
 #include "lcmloc/models/world.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
+#include "test_log_writer.hpp"
 
 namespace fs = std::filesystem;
 using namespace lcmloc;
@@ -36,37 +37,8 @@ constexpr int64_t kDt = 10000;          // 100 Hz
 constexpr int kSteps = 1000;            // 10 s at 1 m/s: y from 0 to 10 m
 constexpr double kLiveOffsetX = 0.1;    // the fake live daemon's constant x error [m]
 
-/// Where each event of a written log starts, and its channel.
-struct LogLayout {
-  std::vector<int64_t> starts;
-  std::vector<std::string> channels;
-};
-
-/// Writes events with lcm::LogFile and remembers where each one starts.
-class LogWriter {
- public:
-  explicit LogWriter(const std::string& path) : log_(path, "w") {}
-  template <typename T>
-  void add(const std::string& channel, const T& msg, int64_t utime) {
-    std::vector<uint8_t> buf(static_cast<size_t>(msg.getEncodedSize()));
-    msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
-    lcm::LogEvent ev;
-    ev.eventnum = 0;
-    ev.timestamp = utime;
-    ev.channel = channel;
-    ev.datalen = static_cast<int32_t>(buf.size());
-    ev.data = buf.data();
-    layout.starts.push_back(offset_);
-    layout.channels.push_back(channel);
-    offset_ += 28 + static_cast<int64_t>(channel.size()) + ev.datalen;
-    ASSERT_EQ(log_.writeEvent(&ev), 0);
-  }
-  LogLayout layout;
-
- private:
-  lcm::LogFile log_;
-  int64_t offset_ = 0;
-};
+using testlog::LogLayout;
+using testlog::LogWriter;
 
 struct Detection { int step; double offset; std::string channel; int64_t seq; const char* fault; };
 

@@ -24,6 +24,7 @@
 #include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/pose_t.hpp"
+#include "test_log_writer.hpp"
 
 namespace fs = std::filesystem;
 using namespace lcmloc;
@@ -33,29 +34,7 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr int64_t kT0 = 5000000;  // utime of the first truth sample [us]
 
-class LogWriter {
- public:
-  explicit LogWriter(const std::string& path) : log_(path, "w") {}
-  template <typename T>
-  void add(const std::string& channel, const T& msg, int64_t utime) {
-    std::vector<uint8_t> buf(static_cast<size_t>(msg.getEncodedSize()));
-    msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
-    lcm::LogEvent ev;
-    ev.eventnum = 0;
-    ev.timestamp = utime;
-    ev.channel = channel;
-    ev.datalen = static_cast<int32_t>(buf.size());
-    ev.data = buf.data();
-    starts.push_back(offset_);
-    offset_ += 28 + static_cast<int64_t>(channel.size()) + ev.datalen;
-    ASSERT_EQ(log_.writeEvent(&ev), 0);
-  }
-  std::vector<int64_t> starts;   ///< byte offset of each event
-
- private:
-  lcm::LogFile log_;
-  int64_t offset_ = 0;
-};
+using testlog::LogWriter;
 
 ground_truth_t truthMsg(int64_t utime, double x, double y, double heading) {
   ground_truth_t m{};
@@ -554,7 +533,7 @@ TEST_F(EvaluateTest, DamagedLogIsReportedAndTheRestUsed) {
       w.add("GROUND_TRUTH", truthMsg(t, 0.01 * i, 0.0, 0.0), t);
       w.add("POSE", poseMsg(t, 0.01 * i + 0.1, 0.0, 0.0, Eigen::Matrix3d::Identity()), t);
     }
-    starts = w.starts;
+    starts = w.layout.starts;
   }
   // Corrupt the sync word of event 100 (a truth sample) and cut the file inside the last event.
   const int64_t bad = starts[100];
