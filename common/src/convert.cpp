@@ -160,9 +160,8 @@ void toLcm(const core::FilterState& s, const std::string& filter, int64_t seq, l
   m.covariance.resize(n);
   for (int i = 0; i < n; ++i) {
     auto& row = m.covariance[i];
-    row.assign(n, 0.0);
-    if (i < s.P.rows())
-      for (int j = 0; j < n && j < s.P.cols(); ++j) row[j] = s.P(i, j);
+    row.resize(n);
+    for (int j = 0; j < n; ++j) row[j] = i < s.P.rows() && j < s.P.cols() ? s.P(i, j) : 0.0;
   }
 }
 

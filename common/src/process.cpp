@@ -11,6 +11,7 @@
 #include <spdlog/spdlog.h>
 
 #include "lcmloc/common/config.hpp"
+#include "lcmloc/core/text.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 
 namespace lcmloc::common {
@@ -147,11 +148,16 @@ bool Pacer::waitUntil(int64_t sim_utime, const std::function<void()>& idle) {
 // ---------------------------------------------------------------------------------------------
 
 int64_t SeqTracker::observe(const std::string& key, int64_t seq) {
-  auto it = std::find_if(entries_.begin(), entries_.end(), [&](const auto& e) { return e.first == key; });
+  // Most messages come on the channel of the message before: try that entry first.
+  auto it = last_ < entries_.size() && core::sameText(entries_[last_].first, key)
+                ? entries_.begin() + static_cast<std::ptrdiff_t>(last_)
+                : std::find_if(entries_.begin(), entries_.end(), [&](const auto& e) { return e.first == key; });
   if (it == entries_.end()) {
     entries_.push_back({key, Entry{seq, 0}});
+    last_ = entries_.size() - 1;
     return 0;
   }
+  last_ = static_cast<std::size_t>(it - entries_.begin());
   Entry& e = it->second;
   int64_t missing = 0;
   if (seq > e.last + 1) missing = seq - e.last - 1;

@@ -7,6 +7,7 @@
 #include <spdlog/spdlog.h>
 
 #include "lcmloc/common/convert.hpp"
+#include "lcmloc/core/text.hpp"
 #include "lcmloc/common/csv.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/models/world.hpp"
@@ -141,7 +142,7 @@ void FusionDaemon::onDecodeError(const std::string& ch, const std::string& why) 
   publishStatus("rejected_input", ch + ": " + why, last_utime_);
 }
 
-void FusionDaemon::push(core::EngineInput in) {
+void FusionDaemon::push(core::EngineInput&& in) {
   if (hold_) {
     held_.push_back(std::move(in));
     return;
@@ -151,10 +152,8 @@ void FusionDaemon::push(core::EngineInput in) {
     return;
   }
   event_seen_ = false;
-  const std::string ch = in.channel;
-  const int64_t seq = in.seq, utime = in.utime;
-  if (!engine_->push(std::move(in)) && !event_seen_)  // the engine normally reports it itself
-    reject(ch, seq, utime, "older than the reorder window");
+  if (!engine_->push(std::move(in)) && !event_seen_)  // refused inputs are left as they were;
+    reject(in.channel, in.seq, in.utime, "older than the reorder window");  // normally reported by the engine
 }
 
 void FusionDaemon::onOdometry(const std::string& ch, const lcmloc::odometry_t& m) {
@@ -255,7 +254,7 @@ std::string FusionDaemon::poseChannel(const std::string& filter, bool active) co
 void FusionDaemon::publishState(const std::string& filter, bool active, const core::FilterState& s) {
   PoseOut* po = nullptr;
   for (auto& p : pose_out_)
-    if (p.active == active && p.filter == filter) {
+    if (p.active == active && core::sameText(p.filter, filter)) {
       po = &p;
       break;
     }

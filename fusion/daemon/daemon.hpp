@@ -68,7 +68,7 @@ class FusionDaemon {
   void onDecodeError(const std::string& ch, const std::string& why);
 
   bool received(const std::string& ch, int64_t seq);     ///< counts and checks the seq gap
-  void push(core::EngineInput in);
+  void push(core::EngineInput&& in);
   void reject(const std::string& ch, int64_t seq, int64_t utime, const std::string& why);
   void publishState(const std::string& filter, bool active, const core::FilterState& s);
   void publishStatus(const std::string& event, const std::string& detail, int64_t utime);

@@ -7,6 +7,7 @@
 #include <type_traits>
 
 #include "lcmloc/core/angles.hpp"
+#include "lcmloc/core/text.hpp"
 
 namespace lcmloc::core {
 namespace {
@@ -80,7 +81,7 @@ struct FusionEngine::Impl {
   std::string hashed_channel;
   uint32_t channel_hash = 0;
   OrderKey orderKey(const EngineInput& in) {
-    if (in.channel != hashed_channel || hashed_channel.empty()) {
+    if (hashed_channel.empty() || !sameText(in.channel, hashed_channel)) {
       hashed_channel = in.channel;
       channel_hash = stableHash(in.channel);
     }
@@ -200,8 +201,8 @@ struct FusionEngine::Impl {
   }
   void handle(const EngineInput& in, const BearingsInput& b) { landmarkFix(in, b); }
 
-  void handle(const EngineInput& in, const ControlCommand& cmd) {
-    std::visit([&](const auto& c) { control(in.utime, c); }, cmd);
+  void handle(const EngineInput& in, const Boxed<ControlCommand>& cmd) {
+    std::visit([&](const auto& c) { control(in.utime, c); }, *cmd);
   }
 
   void control(int64_t utime, const SwitchFilter& c) {
@@ -332,7 +333,7 @@ FusionEngine::~FusionEngine() = default;
 FusionEngine::FusionEngine(FusionEngine&&) noexcept = default;
 FusionEngine& FusionEngine::operator=(FusionEngine&&) noexcept = default;
 
-bool FusionEngine::push(EngineInput in) {
+bool FusionEngine::push(EngineInput&& in) {
   const OrderKey key = impl_->orderKey(in);
   if (!impl_->buffer.push(key, std::move(in))) {  // refused: `in` is untouched
     ++impl_->counters.too_old;

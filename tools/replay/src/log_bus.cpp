@@ -3,18 +3,19 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "lcmloc/core/text.hpp"
 #include "lcmloc/logger/event_file.hpp"
 
 namespace lcmloc::replay {
 
 /// The output log: the standard LCM log format (events numbered 0, 1, ... as lcm::LogFile numbers
 /// them), written through a 1 MB user-space buffer (one write(2) per MB, not several stdio calls
-/// per event).
+/// per event), by a writer thread while the replay fills the next buffer.
 class LogWriter {
  public:
   explicit LogWriter(const std::string& path) {
     try {
-      file = std::make_unique<logger::EventFile>(path, std::size_t{1} << 20);
+      file = std::make_unique<logger::EventFile>(path, std::size_t{1} << 20, /*background=*/true);
     } catch (const std::exception& e) {
       throw std::runtime_error("cannot create output log '" + path + "': " + e.what());
     }
@@ -51,7 +52,7 @@ bool LogBus::write(const std::string& channel, const void* data, std::size_t siz
   ++written_;
   // A handful of channels: a linear search beats a map lookup per event.
   auto it = per_channel_.begin();
-  while (it != per_channel_.end() && it->first != channel) ++it;
+  while (it != per_channel_.end() && !core::sameText(it->first, channel)) ++it;
   if (it == per_channel_.end())
     per_channel_.emplace_back(channel, 1);
   else
@@ -79,7 +80,7 @@ void LogBus::subscribeRaw(const std::string& channel, RawHandler handler) {
 }
 
 const std::vector<std::size_t>& LogBus::handlersFor(const std::string& channel) {
-  if (last_channel_ && *last_channel_ == channel) return *last_route_;
+  if (last_channel_ && core::sameText(*last_channel_, channel)) return *last_route_;
   auto it = route_.find(channel);
   if (it == route_.end()) {
     std::vector<std::size_t> idx;

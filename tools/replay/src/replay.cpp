@@ -9,7 +9,9 @@
 #include <spdlog/spdlog.h>
 
 #include "daemon/daemon.hpp"
+#include "lcmloc/core/text.hpp"
 #include "lcmloc/replay/log_bus.hpp"
+#include "lcmloc/replay/read_ahead.hpp"
 
 namespace lcmloc::replay {
 
@@ -25,25 +27,33 @@ ReplayResult replayLog(const common::SystemConfig& cfg, const ReplayOptions& opt
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   ReplayResult r;
-  eval::LogScanner scanner(opts.input, &r.issues);
+  ReadAhead scanner(opts.input, opts.read_ahead);
   r.file_size = scanner.fileSize();
   LogBus bus(opts.output);
   fusion::FusionDaemon daemon(cfg, bus);
 
   auto next_progress = t0 + std::chrono::duration<double>(opts.progress_period_s);
   std::size_t issues_reported = 0;
+  // Whether the channel is one of the daemon's outputs, kept for the channel of the event before
+  // (most events are on the same channel as the one before).
+  std::string last_channel;
+  bool last_is_output = false;
   while (true) {
     if (opts.stop && opts.stop()) {
       r.interrupted = true;
       break;
     }
-    const lcm::LogEvent* ev = scanner.next();
+    const lcm::LogEvent* ev = scanner.next(r.issues);
     for (; issues_reported < r.issues.size(); ++issues_reported) {
       const auto& is = r.issues[issues_reported];
       spdlog::warn("input log damaged: event {} at byte {}: {}", is.event_index, is.byte_offset, is.what);
     }
     if (!ev) break;
-    if (isDaemonOutput(cfg.channels, ev->channel)) {
+    if (last_channel.empty() || !core::sameText(ev->channel, last_channel)) {
+      last_channel = ev->channel;
+      last_is_output = isDaemonOutput(cfg.channels, ev->channel);
+    }
+    if (last_is_output) {
       ++r.old_outputs;  // the recorded run's estimates: never fed back, never copied
       continue;
     }

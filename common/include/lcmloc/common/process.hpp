@@ -90,6 +90,7 @@ class SeqTracker {
  private:
   struct Entry { int64_t last = 0; int64_t gaps = 0; };
   std::vector<std::pair<std::string, Entry>> entries_;
+  std::size_t last_ = 0;  ///< entry of the last key observed
   int64_t total_ = 0;
 };
 

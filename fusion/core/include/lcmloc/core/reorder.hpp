@@ -76,19 +76,21 @@ class ReorderBuffer {
     return std::lower_bound(items_.begin() + static_cast<std::ptrdiff_t>(head_), items_.end(), key,
                             [](const Item& a, const OrderKey& k) { return a.first < k; });
   }
+  /// The sink sees the item where it is stored (no move out): it must not push meanwhile. The
+  /// released item is destroyed when compact() reuses its place.
   template <typename F>
   void pop(F& sink) {
-    last_released_ = items_[head_].first;
+    const Item& item = items_[head_++];
+    last_released_ = item.first;
     released_any_ = true;
-    const OrderKey k = items_[head_].first;
-    T v = std::move(items_[head_].second);
-    ++head_;
-    sink(k, v);
+    sink(item.first, item.second);
   }
   /// Drops the released items at the front before the storage would grow: the vector's
-  /// storage is reused, no allocation per item (an item can be large: a few hundred bytes).
+  /// storage is reused, no allocation per item. Only when at least half of the items are
+  /// released: the storage then grows to about twice the window's items and each compaction
+  /// moves at most as many items as were pushed since the one before.
   void compact() {
-    if (head_ == 0 || items_.size() < items_.capacity()) return;
+    if (items_.size() < items_.capacity() || head_ * 2 < items_.size()) return;
     items_.erase(items_.begin(), items_.begin() + static_cast<std::ptrdiff_t>(head_));
     head_ = 0;
   }
