@@ -4,11 +4,9 @@
 
 #include <unistd.h>
 
-#include <cerrno>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <sstream>
 
 #include <lcm/lcm-cpp.hpp>
@@ -333,49 +331,6 @@ TEST(EventFile, WritesTheStandardFormatThatLcmReads) {
   }
   EXPECT_EQ(i, 10);
   fs::remove(file);
-}
-
-// Background writing (a writer thread per file, double buffering): the same bytes as writing on
-// the caller's thread, the same accounting after close; a failing disk is reported by a later
-// call and nothing is counted as written that is not in the file.
-TEST(EventFile, BackgroundWritingWritesTheSameBytesAndReportsAFailedWrite) {
-  const std::string base = (fs::temp_directory_path() / ("lcmloc_eventfile_bg_" + std::to_string(::getpid()))).string();
-  auto fill = [](lcmloc::logger::EventFile& f, int n) {
-    int err = 0;
-    for (int i = 0; i < n && err == 0; ++i) {
-      std::vector<uint8_t> d(static_cast<std::size_t>(i % 50), static_cast<uint8_t>(i));
-      err = f.append(1000 + i, "CH" + std::to_string(i % 3), d.data(), d.size());
-    }
-    return err;
-  };
-  for (std::size_t buffer : {std::size_t{64}, std::size_t{4096}}) {
-    {
-      lcmloc::logger::EventFile fg(base + ".fg", buffer), bg(base + ".bg", buffer, true);
-      ASSERT_EQ(fill(fg, 2000), 0);
-      ASSERT_EQ(fill(bg, 2000), 0);
-      EXPECT_EQ(bg.events(), 2000);
-      EXPECT_EQ(bg.size(), fg.size());
-      EXPECT_EQ(fg.close(), 0);
-      EXPECT_EQ(bg.close(), 0);
-      EXPECT_EQ(bg.eventsWritten(), 2000);
-      EXPECT_EQ(bg.fileBytes(), fg.fileBytes());
-    }
-    std::ifstream a(base + ".fg", std::ios::binary), b(base + ".bg", std::ios::binary);
-    const std::string fa((std::istreambuf_iterator<char>(a)), {}), fb((std::istreambuf_iterator<char>(b)), {});
-    ASSERT_GT(fa.size(), 50000u);
-    EXPECT_TRUE(fa == fb) << "buffer " << buffer;
-  }
-  fs::remove(base + ".fg");
-  fs::remove(base + ".bg");
-
-  // /dev/full: every write fails with ENOSPC.
-  lcmloc::logger::EventFile full("/dev/full", 4096, true);
-  int err = fill(full, 2000);
-  if (err == 0) err = full.flush(false);
-  EXPECT_EQ(err, ENOSPC);
-  EXPECT_EQ(full.eventsWritten(), 0);
-  EXPECT_EQ(full.fileBytes(), 0);
-  full.close(false);
 }
 
 TEST(FileName, ExpandsStrftimeAndIndexAndNeverReusesATakenName) {

@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -16,7 +15,6 @@
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/pose_t.hpp"
-#include "lcmloc/replay/read_ahead.hpp"
 #include "lcmloc/replay/replay.hpp"
 
 using namespace lcmloc;
@@ -340,82 +338,4 @@ TEST_F(ReplayTest, CheckpointRoundTripsExactlyAndRejectsGarbage) {
   EXPECT_FALSE(fusion::readCheckpoint(path("absent")).has_value());
   std::ofstream(path("garbage")) << "not a checkpoint";
   EXPECT_THROW(fusion::readCheckpoint(path("garbage")), std::runtime_error);
-}
-
-// Reading ahead on a second thread hands over the very events, damage reports and therefore the
-// very output that reading on the replay's own thread gives: across block boundaries (a block
-// holds 4096 events), with damage inside a block and right at a block's start, and when the
-// replay is interrupted while the reader waits for room.
-TEST_F(ReplayTest, ReadAheadGivesTheSameEventsDamageAndOutputAsReadingInline) {
-  // 170 s: about 17,000 events, more than the reader may hold (4 blocks of 4096).
-  const std::string long_log = path("long.lcmlog");
-  replay::writeSyntheticLog(cfg_.scenario, 170.0, long_log, cfg_.channels);
-  auto events = readEvents(long_log);
-  ASSERT_GT(events.size(), 4 * 4096u + 10);
-  std::vector<int64_t> offset{0};
-  for (const auto& e : events) offset.push_back(offset.back() + 28 + static_cast<int64_t>(e.channel.size() + e.data.size()));
-  std::string bytes = slurp(long_log);
-  for (std::size_t bad : {std::size_t{700}, std::size_t{4096}, std::size_t{4097}, std::size_t{8190}})
-    bytes[static_cast<std::size_t>(offset[bad]) + 1] = 'X';  // corrupt sync words
-  bytes.resize(bytes.size() - 5);                            // and the last event truncated
-  const std::string damaged = path("damaged.lcmlog");
-  std::ofstream(damaged, std::ios::binary) << bytes;
-
-  // The reader itself: event for event against LogScanner.
-  {
-    std::vector<eval::LogIssue> inline_issues, ahead_issues;
-    eval::LogScanner scanner(damaged, &inline_issues);
-    replay::ReadAhead ahead(damaged, true);
-    int64_t n = 0;
-    while (true) {
-      const lcm::LogEvent* a = scanner.next();
-      const lcm::LogEvent* b = ahead.next(ahead_issues);
-      ASSERT_EQ(a == nullptr, b == nullptr) << "at event " << n;
-      ASSERT_EQ(inline_issues.size(), ahead_issues.size()) << "damage reported at another event, " << n;
-      if (!a) break;
-      ASSERT_EQ(a->channel, b->channel);
-      ASSERT_EQ(a->timestamp, b->timestamp);
-      ASSERT_EQ(a->eventnum, b->eventnum);
-      ASSERT_EQ(a->datalen, b->datalen);
-      ASSERT_EQ(std::memcmp(a->data, b->data, static_cast<std::size_t>(a->datalen)), 0) << "at event " << n;
-      ++n;
-    }
-    EXPECT_EQ(ahead.next(ahead_issues), nullptr);  // stays at the end
-    EXPECT_EQ(ahead.eventsRead(), n);
-    EXPECT_EQ(ahead.bytesUnreadable(), scanner.bytesUnreadable());
-    ASSERT_EQ(ahead_issues.size(), 4u);  // 4096 and 4097 make one damaged stretch
-    for (std::size_t i = 0; i < ahead_issues.size(); ++i) {
-      EXPECT_EQ(ahead_issues[i].event_index, inline_issues[i].event_index);
-      EXPECT_EQ(ahead_issues[i].byte_offset, inline_issues[i].byte_offset);
-      EXPECT_EQ(ahead_issues[i].what, inline_issues[i].what);
-    }
-  }
-
-  // The replay: the same output file and counts either way.
-  cfg_.fusion.shadow = {"dead_reckoning"};
-  replay::ReplayOptions o;
-  o.input = damaged;
-  o.progress_period_s = 0;
-  o.output = path("inline.lcmlog");
-  o.read_ahead = false;
-  const auto a = replay::replayLog(cfg_, o);
-  o.output = path("ahead.lcmlog");
-  o.read_ahead = true;
-  const auto b = replay::replayLog(cfg_, o);
-  EXPECT_TRUE(a.damaged);
-  EXPECT_EQ(a.events_read, b.events_read);
-  EXPECT_EQ(a.bytes_unreadable, b.bytes_unreadable);
-  EXPECT_EQ(a.issues.size(), b.issues.size());
-  EXPECT_EQ(a.written, b.written);
-  const std::string fa = slurp(path("inline.lcmlog"));
-  ASSERT_GT(fa.size(), 100000u);
-  EXPECT_TRUE(fa == slurp(path("ahead.lcmlog"))) << "reading ahead changed the output";
-
-  // Interrupted early: the reader thread, blocked on a full hand-over queue, is stopped.
-  int polls = 0;
-  o.output = path("stopped.lcmlog");
-  o.stop = [&polls] { return ++polls > 100; };
-  const auto s = replay::replayLog(cfg_, o);
-  EXPECT_TRUE(s.interrupted);
-  EXPECT_EQ(s.events_read, 100);
 }

@@ -84,15 +84,12 @@ int runBench(const common::SystemConfig& base, const BenchOptions& opts) {
     std::string key, label, filter;
     int output_every = 1;
     bool file = true;
-    bool read_ahead = true;
     std::vector<double> wall, cpu;  ///< messages per wall / CPU second, one per repetition
     ReplayResult last;
   };
   std::vector<Case> cases;
-  auto add = [&cases](const std::string& key, const std::string& label, const char* filter, int every, bool file,
-                      bool read_ahead = true) {
+  auto add = [&cases](const std::string& key, const std::string& label, const char* filter, int every, bool file) {
     Case k;
-    k.read_ahead = read_ahead;
     k.key = key;
     k.label = label;
     k.filter = filter;
@@ -110,8 +107,6 @@ int runBench(const common::SystemConfig& base, const BenchOptions& opts) {
     add("ukf_gated_output_every_" + n, "ukf_gated, output_every " + n, "ukf_gated", opts.output_every, true);
     add("ukf_gated_output_every_" + n + "_no_output_file", "ukf_gated, output_every " + n + ", no file", "ukf_gated",
         opts.output_every, false);
-    add("ukf_gated_output_every_" + n + "_no_read_ahead", "ukf_gated, output_every " + n + ", no read-ahead",
-        "ukf_gated", opts.output_every, true, false);
   }
   std::vector<double> rate_read, cpu_read;
   int64_t events = 0, decoded = 0;
@@ -130,7 +125,6 @@ int runBench(const common::SystemConfig& base, const BenchOptions& opts) {
       ro.input = log;
       if (k.file) ro.output = out;  // otherwise the outputs are encoded but not written
       ro.progress_period_s = 0;
-      ro.read_ahead = k.read_ahead;
       c0 = cpuSeconds();
       const ReplayResult r = replayLog(c, ro);
       k.wall.push_back(r.events_read / r.seconds);
@@ -155,7 +149,7 @@ int runBench(const common::SystemConfig& base, const BenchOptions& opts) {
     const double w = median(k.wall), c = median(k.cpu);
     table += fmt::format("{:<40}{:>14.0f}{:>10.2f}{:>16.0f}{:>10.2f}{:>11}\n", k.label, w, w / m_read, c, c / c_read,
                          k.last.written);
-    j[k.key] = {{"filter", k.filter}, {"output_every", k.output_every}, {"output_file", k.file}, {"read_ahead", k.read_ahead},
+    j[k.key] = {{"filter", k.filter}, {"output_every", k.output_every}, {"output_file", k.file},
                 {"median_msgs_per_s", w}, {"runs", k.wall}, {"ratio_to_read", w / m_read},
                 {"median_msgs_per_cpu_s", c}, {"cpu_runs", k.cpu}, {"cpu_ratio_to_read", c / c_read},
                 {"used", k.last.used}, {"written", k.last.written}};

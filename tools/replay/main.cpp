@@ -33,7 +33,7 @@ int main(int argc, char** argv) {
   common::CommonOptions opts;
   common::addCommonOptions(app, opts);
   std::string input, output, filter, shadow;
-  bool with_inputs = false, no_shadow = false, bench = false, no_read_ahead = false;
+  bool with_inputs = false, no_shadow = false, bench = false;
   double progress = 2.0;
   replay::BenchOptions bo;
   app.add_option("log", input, "input LCM log file");
@@ -44,8 +44,6 @@ int main(int argc, char** argv) {
   app.add_flag("--with-inputs", with_inputs,
                "copy the input events to the output too (all but the old outputs, HEARTBEAT and LCM_SELF_TEST)");
   app.add_option("--progress", progress, "[s, wall] between progress lines; 0 = none");
-  app.add_flag("--no-read-ahead", no_read_ahead,
-               "read the log on the replay's own thread (default: a second thread reads ahead; same output)");
   app.add_flag("--bench", bench,
                "benchmark instead: generate a synthetic log, measure read+decode, dead_reckoning and ukf_gated "
                "replay (messages/s, medians)");
@@ -92,7 +90,6 @@ int main(int argc, char** argv) {
     ro.output = output;
     ro.with_inputs = with_inputs;
     ro.progress_period_s = progress;
-    ro.read_ahead = !no_read_ahead;
     ro.stop = [] { return common::stopRequested(); };
     const auto r = replay::replayLog(cfg, ro);
     std::cout << fmt::format("replayed {} ({}) with filter {} (shadow: {}) -> {}\n", input, bytes(r.file_size),

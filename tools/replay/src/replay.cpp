@@ -11,7 +11,6 @@
 #include "daemon/daemon.hpp"
 #include "lcmloc/core/text.hpp"
 #include "lcmloc/replay/log_bus.hpp"
-#include "lcmloc/replay/read_ahead.hpp"
 
 namespace lcmloc::replay {
 
@@ -27,7 +26,7 @@ ReplayResult replayLog(const common::SystemConfig& cfg, const ReplayOptions& opt
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   ReplayResult r;
-  ReadAhead scanner(opts.input, opts.read_ahead);
+  eval::LogScanner scanner(opts.input, &r.issues);
   r.file_size = scanner.fileSize();
   LogBus bus(opts.output);
   fusion::FusionDaemon daemon(cfg, bus);
@@ -43,7 +42,7 @@ ReplayResult replayLog(const common::SystemConfig& cfg, const ReplayOptions& opt
       r.interrupted = true;
       break;
     }
-    const lcm::LogEvent* ev = scanner.next(r.issues);
+    const lcm::LogEvent* ev = scanner.next();
     for (; issues_reported < r.issues.size(); ++issues_reported) {
       const auto& is = r.issues[issues_reported];
       spdlog::warn("input log damaged: event {} at byte {}: {}", is.event_index, is.byte_offset, is.what);

@@ -6,16 +6,8 @@
 // Events are appended to a user-space buffer and written out whole. When a write fails
 // (ENOSPC, EFBIG under RLIMIT_FSIZE, EIO) the file is truncated back to the end of the last
 // complete event, so what was written before stays a readable log.
-//
-// With background = true a full buffer is written by a thread of the file's own while append()
-// fills a second one (double buffering: the caller does not wait for write(2) unless the disk is
-// slower than it). The bytes in the file are the same; a failed background write is returned by
-// the next append(), flush() or close(), and the events buffered meanwhile are dropped with it.
-#include <condition_variable>
 #include <cstdint>
-#include <mutex>
 #include <string>
-#include <thread>
 #include <vector>
 
 namespace lcmloc::logger {
@@ -23,7 +15,7 @@ namespace lcmloc::logger {
 class EventFile {
  public:
   /// Creates (truncates) path, making parent directories; throws std::runtime_error.
-  explicit EventFile(const std::string& path, std::size_t buffer_bytes = 1 << 20, bool background = false);
+  explicit EventFile(const std::string& path, std::size_t buffer_bytes = 1 << 20);
   ~EventFile();
   EventFile(const EventFile&) = delete;
   EventFile& operator=(const EventFile&) = delete;
@@ -37,25 +29,16 @@ class EventFile {
   int close(bool sync = true);
 
   const std::string& path() const { return path_; }
-  /// Bytes in the file plus bytes buffered (and being written).
-  int64_t size() const { return file_bytes_ + inflight_ + static_cast<int64_t>(buf_.size()); }
+  /// Bytes in the file plus bytes buffered.
+  int64_t size() const { return file_bytes_ + static_cast<int64_t>(buf_.size()); }
   /// Events appended (buffered ones included) / events written to the kernel.
   int64_t events() const { return events_; }
   int64_t eventsWritten() const { return events_written_; }
-  /// Bytes in the file (whole events only). With background writing: as of the last
-  /// completed write.
+  /// Bytes in the file (whole events only).
   int64_t fileBytes() const { return file_bytes_; }
 
  private:
-  int writeOut();  ///< the buffer is full: write it (or hand it to the writer thread)
-  int writeNow();  ///< writes the buffer on this thread
-  /// Writes buf at the end of the file; on failure cuts the file back to the last whole event
-  /// (ends: end of each event in buf). Returns the errno or 0; whole = bytes / events kept.
-  int writeBuffer(const std::vector<uint8_t>& buf, const std::vector<std::size_t>& ends, std::size_t& whole,
-                  std::size_t& count);
-  /// Background mode: waits for the write in progress and takes over its outcome.
-  int finishBackground();
-  void writerLoop();
+  int writeOut();
 
   std::string path_;
   int fd_ = -1;
@@ -63,18 +46,6 @@ class EventFile {
   std::vector<uint8_t> buf_;
   std::vector<std::size_t> ends_;  ///< end of each buffered event within buf_
   int64_t file_bytes_ = 0, events_ = 0, events_written_ = 0;
-
-  // Background mode: the buffer being written (swapped with buf_ when that is full).
-  bool background_ = false;
-  std::vector<uint8_t> wbuf_;
-  std::vector<std::size_t> wends_;
-  std::mutex mutex_;
-  std::condition_variable cv_;
-  bool busy_ = false, quit_ = false;  ///< wbuf_ handed to the writer / writer to end
-  int werr_ = 0;
-  int64_t inflight_ = 0;  ///< bytes handed to the writer and not yet accounted for
-  std::size_t wwhole_ = 0, wcount_ = 0;
-  std::thread writer_;
 };
 
 /// The 28-byte header of one event (exposed for tests).

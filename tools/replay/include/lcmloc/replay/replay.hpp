@@ -24,9 +24,6 @@ struct ReplayOptions {
   bool with_inputs = false;
   double progress_period_s = 2.0;  ///< [s, wall] between progress lines (<= 0: none)
   std::function<bool()> stop;      ///< polled between events: true ends the replay early
-  /// Read the log on a thread of its own, ahead of the replay (ReadAhead). The output is the
-  /// same either way; with it, reading overlaps with the fusion on a second core.
-  bool read_ahead = true;
 };
 
 struct ReplayResult {
