@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <set>
 
@@ -36,7 +38,17 @@ TEST_F(InsVisionProcess, LauncherRunReinitializesBothFiltersAtTheLandmarks) {
   // The shipped scenario; the run is cut to 260 s of message time (the route is that of the
   // 3600 s run up to 220 s) at 20 times real time.
   const std::string log = path("run.lcmlog");
-  const std::string system = writeFile("system.yaml", std::string("scenario: ") + LCMLOC_INS_VISION_YAML + R"(
+  // At 20 times real time the scenario's 0.2 s reorder window is 10 ms of wall time: a process
+  // waiting that long for a core (ctest -j2 on two cores) would deliver a message too late. The
+  // test's copy of the scenario widens it to 2 s (100 ms of wall time); nothing checked here
+  // depends on it.
+  std::ifstream shipped(LCMLOC_INS_VISION_YAML);
+  std::string text((std::istreambuf_iterator<char>(shipped)), std::istreambuf_iterator<char>());
+  const std::string key = "reorder_window: 0.2 ";
+  ASSERT_NE(text.find(key), std::string::npos) << "the shipped scenario's reorder window changed";
+  text.replace(text.find(key), key.size(), "reorder_window: 2.0 ");
+  const std::string scenario = writeFile("scenario.yaml", text);
+  const std::string system = writeFile("system.yaml", std::string("scenario: ") + scenario + R"(
 drain_time: 1.0
 stop_timeout: 5.0
 ready_timeout: 5.0
