@@ -177,6 +177,44 @@ TEST_F(ReplayProcessTest, LiveRunEqualsOfflineReplayByteForByteWithSwitchAndShad
   EXPECT_EQ(last.filter, "ukf_calib");
 }
 
+// fusion.output_every: 10 in the live daemon: the batched time update and the decimated poses are
+// the engine's, so the live system and the offline replay of its log still agree byte for byte,
+// a switch in the middle of a batch included (the batch is applied before the command).
+TEST_F(ReplayProcessTest, LiveRunWithOutputEveryEqualsOfflineReplayByteForByte) {
+  const std::string log = path("run.lcmlog");
+  const std::string scenario = writeFile(
+      "scenario.yaml", "scenario: {realtime_factor: 4}\nlogger: {output: " + log +
+                           "}\nfusion: {shadow: [dead_reckoning], output_every: 10}\n");
+  Bus bus(url_);
+  Watch w(bus);
+  Child launcher(LCMLOC_LAUNCHER, {"--system", LCMLOC_SYSTEM_YAML, "--config", scenario, "--lcm-url", url_},
+                 path("launcher.out"));
+  ASSERT_TRUE(waitFor(bus, [&] { return w.poses.size() > 60; }, 30s)) << launcher.output();
+  Child ctl(LCMLOC_CTL, {"--lcm-url", url_, "--config", scenario, "--timeout", "5", "switch", "ukf"}, path("ctl.out"));
+  const auto deadline = std::chrono::steady_clock::now() + 15s;
+  std::optional<int> ctl_rc;
+  while (!(ctl_rc = ctl.wait(0ms)) && std::chrono::steady_clock::now() < deadline) bus.handle(20);
+  EXPECT_EQ(ctl_rc.value_or(-1), 0) << ctl.output();
+
+  const auto rc = launcher.wait(90s);
+  ASSERT_TRUE(rc.has_value()) << launcher.output();
+  ASSERT_EQ(*rc, 0) << launcher.output();
+  auto live = byChannel(readEvents(log));
+  const std::size_t odometry = live["ODOMETRY"].size(), detections = live["MAGRULER"].size() + live["MAGRULER_FAULT"].size();
+  ASSERT_GT(odometry, 1000u);
+  // About one pose per ten odometry messages, plus one per detection and the final one.
+  EXPECT_LE(live["POSE"].size(), odometry / 10 + detections + 2);
+  EXPECT_GE(live["POSE"].size(), odometry / 10 + detections - 2);
+  EXPECT_EQ(decode<lcmloc::pose_t>(live["POSE"].back()).filter, "ukf");
+  auto offline = byChannel(replay(log, scenario, "replay.lcmlog"));
+  for (const char* ch : {"POSE", "POSE_DEAD_RECKONING", "GATE", "FUSION_STATUS"}) {
+    ASSERT_FALSE(live[ch].empty()) << ch;
+    EXPECT_EQ(firstDifference(live[ch], offline[ch]), -1)
+        << ch << ": live " << live[ch].size() << " vs replay " << offline[ch].size() << " messages";
+  }
+  EXPECT_EQ(decode<lcmloc::fusion_status_t>(live["FUSION_STATUS"].back()).sequence_gaps, 0);
+}
+
 // lcm-logplayer into a running daemon gives the offline replay's estimates byte for byte when
 // nothing is lost; with events removed from the log, the daemon reports the gap on FUSION_STATUS
 // (and still equals the offline replay of the same damaged input).
