@@ -81,6 +81,32 @@ class ReplayProcessTest : public ProcessFixture {
     EXPECT_EQ(rc.value_or(-1), 0) << r.output();
     return readEvents(path(name));
   }
+  /// The scenario of a live launcher run at four times real time, recording into log.
+  std::string liveScenario(const std::string& log, const std::string& fusion) {
+    return writeFile("scenario.yaml",
+                     "scenario: {realtime_factor: 4}\nlogger: {output: " + log + "}\nfusion: " + fusion + "\n");
+  }
+  /// Runs lcmloc-ctl with args against the daemon, keeping bus drained meanwhile; (exit code, output).
+  std::pair<int, std::string> ctl(Bus& bus, const std::string& scenario, std::vector<std::string> args,
+                                  const std::string& name) {
+    std::vector<std::string> all{"--lcm-url", url_, "--config", scenario, "--timeout", "5"};
+    all.insert(all.end(), args.begin(), args.end());
+    Child c(LCMLOC_CTL, all, path(name));
+    // Keep our own subscriptions drained while the ctl runs (its answer is on the bus too).
+    const auto deadline = std::chrono::steady_clock::now() + 15s;
+    std::optional<int> rc;
+    while (!(rc = c.wait(0ms)) && std::chrono::steady_clock::now() < deadline) bus.handle(20);
+    return {rc.value_or(-1), c.output()};
+  }
+  /// The daemon's outputs recorded live equal those of the offline replay of the same log.
+  void expectLiveEqualsReplay(std::map<std::string, std::vector<std::vector<uint8_t>>>& live,
+                              std::map<std::string, std::vector<std::vector<uint8_t>>>& offline) {
+    for (const char* ch : {"POSE", "POSE_DEAD_RECKONING", "GATE", "FUSION_STATUS"}) {
+      ASSERT_FALSE(live[ch].empty()) << ch;
+      EXPECT_EQ(firstDifference(live[ch], offline[ch]), -1)
+          << ch << ": live " << live[ch].size() << " vs replay " << offline[ch].size() << " messages";
+    }
+  }
 };
 
 /// A test-side daemon watcher: heartbeats, POSE/GATE payloads and FUSION_STATUS messages.
@@ -127,34 +153,22 @@ lcmloc::odometry_t odo(int64_t seq, int64_t utime) {
 // including the switch at the same point.
 TEST_F(ReplayProcessTest, LiveRunEqualsOfflineReplayByteForByteWithSwitchAndShadow) {
   const std::string log = path("run.lcmlog");
-  const std::string scenario = writeFile(
-      "scenario.yaml", "scenario: {realtime_factor: 4}\nlogger: {output: " + log +
-                           "}\nfusion: {shadow: [dead_reckoning]}\n");
+  const std::string scenario = liveScenario(log, "{shadow: [dead_reckoning]}");
   Bus bus(url_);
   Watch w(bus);
   Child launcher(LCMLOC_LAUNCHER, {"--system", LCMLOC_SYSTEM_YAML, "--config", scenario, "--lcm-url", url_},
                  path("launcher.out"));
   ASSERT_TRUE(waitFor(bus, [&] { return w.poses.size() > 300; }, 30s)) << launcher.output();
 
-  auto ctl = [&](std::vector<std::string> args, const std::string& name) {
-    std::vector<std::string> all{"--lcm-url", url_, "--config", scenario, "--timeout", "5"};
-    all.insert(all.end(), args.begin(), args.end());
-    auto c = std::make_unique<Child>(LCMLOC_CTL, all, path(name));
-    // Keep our own subscriptions drained while the ctl runs (its answer is on the bus too).
-    const auto deadline = std::chrono::steady_clock::now() + 15s;
-    std::optional<int> rc;
-    while (!(rc = c->wait(0ms)) && std::chrono::steady_clock::now() < deadline) bus.handle(20);
-    return std::make_pair(rc.value_or(-1), c->output());
-  };
-  const auto [rc_unknown, out_unknown] = ctl({"switch", "no_such_filter"}, "ctl1.out");
+  const auto [rc_unknown, out_unknown] = ctl(bus, scenario, {"switch", "no_such_filter"}, "ctl1.out");
   EXPECT_EQ(rc_unknown, 3) << out_unknown;
   EXPECT_NE(out_unknown.find("refused: switch to 'no_such_filter'"), std::string::npos) << out_unknown;
   EXPECT_NE(out_unknown.find("unknown filter type"), std::string::npos) << out_unknown;
-  const auto [rc_bad, out_bad] = ctl({"switch", "ukf", "--param", "pv_diag=[-1, 1]"}, "ctl2.out");
+  const auto [rc_bad, out_bad] = ctl(bus, scenario, {"switch", "ukf", "--param", "pv_diag=[-1, 1]"}, "ctl2.out");
   EXPECT_EQ(rc_bad, 3) << out_bad;
   EXPECT_NE(out_bad.find("refused"), std::string::npos) << out_bad;
   EXPECT_EQ(w.poses.back().filter, "ukf_gated") << "the running filter continues after a refusal";
-  const auto [rc_ok, out_ok] = ctl({"switch", "ukf_calib", "--param", "scale_std0=0.03"}, "ctl3.out");
+  const auto [rc_ok, out_ok] = ctl(bus, scenario, {"switch", "ukf_calib", "--param", "scale_std0=0.03"}, "ctl3.out");
   EXPECT_EQ(rc_ok, 0) << out_ok;
   EXPECT_NE(out_ok.find("ack: switched ukf_gated -> ukf_calib"), std::string::npos) << out_ok;
 
@@ -166,11 +180,7 @@ TEST_F(ReplayProcessTest, LiveRunEqualsOfflineReplayByteForByteWithSwitchAndShad
   EXPECT_EQ(decode<lcmloc::pose_t>(live["POSE"].back()).filter, "ukf_calib");
   ASSERT_EQ(live["FUSION_CONTROL"].size(), 3u) << "the logger records the commands";
   auto offline = byChannel(replay(log, scenario, "replay.lcmlog"));
-  for (const char* ch : {"POSE", "POSE_DEAD_RECKONING", "GATE", "FUSION_STATUS"}) {
-    ASSERT_FALSE(live[ch].empty()) << ch;
-    EXPECT_EQ(firstDifference(live[ch], offline[ch]), -1)
-        << ch << ": live " << live[ch].size() << " vs replay " << offline[ch].size() << " messages";
-  }
+  expectLiveEqualsReplay(live, offline);
   const auto last = decode<lcmloc::fusion_status_t>(live["FUSION_STATUS"].back());
   EXPECT_EQ(last.event, "stopped");
   EXPECT_EQ(last.sequence_gaps, 0);
@@ -182,19 +192,14 @@ TEST_F(ReplayProcessTest, LiveRunEqualsOfflineReplayByteForByteWithSwitchAndShad
 // a switch in the middle of a batch included (the batch is applied before the command).
 TEST_F(ReplayProcessTest, LiveRunWithOutputEveryEqualsOfflineReplayByteForByte) {
   const std::string log = path("run.lcmlog");
-  const std::string scenario = writeFile(
-      "scenario.yaml", "scenario: {realtime_factor: 4}\nlogger: {output: " + log +
-                           "}\nfusion: {shadow: [dead_reckoning], output_every: 10}\n");
+  const std::string scenario = liveScenario(log, "{shadow: [dead_reckoning], output_every: 10}");
   Bus bus(url_);
   Watch w(bus);
   Child launcher(LCMLOC_LAUNCHER, {"--system", LCMLOC_SYSTEM_YAML, "--config", scenario, "--lcm-url", url_},
                  path("launcher.out"));
   ASSERT_TRUE(waitFor(bus, [&] { return w.poses.size() > 60; }, 30s)) << launcher.output();
-  Child ctl(LCMLOC_CTL, {"--lcm-url", url_, "--config", scenario, "--timeout", "5", "switch", "ukf"}, path("ctl.out"));
-  const auto deadline = std::chrono::steady_clock::now() + 15s;
-  std::optional<int> ctl_rc;
-  while (!(ctl_rc = ctl.wait(0ms)) && std::chrono::steady_clock::now() < deadline) bus.handle(20);
-  EXPECT_EQ(ctl_rc.value_or(-1), 0) << ctl.output();
+  const auto [ctl_rc, ctl_out] = ctl(bus, scenario, {"switch", "ukf"}, "ctl.out");
+  EXPECT_EQ(ctl_rc, 0) << ctl_out;
 
   const auto rc = launcher.wait(90s);
   ASSERT_TRUE(rc.has_value()) << launcher.output();
@@ -207,11 +212,7 @@ TEST_F(ReplayProcessTest, LiveRunWithOutputEveryEqualsOfflineReplayByteForByte) 
   EXPECT_GE(live["POSE"].size(), odometry / 10 + detections - 2);
   EXPECT_EQ(decode<lcmloc::pose_t>(live["POSE"].back()).filter, "ukf");
   auto offline = byChannel(replay(log, scenario, "replay.lcmlog"));
-  for (const char* ch : {"POSE", "POSE_DEAD_RECKONING", "GATE", "FUSION_STATUS"}) {
-    ASSERT_FALSE(live[ch].empty()) << ch;
-    EXPECT_EQ(firstDifference(live[ch], offline[ch]), -1)
-        << ch << ": live " << live[ch].size() << " vs replay " << offline[ch].size() << " messages";
-  }
+  expectLiveEqualsReplay(live, offline);
   EXPECT_EQ(decode<lcmloc::fusion_status_t>(live["FUSION_STATUS"].back()).sequence_gaps, 0);
 }
 
