@@ -150,11 +150,6 @@ class DeadReckoningFilter final : public Filter {
     P_ = P;
   }
   std::string name() const override { return "dead_reckoning"; }
-  FilterState state() const override {
-    FilterState s;
-    stateInto(s);
-    return s;
-  }
   void stateInto(FilterState& s) const override {
     s.utime = utime_;
     s.x = x_;
@@ -248,11 +243,6 @@ class RulerUkf final : public Filter {
 
   std::string name() const override { return name_; }
 
-  FilterState state() const override {
-    FilterState s;
-    stateInto(s);
-    return s;
-  }
   void stateInto(FilterState& s) const override {
     s.utime = utime_;
     s.x = ukf_.x();

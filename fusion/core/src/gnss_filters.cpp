@@ -129,13 +129,11 @@ class GnssFilterBase : public Filter {
     return d;
   }
 
-  FilterState state() const override {
-    FilterState s;
+  void stateInto(FilterState& s) const override {
     s.utime = utime_;
     fillState(s.x, s.P);
     s.names = names();
     s.status = status();
-    return s;
   }
 
   void initialize(const FilterState& from) override {

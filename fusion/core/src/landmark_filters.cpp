@@ -32,11 +32,6 @@ class LandmarkUkf final : public Filter {
   }
 
   std::string name() const override { return "ukf_landmarks"; }
-  FilterState state() const override {
-    FilterState s;
-    stateInto(s);
-    return s;
-  }
   void stateInto(FilterState& s) const override {
     s.utime = utime_;
     s.x = ukf_.x();

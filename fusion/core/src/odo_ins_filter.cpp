@@ -47,11 +47,6 @@ class OdoInsAdapter : public Filter {
 
   std::string name() const override { return name_; }
 
-  FilterState state() const override {
-    FilterState s;
-    stateInto(s);
-    return s;
-  }
 
   void stateInto(FilterState& out) const override {
     const ins::InsState& s = kf_.state();

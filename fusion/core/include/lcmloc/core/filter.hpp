@@ -140,9 +140,13 @@ class Filter {
   virtual ~Filter() = default;
   virtual std::string name() const = 0;
   /// Current state (first three entries x, y, theta), covariance and status.
-  virtual FilterState state() const = 0;
+  FilterState state() const {
+    FilterState s;
+    stateInto(s);
+    return s;
+  }
   /// The same values as state(), into out, reusing its storage (the engine's per-message path).
-  virtual void stateInto(FilterState& out) const { out = state(); }
+  virtual void stateInto(FilterState& out) const = 0;
   /// Starts from another filter's state: the first three states and their covariance are
   /// copied; states this filter has but the source lacks take their initial values; states
   /// the source has but this filter lacks are dropped (hot swap).
