@@ -18,6 +18,7 @@
 #include "lcmloc/common/csv.hpp"
 #include "lcmloc/core/vehicle_model.hpp"
 #include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/eval/trajectory.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/gate_decision_t.hpp"
 #include "lcmloc/import/event_log.hpp"
@@ -55,19 +56,6 @@ std::vector<double> groups(int byte) {
   return out;
 }
 
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const double pos = q * static_cast<double>(v.size() - 1);
-  const auto i = static_cast<std::size_t>(pos);
-  const double f = pos - static_cast<double>(i);
-  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
-}
-
-template <typename T>
-bool decode(const eval::RawEvent& e, T& m) {
-  return m.decode(e.data, 0, e.size) == e.size;
-}
 
 }  // namespace
 
@@ -279,7 +267,7 @@ MagnetGridReport runMagnetGrid(const MagnetGridOptions& opt, MagnetGridImport* i
   eval::scanLog(ro.output, [&](const eval::RawEvent& e) {
     if (*e.channel == cfg.channels.pose) {
       lcmloc::pose_t p;
-      if (decode(e, p) && p.dim >= 3) {
+      if (eval::decodeEvent(e, p) && p.dim >= 3) {
         track.push_back({p.utime * 1e-6 - t0, p.state[0], p.state[1], p.state[2]});
         last = p;
         have_last = true;
@@ -288,10 +276,10 @@ MagnetGridReport runMagnetGrid(const MagnetGridOptions& opt, MagnetGridImport* i
       }
     } else if (*e.channel == dr_channel) {
       lcmloc::pose_t p;
-      if (decode(e, p) && p.dim >= 3) dr.push_back({p.utime * 1e-6 - t0, p.state[0], p.state[1], p.state[2]});
+      if (eval::decodeEvent(e, p) && p.dim >= 3) dr.push_back({p.utime * 1e-6 - t0, p.state[0], p.state[1], p.state[2]});
     } else if (*e.channel == cfg.channels.gate) {
       lcmloc::gate_decision_t g;
-      if (!decode(e, g) || g.filter != active) return;
+      if (!eval::decodeEvent(e, g) || g.filter != active) return;
       rep.gate = g.gate;
       if (decisions++ > 0)  // the first pass is the grid's anchor: associated by construction
         rep.max_prior_sigma = std::max(rep.max_prior_sigma, prior_sigma);
@@ -309,7 +297,7 @@ MagnetGridReport runMagnetGrid(const MagnetGridOptions& opt, MagnetGridImport* i
       }
     } else if (*e.channel == cfg.channels.status) {
       lcmloc::fusion_status_t st;
-      if (decode(e, st) && st.event == "lockout") ++rep.lockouts;
+      if (eval::decodeEvent(e, st) && st.event == "lockout") ++rep.lockouts;
     }
   });
   rep.with_candidate = static_cast<int64_t>(nis.size());
@@ -322,7 +310,7 @@ MagnetGridReport runMagnetGrid(const MagnetGridOptions& opt, MagnetGridImport* i
       w95 += v <= 5.991464547107979;
     }
     rep.nis_mean = s / nis.size();
-    rep.nis_median = quantile(nis, 0.5);
+    rep.nis_median = eval::percentile(nis, 0.5);
     rep.within_gate = static_cast<double>(within) / nis.size();
     rep.within_95 = static_cast<double>(w95) / nis.size();
   }

@@ -11,6 +11,7 @@
 #include <spdlog/spdlog.h>
 
 #include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/eval/trajectory.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/gate_decision_t.hpp"
 #include "lcmloc/pose_t.hpp"
@@ -34,24 +35,6 @@ bool interpolate(const std::vector<std::array<double, 3>>& tr, double t, double&
   y = a[2] + w * (b[2] - a[2]);
   return true;
 }
-
-namespace {
-
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const double pos = q * static_cast<double>(v.size() - 1);
-  const auto i = static_cast<std::size_t>(pos);
-  const double f = pos - static_cast<double>(i);
-  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
-}
-
-template <typename T>
-bool decode(const eval::RawEvent& e, T& m) {
-  return m.decode(e.data, 0, e.size) == e.size;
-}
-
-}  // namespace
 
 ExperimentResult runExperiment(const common::SystemConfig& cfg0, ImportOptions imp, const ExperimentOptions& opt) {
   namespace fs = std::filesystem;
@@ -107,7 +90,7 @@ ExperimentResult runExperiment(const common::SystemConfig& cfg0, ImportOptions i
     eval::scanLog(ro.output, [&](const eval::RawEvent& e) {
       if (*e.channel == cfg.channels.pose) {
         lcmloc::pose_t p;
-        if (decode(e, p) && p.dim >= 2) {
+        if (eval::decodeEvent(e, p) && p.dim >= 2) {
           ++s.poses;
           const double t = static_cast<double>(p.utime) * 1e-6 - t0;
           if (!s.track.empty() && t == s.track.back()[0]) s.track.back() = {t, p.state[0], p.state[1]};
@@ -115,11 +98,11 @@ ExperimentResult runExperiment(const common::SystemConfig& cfg0, ImportOptions i
         }
       } else if (*e.channel == cfg.channels.gate) {
         lcmloc::gate_decision_t g;
-        if (decode(e, g) && g.sensor == cfg.channels.gps && g.reason != "no_fix")
+        if (eval::decodeEvent(e, g) && g.sensor == cfg.channels.gps && g.reason != "no_fix")
           (g.accepted ? s.gps_accepted : s.gps_rejected)++;
       } else if (*e.channel == cfg.channels.status) {
         lcmloc::fusion_status_t st;
-        if (decode(e, st) && st.event == "lockout") ++s.lockouts;
+        if (eval::decodeEvent(e, st) && st.event == "lockout") ++s.lockouts;
       }
     });
     std::error_code ec;
@@ -138,8 +121,8 @@ ExperimentResult runExperiment(const common::SystemConfig& cfg0, ImportOptions i
     double se = 0;
     for (double e : s.err) se += e * e;
     s.rmse_m = s.scored ? std::sqrt(se / static_cast<double>(s.scored)) : 0;
-    s.median_m = quantile(s.err, 0.5);
-    s.p95_m = quantile(s.err, 0.95);
+    s.median_m = eval::percentile(s.err, 0.5);
+    s.p95_m = eval::percentile(s.err, 0.95);
     s.max_m = s.err.empty() ? 0 : *std::max_element(s.err.begin(), s.err.end());
     res.scores.push_back(std::move(s));
   }

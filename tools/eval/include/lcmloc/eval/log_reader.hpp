@@ -122,6 +122,12 @@ struct RawEvent {
   int32_t size = 0;
 };
 
+/// Decodes e into m; true when the whole payload is exactly one T.
+template <typename T>
+bool decodeEvent(const RawEvent& e, T& m) {
+  return m.decode(e.data, 0, e.size) == e.size;
+}
+
 /// What scanLog found about the file itself.
 struct ScanSummary {
   int64_t file_size = 0;
