@@ -138,6 +138,17 @@ GateDecision makeDecision(const RulerDetection& det) {
   return d;
 }
 
+}  // namespace
+
+GateDecision Filter::update(const RulerDetection& det) {
+  GateDecision d = makeDecision(det);
+  d.gate = kInf;
+  d.reason = "ignored";
+  return d;
+}
+
+namespace {
+
 // ---------------------------------------------------------------------------------------------
 /// Odometry only (eq. 1-2); covariance propagated by linearisation with the same process noise.
 class DeadReckoningFilter final : public Filter {

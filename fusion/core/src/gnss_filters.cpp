@@ -122,13 +122,6 @@ class GnssFilterBase : public Filter {
 
   bool uses(Measurement m) const override { return m != Measurement::Ruler; }
 
-  /// Never called by the engine (uses(Ruler) is false); answers "ignored" if called directly.
-  GateDecision update(const RulerDetection& det) override {
-    GateDecision d = decision(det.utime, det.sensor, det.seq, kInf);
-    d.reason = "ignored";
-    return d;
-  }
-
   void stateInto(FilterState& s) const override {
     s.utime = utime_;
     fillState(s.x, s.P);

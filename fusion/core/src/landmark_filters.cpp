@@ -64,14 +64,6 @@ class LandmarkUkf final : public Filter {
   }
 
   /// The ruler is not this filter's sensor (uses() says so; the engine never calls this).
-  GateDecision update(const RulerDetection& det) override {
-    GateDecision d;
-    d.utime = det.utime;
-    d.sensor = det.sensor;
-    d.measurement_seq = det.seq;
-    d.reason = "not_used";
-    return d;
-  }
 
   std::optional<GateDecision> update(const LandmarkObservation& obs) override {
     GateDecision d = decision(obs.utime, obs.sensor, obs.seq, gate2_);

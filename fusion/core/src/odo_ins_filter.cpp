@@ -106,14 +106,6 @@ class OdoInsAdapter : public Filter {
 
   bool uses(Measurement m) const override { return m == Measurement::Imu; }
 
-  GateDecision update(const RulerDetection& det) override {
-    GateDecision d;
-    d.utime = det.utime;
-    d.sensor = det.sensor;
-    d.measurement_seq = det.seq;
-    d.reason = "unused";
-    return d;
-  }
 
   std::optional<GateDecision> update(const ImuInput& m) override {
     GateDecision d;

@@ -158,8 +158,10 @@ class Filter {
   /// magnetic-ruler family, including dead reckoning, which reports "dead_reckoning").
   virtual bool uses(Measurement m) const { return m == Measurement::Ruler; }
   /// Measurement update with one ruler detection; returns the gate decision (dead reckoning
-  /// returns a decision with accepted = false, reason "dead_reckoning").
-  virtual GateDecision update(const RulerDetection& det) = 0;
+  /// returns a decision with accepted = false, reason "dead_reckoning"). Default, for filters
+  /// that do not use the ruler (the engine does not call it then): not accepted, reason
+  /// "ignored".
+  virtual GateDecision update(const RulerDetection& det);
   /// One IMU sample. Returns the decision on the measurement it carries (the magnetometer
   /// heading) when the filter used one; nullopt when nothing was gated (default: ignored).
   virtual std::optional<GateDecision> update(const ImuInput&) { return std::nullopt; }
