@@ -236,13 +236,19 @@ TEST(OdoInsFilter, LandmarkFixThroughTheEngineReinitializes) {
   EXPECT_NEAR(wrapAngle(later.x[2] - theta_true), 0.0, 1e-4);
 }
 
-TEST(OdoInsFilter, LandmarkFixRefusals) {
-  const auto map = triangle(1000.0);
-  Recorder rec;
+/// An odo_ins engine with the landmark triangle as its map, inputs in arrival order.
+EngineConfig landmarkEngineConfig(const std::map<int, Vec2>& map) {
   EngineConfig ec;
   ec.filter = insConfig();
   ec.reorder_window_us = 0;
   ec.landmarks = map;
+  return ec;
+}
+
+TEST(OdoInsFilter, LandmarkFixRefusals) {
+  const auto map = triangle(1000.0);
+  Recorder rec;
+  const EngineConfig ec = landmarkEngineConfig(map);
   FusionEngine e(ec, {}, rec.outputs());
   int64_t seq = 0;
   stand(e, 1000000, 50, M_PI / 2, &seq);
@@ -278,11 +284,7 @@ TEST(OdoInsFilter, LandmarkFixRefusals) {
 TEST(OdoInsFilter, FewerThanThreeLandmarksInViewIsADecisionWithoutAnEvent) {
   const auto map = triangle(1000.0);
   Recorder rec;
-  EngineConfig ec;
-  ec.filter = insConfig();
-  ec.reorder_window_us = 0;
-  ec.landmarks = map;
-  FusionEngine e(ec, {}, rec.outputs());
+  FusionEngine e(landmarkEngineConfig(map), {}, rec.outputs());
   int64_t seq = 0;
   stand(e, 1000000, 50, M_PI / 2, &seq);
   const FilterState before = e.activeState();
