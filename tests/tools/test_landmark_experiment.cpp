@@ -17,6 +17,7 @@
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/convert.hpp"
 #include "lcmloc/landmark_experiment/experiment.hpp"
+#include "test_log_writer.hpp"
 
 using namespace lcmloc;
 using namespace lcmloc::landmark_experiment;
@@ -31,6 +32,16 @@ const CaseResult& get(const Result& r, const std::string& name) {
   for (const auto& c : r.cases)
     if (c.name == name) return c;
   throw std::runtime_error("no case " + name);
+}
+/// Runs lcmloc-landmark-experiment with args (shell words), output to dir/out.txt; (exit code, output).
+std::pair<int, std::string> runExperimentCommand(const std::string& args, const std::filesystem::path& dir) {
+  const std::string cmd = std::string(LCMLOC_LANDMARK_EXPERIMENT_BIN) + " " + args + " > '" +
+                          (dir / "out.txt").string() + "' 2>&1";
+  const int st = std::system(cmd.c_str());
+  std::ifstream in(dir / "out.txt");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, ss.str()};
 }
 Result smallRun(uint64_t seed) {
   const auto cfg = common::loadSystemConfig(LCMLOC_LANDMARK_YAML);
@@ -142,15 +153,7 @@ TEST(LandmarkExperiment, CommandWritesReportAndRefusesBadInput) {
   const fs::path dir = fs::temp_directory_path() / "lcmloc_landmark_experiment_cmd";
   fs::remove_all(dir);
   fs::create_directories(dir);
-  auto runCmd = [&](const std::string& args) {
-    const std::string cmd = std::string(LCMLOC_LANDMARK_EXPERIMENT_BIN) + " " + args + " > '" +
-                            (dir / "out.txt").string() + "' 2>&1";
-    const int st = std::system(cmd.c_str());
-    std::ifstream in(dir / "out.txt");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return std::make_pair(WIFEXITED(st) ? WEXITSTATUS(st) : -1, ss.str());
-  };
+  auto runCmd = [&](const std::string& args) { return runExperimentCommand(args, dir); };
   auto [rc, out] = runCmd("--runs 30 --seed 4 --out '" + (dir / "r").string() + "'");
   EXPECT_EQ(rc, 0) << out;
   EXPECT_NE(out.find("apart_off_centre"), std::string::npos) << out;
@@ -225,19 +228,8 @@ TEST(LandmarkExperiment, CommandSolvesARecordedLog) {
   std::vector<models::Landmark> lms;
   const auto obs = lineObservations(&lms);
   {
-    lcm::LogFile log((dir / "run.lcmlog").string(), "w");
-    ASSERT_TRUE(log.good());
-    auto write = [&](const std::string& ch, const auto& msg, int64_t utime) {
-      std::vector<uint8_t> buf(static_cast<size_t>(msg.getEncodedSize()));
-      msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
-      lcm::LogEvent ev;
-      ev.eventnum = 0;
-      ev.timestamp = utime;
-      ev.channel = ch;
-      ev.datalen = static_cast<int32_t>(buf.size());
-      ev.data = buf.data();
-      ASSERT_EQ(log.writeEvent(&ev), 0);
-    };
+    testlog::LogWriter log((dir / "run.lcmlog").string());
+    auto write = [&](const std::string& ch, const auto& msg, int64_t utime) { log.add(ch, msg, utime); };
     for (std::size_t k = 0; k < obs.size(); ++k) {
       models::TruthState t;
       t.utime = obs[k].utime;
@@ -253,15 +245,7 @@ TEST(LandmarkExperiment, CommandSolvesARecordedLog) {
     map += "  - {id: " + std::to_string(l.id) + ", x: " + std::to_string(l.x) + ", y: " + std::to_string(l.y) + "}\n";
   std::ofstream(dir / "map.yaml") << map;
   std::ofstream(dir / "nomap.yaml") << "vision: {rate_hz: 1}\n";
-  auto runCmd = [&](const std::string& args) {
-    const std::string cmd = std::string(LCMLOC_LANDMARK_EXPERIMENT_BIN) + " " + args + " > '" +
-                            (dir / "out.txt").string() + "' 2>&1";
-    const int st = std::system(cmd.c_str());
-    std::ifstream in(dir / "out.txt");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return std::make_pair(WIFEXITED(st) ? WEXITSTATUS(st) : -1, ss.str());
-  };
+  auto runCmd = [&](const std::string& args) { return runExperimentCommand(args, dir); };
   const std::string log = "--log '" + (dir / "run.lcmlog").string() + "'";
   auto [rc, out] = runCmd(log + " --config '" + (dir / "map.yaml").string() + "' --out '" + (dir / "r").string() + "'");
   ASSERT_EQ(rc, 0) << out;
