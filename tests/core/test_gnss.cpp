@@ -362,6 +362,43 @@ TEST(GnssEngine, LockoutAndRecoveryEventsForGps) {
   EXPECT_NEAR(engine.activeState().x[0], 80.0, 3.0);
 }
 
+// A saturated IMU sample is not used (above) and shows on FUSION_STATUS: one "imu_saturated"
+// event at the start of each saturated stretch, not one per sample; none without saturation.
+TEST(GnssEngine, SaturatedImuStretchesAreReportedOncePerStretch) {
+  EngineConfig ec;
+  ec.filter = gnssConfig("ukf_gps");
+  ec.filter.gnss.accel_saturation = 19.9;
+  ec.shadow = {"tvekf"};
+  std::vector<std::pair<std::string, std::string>> events;
+  EngineOutputs out;
+  out.on_event = [&](const std::string& e, const std::string& d, int64_t) { events.push_back({e, d}); };
+  FusionEngine engine(ec, {}, out);
+  for (int k = 0; k < 100; ++k) {
+    const int64_t t = 1'000'000 + k * 10'000;
+    engine.push({"ODOMETRY", k, t, odo(t, 0.1)});
+    const bool spike = (k >= 10 && k < 13) || k == 50;
+    engine.push({"IMU", k, t, imu(t, spike ? 20.5 : 0.3)});
+  }
+  engine.flush();
+  std::vector<std::string> details;
+  for (const auto& [e, d] : events)
+    if (e == "imu_saturated") details.push_back(d);
+  ASSERT_EQ(details.size(), 2u);
+  EXPECT_NE(details[0].find("IMU seq 10: forward acceleration 20.50 m/s^2"), std::string::npos) << details[0];
+  EXPECT_NE(details[0].find("gnss.accel_saturation 19.90"), std::string::npos) << details[0];
+  EXPECT_NE(details[0].find("by ukf_gps (1 samples so far)"), std::string::npos) << details[0];
+  EXPECT_NE(details[1].find("IMU seq 50"), std::string::npos) << details[1];
+  EXPECT_NE(details[1].find("(4 samples so far)"), std::string::npos) << details[1];
+
+  // Without a saturation limit nothing is reported.
+  ec.filter.gnss.accel_saturation = 0.0;
+  events.clear();
+  FusionEngine unlimited(ec, {}, out);
+  for (int k = 0; k < 20; ++k) unlimited.push({"IMU", k, 1'000'000 + k * 10'000, imu(1'000'000 + k * 10'000, 20.5)});
+  unlimited.flush();
+  for (const auto& [e, d] : events) EXPECT_NE(e, "imu_saturated") << d;
+}
+
 TEST(GnssFilters, InvalidConfigIsRefused) {
   FilterConfig c = gnssConfig("tvekf");
   c.gnss.mag_std = 0.0;

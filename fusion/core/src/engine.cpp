@@ -186,8 +186,24 @@ struct FusionEngine::Impl {
       emitState(f, is_active);
     });
   }
+  /// Saturated IMU samples of the active filter so far, and whether the last sample was one.
+  int64_t imu_saturated = 0;
+  bool imu_saturating = false;
   void handle(const EngineInput& in, const ImuInput& m) {
     handleAbsolute(in, m, Measurement::Imu, "IMU sample");
+    // One event per saturated stretch (a pothole gives a few samples in a row), not per sample.
+    const int64_t n = active->saturatedImuSamples();
+    const bool saturated = n > imu_saturated;
+    if (saturated && !imu_saturating) {
+      char detail[200];
+      std::snprintf(detail, sizeof detail,
+                    ": forward acceleration %.2f m/s^2 at or beyond gnss.accel_saturation %.2f m/s^2: not used "
+                    "by %s (%lld samples so far)",
+                    m.accel[0], active_cfg.gnss.accel_saturation, active->name().c_str(), static_cast<long long>(n));
+      event("imu_saturated", in.channel + " seq " + std::to_string(in.seq) + detail, in.utime);
+    }
+    imu_saturating = saturated;
+    imu_saturated = n;  // a switched-to filter counts from 0
   }
   void handle(const EngineInput& in, const GpsInput& m) {
     handleAbsolute(in, m, Measurement::Gps, "GPS fix");

@@ -236,7 +236,7 @@ class GnssFilterBase : public Filter {
   }
 
   /// IMU samples whose forward acceleration was saturated or not finite (not used).
-  int64_t saturatedSamples() const { return saturated_; }
+  int64_t saturatedImuSamples() const override { return saturated_; }
   /// GPS-course heading aid (gnss.course_distance, tvekf): heading updates accepted / gated.
   int64_t courseAccepted() const { return course_accepted_; }
   int64_t courseRejected() const { return course_rejected_; }

@@ -171,6 +171,9 @@ class Filter {
   virtual std::optional<GateDecision> update(const LandmarkObservation&) { return std::nullopt; }
   /// One range-only beacon measurement (default: ignored).
   virtual std::optional<GateDecision> update(const BeaconRange&) { return std::nullopt; }
+  /// IMU samples not used because their forward acceleration reached gnss.accel_saturation
+  /// (the GNSS filters; 0 for the others). The engine reports each saturated stretch.
+  virtual int64_t saturatedImuSamples() const { return 0; }
   /// Status only: what state().status returns, without copying the state (per-message path).
   virtual FilterStatus status() const { return state().status; }
   /// Batched time update (fusion.output_every > 1): adds one odometry increment to a pending
