@@ -8,6 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "lcmloc/eval/gnuplot.hpp"
+
 namespace lcmloc::gps_experiment {
 namespace {
 
@@ -129,8 +131,7 @@ bool writeReport(const Result& r, const Options& opt, const std::string& dir) {
      << "set xlabel 't [s]'\nset ylabel 'error [m]'\nset logscale y\nset key top right\n"
      << "plot 'gps.dat' using 1:4 with points pt 7 ps 0.5 lc rgb '#999999' title 'GPS'" << plot_b << "\n";
   gp.close();
-  const std::string cmd = "cd '" + dir + "' && gnuplot plot.gp > gnuplot.log 2>&1";
-  return std::system(cmd.c_str()) == 0;
+  return eval::runGnuplot(dir, "plot.gp") == 0;
 }
 
 }  // namespace lcmloc::gps_experiment

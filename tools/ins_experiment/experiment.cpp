@@ -12,6 +12,7 @@
 
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/engine.hpp"
+#include "lcmloc/eval/gnuplot.hpp"
 
 namespace lcmloc::ins_experiment {
 
@@ -297,8 +298,7 @@ bool writeReport(const std::vector<RunResult>& runs, const models::InsSimConfig&
   }
   gp << "\n";
   gp.close();
-  const std::string cmd = "cd '" + dir + "' && gnuplot plot.gp > gnuplot.log 2>&1";
-  return std::system(cmd.c_str()) == 0;
+  return eval::runGnuplot(dir, "plot.gp") == 0;
 }
 
 }  // namespace lcmloc::ins_experiment

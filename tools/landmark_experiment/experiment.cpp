@@ -15,6 +15,7 @@
 
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/landmark_fix.hpp"
+#include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/models/scenario_config.hpp"
 
 namespace lcmloc::landmark_experiment {
@@ -498,8 +499,7 @@ bool writeReport(const Result& r, const std::string& dir) {
        << "unset arrow\nunset multiplot\n";
   }
   gp.close();
-  const std::string cmd = "cd '" + dir + "' && gnuplot plot.gp > gnuplot.log 2>&1";
-  return std::system(cmd.c_str()) == 0;
+  return eval::runGnuplot(dir, "plot.gp") == 0;
 }
 
 }  // namespace lcmloc::landmark_experiment

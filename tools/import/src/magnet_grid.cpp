@@ -17,6 +17,7 @@
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/csv.hpp"
 #include "lcmloc/core/vehicle_model.hpp"
+#include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/eval/trajectory.hpp"
 #include "lcmloc/fusion_status_t.hpp"
@@ -372,8 +373,7 @@ MagnetGridReport runMagnetGrid(const MagnetGridOptions& opt, MagnetGridImport* i
        << "'accepted.dat' using 2:3 with points pt 7 ps 0.8 lc rgb '#2ca02c' title 'associated magnet (accepted)', "
        << "'rejected.dat' using 2:3 with points pt 2 ps 1.0 lc rgb '#d62728' title 'nearest magnet (gate rejected)'\n";
   }
-  const std::string cmd = "cd '" + opt.out_dir + "' && gnuplot plot.gp > gnuplot.log 2>&1";
-  if (std::system(cmd.c_str()) != 0) spdlog::warn("gnuplot failed (see {}/gnuplot.log): no figure", opt.out_dir);
+  if (eval::runGnuplot(opt.out_dir, "plot.gp") != 0) spdlog::warn("gnuplot failed (see {}/gnuplot.log): no figure", opt.out_dir);
   return rep;
 }
 

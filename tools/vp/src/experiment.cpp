@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/eval/trajectory.hpp"
 #include "lcmloc/fusion_status_t.hpp"
@@ -183,8 +184,7 @@ ExperimentResult runExperiment(const common::SystemConfig& cfg0, ImportOptions i
          << "set title 'Error of the fused track at the held-out fixes'\nset xlabel 't [s]'\n"
          << "set ylabel 'error [m]'\nset logscale y\nset key top left\nplot " << pb << "\n";
   }
-  const std::string cmd = "cd '" + opt.out_dir + "' && gnuplot plot.gp > gnuplot.log 2>&1";
-  if (std::system(cmd.c_str()) != 0) spdlog::warn("gnuplot failed (see {}/gnuplot.log): no figures", opt.out_dir);
+  if (eval::runGnuplot(opt.out_dir, "plot.gp") != 0) spdlog::warn("gnuplot failed (see {}/gnuplot.log): no figures", opt.out_dir);
   res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return res;
 }
