@@ -24,21 +24,25 @@ FilterConfig insConfig(double theta0 = M_PI / 2) {
   return c;
 }
 
-/// IMU sample (imu_t frame: x forward, y left, z up) of a vehicle standing at 40 N with heading
-/// theta (CCW from east).
-ImuInput standingImu(int64_t utime, double theta) {
+/// IMU sample (imu_t frame: x forward, y left, z up) of a vehicle at 40 N driving straight with
+/// heading theta (CCW from east) at speed v [m/s], accelerating at a [m/s^2].
+ImuInput drivingImu(int64_t utime, double theta, double v, double a) {
   ins::InsState s;
   s.lat = kLat;
   s.lon = kLon;
   s.q_bn = Eigen::Quaterniond(ins::cbnFromHeading(M_PI / 2 - theta));
+  const ins::Vec3 dir(std::cos(theta), std::sin(theta), 0.0);
+  s.v = v * dir;
   ins::Vec3 w, f;
-  ins::idealImu(s, ins::Vec3::Zero(), ins::Vec3::Zero(), &w, &f);
+  ins::idealImu(s, a * dir, ins::Vec3::Zero(), &w, &f);
   ImuInput m;
   m.utime = utime;
   m.gyro = Vec3(w.y(), -w.x(), w.z());
   m.accel = Vec3(f.y(), -f.x(), f.z());
   return m;
 }
+
+ImuInput standingImu(int64_t utime, double theta) { return drivingImu(utime, theta, 0.0, 0.0); }
 
 struct Recorder {
   std::vector<std::pair<std::string, std::string>> events;
@@ -86,14 +90,68 @@ TEST(OdoInsFilter, RegisteredAndReportsPoseAndScale) {
   EXPECT_NE(std::find(types.begin(), types.end(), "odo_ins_uncal"), types.end());
   auto f = makeFilter(insConfig(0.3), {});
   const FilterState s = f->state();
-  ASSERT_EQ(s.x.size(), 4);
+  ASSERT_EQ(s.x.size(), 11);
   EXPECT_EQ(s.names[3], "odo_scale_error");
+  EXPECT_EQ(s.names[4], "v_east");
+  EXPECT_EQ(s.names[10], "accel_bias_forward");
   EXPECT_NEAR(s.x[2], 0.3, 1e-12);
   EXPECT_EQ(s.status, FilterStatus::Uninitialized);  // no IMU sample yet
   EXPECT_NEAR(std::sqrt(s.P(3, 3)), 0.005 * std::sqrt(1 + 0.0003 * 0.0003 / 0.005 / 0.005), 1e-6);
   FilterConfig bad = insConfig();
   bad.ins.meas_vel_std = 0.0;
   EXPECT_THROW(makeFilter(bad, {}), std::invalid_argument);
+}
+
+// Hand-over while moving (a daemon taking over from the last POSE or a checkpoint, a hot swap
+// between odo_ins filters): the state carries the INS velocity and the bias estimates, so the new
+// filter drives on with the vehicle. From x, y, theta and the scale alone (what a state from
+// another filter carries) it restarts at rest, and the odometer pulls it up to speed only slowly.
+TEST(OdoInsFilter, HandOverWhileMovingKeepsVelocityAndBiases) {
+  const double theta = 0.4;
+  int64_t t = 1000000;
+  auto step = [&](std::vector<Filter*> fs, double v, double a) {
+    t += 10000;
+    OdometryInput o;
+    o.utime = t;
+    o.delta_s = (v - 0.5 * a * 0.01) * 0.01;  // the distance over (t - 10 ms, t]
+    for (Filter* f : fs) {
+      f->predict(o);
+      f->update(drivingImu(t, theta, v, a));
+    }
+  };
+  auto a = makeFilter(insConfig(theta), {});
+  double v = 0.0;
+  for (int k = 0; k < 1000; ++k) step({a.get()}, v, 0.0);  // 10 s standing
+  for (int k = 0; k < 1000; ++k) {                         // 10 s at 1 m/s^2
+    v += 0.01;
+    step({a.get()}, v, 1.0);
+  }
+  for (int k = 0; k < 1000; ++k) step({a.get()}, v, 0.0);  // 10 s at 10 m/s
+  const FilterState handed = a->state();
+  ASSERT_EQ(handed.names[4], "v_east");
+  EXPECT_NEAR(handed.x[4], 10.0 * std::cos(theta), 0.05);
+  EXPECT_NEAR(handed.x[5], 10.0 * std::sin(theta), 0.05);
+
+  auto b = makeFilter(insConfig(theta), {});
+  b->initialize(handed);
+  const FilterState started = b->state();
+  for (int i = 0; i < handed.x.size(); ++i) EXPECT_NEAR(started.x[i], handed.x[i], 1e-9) << handed.names[i];
+  for (int i = 4; i < handed.x.size(); ++i)
+    EXPECT_NEAR(started.P(i, i), handed.P(i, i), 1e-12 + 1e-9 * handed.P(i, i)) << handed.names[i];
+
+  FilterState pose_only = handed;
+  pose_only.x.conservativeResize(4);
+  pose_only.P.conservativeResize(4, 4);
+  pose_only.names.resize(4);
+  auto c = makeFilter(insConfig(theta), {});
+  c->initialize(pose_only);
+
+  for (int k = 0; k < 2000; ++k) step({a.get(), b.get(), c.get()}, v, 0.0);  // 20 s on
+  const FilterState sa = a->state(), sb = b->state(), sc = c->state();
+  // b: within the 0.1 m it lags by starting at the next IMU sample (10 ms at 10 m/s).
+  EXPECT_LT(std::hypot(sb.x[0] - sa.x[0], sb.x[1] - sa.x[1]), 0.3);
+  EXPECT_NEAR(std::hypot(sb.x[4], sb.x[5]), 10.0, 0.05);
+  EXPECT_GT(std::hypot(sc.x[0] - sa.x[0], sc.x[1] - sa.x[1]), 10.0) << "without the velocity: should lag far behind";
 }
 
 TEST(OdoInsFilter, StandingStaysPutThroughTheEngine) {

@@ -65,7 +65,9 @@ TEST_F(InsProcess, FusionRunsOdoInsOnImuAndOdometryAndTakesALandmarkFix) {
   ASSERT_NE(t, nullptr);
   EXPECT_GT(t->distance, 50.0);
   EXPECT_LT(std::hypot(p.state[0] - t->x, p.state[1] - t->y), 0.5);
-  EXPECT_EQ(p.state.size(), 4u);
+  ASSERT_EQ(p.state.size(), 11u);  // x, y, theta, odo_scale_error, velocity, biases
+  EXPECT_EQ(p.state_names[4], "v_east");
+  EXPECT_NEAR(std::hypot(p.state[4], p.state[5]), t->speed, 0.1);
 
   // NaN IMU sample: refused by the daemon with a status event, the daemon keeps running.
   lcmloc::imu_t bad{};

@@ -24,6 +24,21 @@ constexpr double kG = 9.78;  ///< g of the sensor grade (as ins::ImuGrade)
 constexpr int64_t kMaxStepUs = 20000;  ///< longest INS step while bridging a gap [us]
 constexpr std::size_t kMaxPending = 10000;
 
+/// The states published after x, y, theta, odo_scale_error, each with the error state whose
+/// covariance it has: the INS velocity (ENU) and the gyro drift and accelerometer bias estimates
+/// (INS body frame: x right, y forward, z up). A hand-over or hot swap between odo_ins filters
+/// restores them (initialize), so a daemon taking over a moving vehicle starts at its speed with
+/// the calibrated biases; other filters drop them.
+struct ExtraState {
+  const char* name;
+  int index;
+};
+constexpr ExtraState kExtraStates[] = {{"v_east", ins::kDvE},          {"v_north", ins::kDvN},
+                                       {"gyro_bias_right", ins::kEpsX}, {"gyro_bias_forward", ins::kEpsY},
+                                       {"gyro_bias_up", ins::kEpsZ},    {"accel_bias_right", ins::kNabX},
+                                       {"accel_bias_forward", ins::kNabY}};
+constexpr int kExtra = static_cast<int>(sizeof kExtraStates / sizeof kExtraStates[0]);
+
 void check(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument("filter config: " + what);
 }
@@ -43,10 +58,10 @@ class OdoInsAdapter : public Filter {
     s.lat = lat0_ + cfg.initial_pose[1] / sy_;
     s.lon = lon0_ + cfg.initial_pose[0] / sx_;
     names_ = {"x", "y", "theta", "odo_scale_error"};
+    for (const auto& e : kExtraStates) names_.push_back(e.name);
   }
 
   std::string name() const override { return name_; }
-
 
   void stateInto(FilterState& out) const override {
     const ins::InsState& s = kf_.state();
@@ -56,13 +71,17 @@ class OdoInsAdapter : public Filter {
     // IMU interval, queued until that sample) label the state utime_: the pose at utime_ is the
     // INS position carried forward with its velocity over the difference.
     const double lead = leadS(utime_);
-    out.x << (s.lon - lon0_) * sx_ + s.v.x() * lead, (s.lat - lat0_) * sy_ + s.v.y() * lead, theta(),
+    out.x.resize(4 + kExtra);
+    out.x.head<4>() << (s.lon - lon0_) * sx_ + s.v.x() * lead, (s.lat - lat0_) * sy_ + s.v.y() * lead, theta(),
         kf_.scaleEstimate();
-    Eigen::Matrix<double, 4, ins::kN> J = Eigen::Matrix<double, 4, ins::kN>::Zero();
+    const ins::Vec3 gb = kf_.gyroBias(), ab = kf_.accelBias();
+    out.x.tail<kExtra>() << s.v.x(), s.v.y(), gb.x(), gb.y(), gb.z(), ab.x(), ab.y();
+    Eigen::Matrix<double, 4 + kExtra, ins::kN> J = Eigen::Matrix<double, 4 + kExtra, ins::kN>::Zero();
     J(0, ins::kDLon) = sx_;
     J(1, ins::kDL) = sy_;
     J(2, ins::kPhiU) = -1.0;
     J(3, ins::kKc) = J(3, ins::kKr) = 1.0;
+    for (int k = 0; k < kExtra; ++k) J(4 + k, kExtraStates[k].index) = 1.0;
     out.P = J * kf_.covariance() * J.transpose();
     out.names = names_;
     out.status = status_;
@@ -73,8 +92,30 @@ class OdoInsAdapter : public Filter {
         !from.x.allFinite() || !from.P.allFinite())
       throw std::invalid_argument(name_ + ": malformed initial state");
     setPose(from.x.head<3>(), from.P.topLeftCorner<3, 3>(), from.utime);
-    for (std::size_t i = 3; i < from.names.size() && static_cast<Eigen::Index>(i) < from.x.size(); ++i)
+    // The other states by name: the scale, and velocity and biases when the source is an odo_ins
+    // filter (their variances and the covariances among them; cross terms to the rest zeroed).
+    int src[kExtra];
+    for (int k = 0; k < kExtra; ++k) src[k] = -1;
+    for (std::size_t i = 3; i < from.names.size() && static_cast<Eigen::Index>(i) < from.x.size(); ++i) {
       if (from.names[i] == "odo_scale_error" && estimate_scale_) kf_.setScaleEstimate(from.x[i]);
+      for (int k = 0; k < kExtra; ++k)
+        if (from.names[i] == kExtraStates[k].name) src[k] = static_cast<int>(i);
+    }
+    ins::InsState& s = kf_.mutableState();
+    ins::Vec3 gb = kf_.gyroBias(), ab = kf_.accelBias();
+    double* value[kExtra] = {&s.v.x(), &s.v.y(), &gb.x(), &gb.y(), &gb.z(), &ab.x(), &ab.y()};
+    StateMat& P = kf_.mutableCovariance();
+    for (int k = 0; k < kExtra; ++k) {
+      if (src[k] < 0) continue;
+      *value[k] = from.x[src[k]];
+      P.row(kExtraStates[k].index).setZero();
+      P.col(kExtraStates[k].index).setZero();
+    }
+    for (int a = 0; a < kExtra; ++a)
+      for (int b = 0; b < kExtra; ++b)
+        if (src[a] >= 0 && src[b] >= 0) P(kExtraStates[a].index, kExtraStates[b].index) = from.P(src[a], src[b]);
+    kf_.setBiases(gb, ab);
+    if (src[0] >= 0 || src[1] >= 0) placeAt(from.x.head<2>(), from.utime);  // with the new velocity
     utime_ = std::max(utime_, from.utime);
   }
 
@@ -105,7 +146,6 @@ class OdoInsAdapter : public Filter {
   }
 
   bool uses(Measurement m) const override { return m == Measurement::Imu; }
-
 
   std::optional<GateDecision> update(const ImuInput& m) override {
     GateDecision d;
@@ -202,6 +242,14 @@ class OdoInsAdapter : public Filter {
   /// Seconds from the INS time to t (> 0 only while the INS runs and t is ahead of it).
   double leadS(int64_t t) const { return have_imu_ && t > ins_utime_ ? (t - ins_utime_) * 1e-6 : 0.0; }
 
+  /// Sets the INS position to xy (valid at utime t) carried back to ins_utime_ with the velocity.
+  void placeAt(const Vec2& xy, int64_t t) {
+    ins::InsState& s = kf_.mutableState();
+    const double lead = leadS(t);
+    s.lat = lat0_ + (xy[1] - s.v.y() * lead) / sy_;
+    s.lon = lon0_ + (xy[0] - s.v.x() * lead) / sx_;
+  }
+
   /// pose: valid at utime t (the INS position is set to it carried back to ins_utime_).
   void setPose(const Vec3& pose, const Mat3& cov, int64_t t) {
     ins::InsState& s = kf_.mutableState();
@@ -209,9 +257,7 @@ class OdoInsAdapter : public Filter {
     const double dtheta = wrapAngle(pose[2] - theta());
     s.q_bn = (Eigen::Quaterniond(Eigen::AngleAxisd(dtheta, ins::Vec3::UnitZ())) * s.q_bn).normalized();
     s.v = s.cbn() * v_b;
-    const double lead = leadS(t);
-    s.lat = lat0_ + (pose[1] - s.v.y() * lead) / sy_;
-    s.lon = lon0_ + (pose[0] - s.v.x() * lead) / sx_;
+    placeAt(pose.head<2>(), t);
     StateMat& P = kf_.mutableCovariance();
     const int idx[3] = {ins::kDLon, ins::kDL, ins::kPhiU};
     const double scale[3] = {1.0 / sx_, 1.0 / sy_, -1.0};

@@ -147,6 +147,11 @@ public:
   InsState& mutableState() { return ins_.state(); }
   StateMat& mutableCovariance() { return P_; }
   void setScaleEstimate(double k) { k_ = k; }
+  /// Sets the gyro drift and accelerometer bias estimates (INS body frame; hand-over).
+  void setBiases(const Vec3& gyro, const Vec3& accel) {
+    gyro_bias_ = gyro;
+    accel_bias_ = accel;
+  }
 
   const InsState& state() const { return ins_.state(); }
   /// Estimated total odometer scale error K: true speed = raw / (1 + K).
