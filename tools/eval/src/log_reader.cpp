@@ -122,8 +122,8 @@ class Decoder {
 };
 
 /// fread without the stream lock: a LogScanner's FILE is only ever used by the thread that
-/// reads with it, and once a process has a second thread (the replay reads ahead on one) every
-/// locked fread costs two atomic operations, three times per event.
+/// reads with it, and as soon as the process has a second thread every locked fread costs two
+/// atomic operations, three times per event.
 std::size_t readBytes(void* out, std::size_t n, FILE* f) { return fread_unlocked(out, 1, n, f); }
 
 /// Offset of the next sync word at or after from, or -1 when there is none.
