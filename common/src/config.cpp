@@ -157,34 +157,16 @@ void parseGps(KeyReader& root, models::GpsSensorConfig& g, GpsDriverConfig& d) {
   r.get("reported_std", g.reported_std, 0.0, 1e4, "0 = the model's own 1 sigma");
   r.get("satellites", g.satellites, 0, 100);
   r.get("hdop", g.hdop, 0.0, 100.0);
-  YAML::Node outages = r.child("outages");
-  if (outages && !outages.IsNull()) {
-    if (!outages.IsSequence()) throw ConfigError(root.file(), "gps.outages", "expected a list of {start, duration}");
-    g.outages.clear();
-    for (std::size_t i = 0; i < outages.size(); ++i) {
-      models::GpsOutage o;
-      KeyReader orr(outages[i], root.file(), "gps.outages[" + std::to_string(i) + "]");
-      orr.get("start", o.start, 0.0, 1e7);
-      orr.get("duration", o.duration, 0.0, 1e7);
-      orr.finish();
-      g.outages.push_back(o);
-    }
-  }
-  YAML::Node jumps = r.child("jumps");
-  if (jumps && !jumps.IsNull()) {
-    if (!jumps.IsSequence()) throw ConfigError(root.file(), "gps.jumps", "expected a list of {at, duration, dx, dy}");
-    g.jumps.clear();
-    for (std::size_t i = 0; i < jumps.size(); ++i) {
-      models::GpsJump j;
-      KeyReader jr(jumps[i], root.file(), "gps.jumps[" + std::to_string(i) + "]");
-      jr.get("at", j.at, 0.0, 1e7);
-      jr.get("duration", j.duration, 0.0, 1e7);
-      jr.get("dx", j.dx, -1e6, 1e6);
-      jr.get("dy", j.dy, -1e6, 1e6);
-      jr.finish();
-      g.jumps.push_back(j);
-    }
-  }
+  r.getList("outages", g.outages, "{start, duration}", [](KeyReader& o, models::GpsOutage& v) {
+    o.get("start", v.start, 0.0, 1e7);
+    o.get("duration", v.duration, 0.0, 1e7);
+  });
+  r.getList("jumps", g.jumps, "{at, duration, dx, dy}", [](KeyReader& j, models::GpsJump& v) {
+    j.get("at", v.at, 0.0, 1e7);
+    j.get("duration", v.duration, 0.0, 1e7);
+    j.get("dx", v.dx, -1e6, 1e6);
+    j.get("dy", v.dy, -1e6, 1e6);
+  });
   r.finish();
 }
 
@@ -287,31 +269,6 @@ void parseVision(KeyReader& root, models::VisionSensorConfig& v) {
   r.get<uint64_t>("seed", v.seed);
   r.get("max_range", v.max_range, 0.0, 1e7, "[m], 0 = no limit");
   r.finish();
-}
-
-// Top-level `landmarks`: the landmark map, a list of {id, x, y} (x east, y north [m]); ids unique.
-void parseLandmarks(KeyReader& root, std::vector<models::Landmark>& out) {
-  YAML::Node n = root.child("landmarks");
-  if (!n) return;
-  out.clear();
-  if (n.IsNull()) return;
-  if (!n.IsSequence()) throw ConfigError(root.file(), "landmarks", "expected a list of {id, x, y}, got " + nodeText(n));
-  for (std::size_t i = 0; i < n.size(); ++i) {
-    const std::string kp = "landmarks[" + std::to_string(i) + "]";
-    models::Landmark l;
-    KeyReader r(n[i], root.file(), kp);
-    if (!r.child("id")) throw ConfigError(root.file(), kp + ".id", "missing (every landmark needs an id)");
-    r.get("id", l.id);
-    if (!r.child("x") || !r.child("y")) throw ConfigError(root.file(), kp, "missing x or y");
-    r.get("x", l.x, -1e7, 1e7);
-    r.get("y", l.y, -1e7, 1e7);
-    r.finish();
-    for (std::size_t j = 0; j < out.size(); ++j)
-      if (out[j].id == l.id)
-        throw ConfigError(root.file(), kp + ".id",
-                          "duplicate landmark id " + std::to_string(l.id) + " (also landmarks[" + std::to_string(j) + "])");
-    out.push_back(l);
-  }
 }
 
 }  // namespace
@@ -428,7 +385,7 @@ SystemConfig parseSystemConfig(const std::string& yaml_text, const std::string& 
   parseLogger(root, cfg.logger);
   ins_config::parseInsSim(root, cfg.ins_sim);
   parseVision(root, cfg.scenario.vision);
-  parseLandmarks(root, cfg.scenario.landmarks);
+  ins_config::parseLandmarkList(root, "landmarks", cfg.scenario.landmarks);
   // One landmark map for the whole system: the fusion takes the top-level `landmarks` (the
   // one lcmloc-vision observes) unless its own `fusion.landmarks` is given.
   if (cfg.fusion.landmarks.empty())

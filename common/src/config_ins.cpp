@@ -18,21 +18,11 @@ void parseInsSim(KeyReader& root, models::InsSimConfig& c) {
   if (!models::insStartValid(c.start))
     throw ConfigError(root.file(), "ins_sim.start",
                       "unknown start '" + c.start + "' (valid: hard, gentle, gentle_turn, gentle_stopgo, steady)");
-  YAML::Node segs = r.child("segments");
-  if (segs && !segs.IsNull()) {
-    const std::string kp = r.keyPath("segments");
-    if (!segs.IsSequence()) throw ConfigError(root.file(), kp, "expected a list of {duration, accel, yaw_rate}");
-    c.segments.clear();
-    for (std::size_t i = 0; i < segs.size(); ++i) {
-      models::InsMotionSegment s;
-      KeyReader sr(segs[i], root.file(), kp + "[" + std::to_string(i) + "]");
-      sr.get("duration", s.duration, 1e-3, 1e6);
-      sr.get("accel", s.accel, -20.0, 20.0);
-      sr.get("yaw_rate", s.yaw_rate, -180.0, 180.0, "deg/s");
-      sr.finish();
-      c.segments.push_back(s);
-    }
-  }
+  r.getList("segments", c.segments, "{duration, accel, yaw_rate}", [](KeyReader& s, models::InsMotionSegment& v) {
+    s.get("duration", v.duration, 1e-3, 1e6);
+    s.get("accel", v.accel, -20.0, 20.0);
+    s.get("yaw_rate", v.yaw_rate, -180.0, 180.0, "deg/s");
+  });
   if (c.profile == "custom" && c.segments.empty())
     throw ConfigError(root.file(), "ins_sim.segments", "the custom profile needs a non-empty list of segments");
   r.get("latitude", c.latitude, -89.0, 89.0);
@@ -49,20 +39,10 @@ void parseInsSim(KeyReader& root, models::InsSimConfig& c) {
   r.get("scale_markov", c.scale_markov, 0.0, 0.5);
   r.get("scale_tau", c.scale_tau, 1e-3, 1e9);
   r.get("scale_white", c.scale_white, 0.0, 0.5);
-  YAML::Node drops = r.child("imu_dropouts");
-  if (drops && !drops.IsNull()) {
-    const std::string kp = r.keyPath("imu_dropouts");
-    if (!drops.IsSequence()) throw ConfigError(root.file(), kp, "expected a list of {start, duration}");
-    c.imu_dropouts.clear();
-    for (std::size_t i = 0; i < drops.size(); ++i) {
-      double start = 0, duration = 0;
-      KeyReader dr(drops[i], root.file(), kp + "[" + std::to_string(i) + "]");
-      dr.get("start", start, 0.0, 1e7);
-      dr.get("duration", duration, 0.0, 1e7);
-      dr.finish();
-      c.imu_dropouts.emplace_back(start, duration);
-    }
-  }
+  r.getList("imu_dropouts", c.imu_dropouts, "{start, duration}", [](KeyReader& d, auto& v) {
+    d.get("start", v.first, 0.0, 1e7);
+    d.get("duration", v.second, 0.0, 1e7);
+  });
   r.finish();
 }
 
@@ -91,27 +71,37 @@ void parseInsFilter(KeyReader& filter, core::InsFilterConfig& c) {
   r.finish();
 }
 
-void parseLandmarks(KeyReader& fusion, std::map<int, core::Vec2>& landmarks) {
-  YAML::Node n = fusion.child("landmarks");
+void parseLandmarkList(KeyReader& parent, const std::string& key, std::vector<models::Landmark>& out) {
+  YAML::Node n = parent.child(key);
   if (!n) return;
-  const std::string kp = fusion.keyPath("landmarks");
-  landmarks.clear();
+  out.clear();
   if (n.IsNull()) return;
-  if (!n.IsSequence()) throw ConfigError(fusion.file(), kp, "expected a list of {id, x, y}");
+  const std::string kp = parent.keyPath(key);
+  if (!n.IsSequence()) throw ConfigError(parent.file(), kp, "expected a list of {id, x, y}, got " + yaml_detail::nodeText(n));
   for (std::size_t i = 0; i < n.size(); ++i) {
     const std::string ip = kp + "[" + std::to_string(i) + "]";
-    KeyReader r(n[i], fusion.file(), ip);
-    int id = -1;
-    double x = std::numeric_limits<double>::quiet_NaN(), y = x;
-    r.get("id", id, 0, std::numeric_limits<int>::max());
-    r.get("x", x, -1e8, 1e8);
-    r.get("y", y, -1e8, 1e8);
+    models::Landmark l;
+    KeyReader r(n[i], parent.file(), ip);
+    if (!r.child("id")) throw ConfigError(parent.file(), ip + ".id", "missing (every landmark needs an id)");
+    r.get("id", l.id);
+    if (!r.child("x") || !r.child("y")) throw ConfigError(parent.file(), ip, "missing x or y");
+    r.get("x", l.x, -1e7, 1e7);
+    r.get("y", l.y, -1e7, 1e7);
     r.finish();
-    if (id < 0 || !std::isfinite(x) || !std::isfinite(y))
-      throw ConfigError(fusion.file(), ip, "a landmark needs id, x and y");
-    if (!landmarks.emplace(id, core::Vec2(x, y)).second)
-      throw ConfigError(fusion.file(), ip + ".id", "landmark id " + std::to_string(id) + " given twice");
+    for (std::size_t j = 0; j < out.size(); ++j)
+      if (out[j].id == l.id)
+        throw ConfigError(parent.file(), ip + ".id",
+                          "duplicate landmark id " + std::to_string(l.id) + " (also " + kp + "[" + std::to_string(j) + "])");
+    out.push_back(l);
   }
+}
+
+void parseLandmarks(KeyReader& fusion, std::map<int, core::Vec2>& landmarks) {
+  std::vector<models::Landmark> list;
+  if (!fusion.child("landmarks")) return;  // absent: unchanged
+  parseLandmarkList(fusion, "landmarks", list);
+  landmarks.clear();
+  for (const auto& l : list) landmarks.emplace(l.id, core::Vec2(l.x, l.y));
 }
 
 }  // namespace lcmloc::common::ins_config

@@ -6,11 +6,16 @@
 #include "lcmloc/common/yaml_reader.hpp"
 #include "lcmloc/core/filter.hpp"
 #include "lcmloc/models/ins_sim.hpp"
+#include "lcmloc/models/vision_sensor.hpp"
 
 namespace lcmloc::common::ins_config {
 
 void parseInsSim(KeyReader& root, models::InsSimConfig& c);
 void parseInsFilter(KeyReader& filter, core::InsFilterConfig& c);
+/// A landmark map under parent.key: a list of {id, x, y} (x east, y north [m]), ids unique
+/// (absent: out unchanged; null: empty).
+void parseLandmarkList(KeyReader& parent, const std::string& key, std::vector<models::Landmark>& out);
+/// `fusion.landmarks` (the same list) as id -> (x, y).
 void parseLandmarks(KeyReader& fusion, std::map<int, core::Vec2>& landmarks);
 
 }  // namespace lcmloc::common::ins_config

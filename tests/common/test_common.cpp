@@ -133,6 +133,29 @@ TEST(Config, OutputEveryIsAPositiveInteger) {
             std::string::npos);
 }
 
+// Lists of maps (GPS outages and jumps, INS motion segments and IMU dropouts): read item by
+// item; not a list, an unknown key in an item and an out-of-range value name the item.
+TEST(Config, ListsOfMapsAreReadItemByItemWithClearErrors) {
+  const auto cfg = common::parseSystemConfig(
+      "gps: {outages: [{start: 5, duration: 2}, {start: 30, duration: 1}], jumps: [{at: 10, duration: 3, dx: 4, dy: -1}]}\n"
+      "ins_sim: {imu_dropouts: [{start: 1, duration: 0.5}]}\n",
+      "l.yaml");
+  ASSERT_EQ(cfg.scenario.gps.outages.size(), 2u);
+  EXPECT_EQ(cfg.scenario.gps.outages[1].start, 30.0);
+  ASSERT_EQ(cfg.scenario.gps.jumps.size(), 1u);
+  EXPECT_EQ(cfg.scenario.gps.jumps[0].dy, -1.0);
+  ASSERT_EQ(cfg.ins_sim.imu_dropouts.size(), 1u);
+  EXPECT_EQ(cfg.ins_sim.imu_dropouts[0].second, 0.5);
+  EXPECT_NE(errorOf("gps: {outages: 5}").find("gps.outages: expected a list of {start, duration}, got '5'"),
+            std::string::npos)
+      << errorOf("gps: {outages: 5}");
+  EXPECT_NE(errorOf("gps: {jumps: [{at: 1, dz: 2}]}").find("gps.jumps[0]"), std::string::npos)
+      << errorOf("gps: {jumps: [{at: 1, dz: 2}]}");
+  EXPECT_NE(errorOf("ins_sim: {segments: [{duration: 1}, {duration: -1}]}").find("ins_sim.segments[1].duration"),
+            std::string::npos)
+      << errorOf("ins_sim: {segments: [{duration: 1}, {duration: -1}]}");
+}
+
 TEST(Config, MissingFileNamesTheFile) {
   try {
     common::loadSystemConfig("/nonexistent/dir/scenario.yaml");

@@ -106,6 +106,25 @@ class KeyReader {
       out.push_back(convert<std::string>(n[i], kp + "[" + std::to_string(i) + "]"));
   }
 
+  /// A list of maps under key (absent or null: out unchanged): each map is read by
+  /// item(KeyReader&, T&) into a default T, its unknown keys an error; shape names the map's keys
+  /// for the error message of a key that is not a list.
+  template <typename T, typename F>
+  void getList(const std::string& key, std::vector<T>& out, const char* shape, F item) {
+    YAML::Node n = child(key);
+    if (!n || n.IsNull()) return;
+    const std::string kp = keyPath(key);
+    if (!n.IsSequence()) throw ConfigError(file_, kp, std::string("expected a list of ") + shape + ", got " + nodeText(n));
+    out.clear();
+    for (std::size_t i = 0; i < n.size(); ++i) {
+      KeyReader r(n[i], file_, kp + "[" + std::to_string(i) + "]");
+      T v{};
+      item(r, v);
+      r.finish();
+      out.push_back(v);
+    }
+  }
+
   /// Throws for the first key that nobody asked for.
   void finish() const {
     if (!node_ || !node_.IsMap()) return;
