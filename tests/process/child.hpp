@@ -1,6 +1,7 @@
 #pragma once
-// A child process for process tests: fork/exec with stdout+stderr to a file, bounded waits,
-// killed on destruction if still running.
+// A child process for process tests: fork/exec with stdout+stderr to a file, bounded waits.
+// The child leads a process group of its own; on destruction the whole group is killed, so
+// what it started and left behind goes too (gpsfake's gpsd, a launcher's processes).
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -22,6 +23,7 @@ class Child {
     all.insert(all.end(), args.begin(), args.end());
     pid_ = ::fork();
     if (pid_ == 0) {
+      ::setpgid(0, 0);
       const int fd = ::open(output_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
       ::dup2(fd, 1);
       ::dup2(fd, 2);
@@ -31,12 +33,12 @@ class Child {
       ::execv(argv[0], argv.data());
       ::_exit(127);
     }
+    if (pid_ > 0) ::setpgid(pid_, pid_);  // also here: whichever runs first
   }
   ~Child() {
-    if (running()) {
-      ::kill(pid_, SIGKILL);
-      ::waitpid(pid_, nullptr, 0);
-    }
+    if (pid_ <= 0) return;
+    ::kill(-pid_, SIGKILL);  // the group: while any member lives, no other process gets this id
+    if (running()) ::waitpid(pid_, nullptr, 0);
   }
   Child(const Child&) = delete;
   Child& operator=(const Child&) = delete;
