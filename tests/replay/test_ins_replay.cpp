@@ -14,24 +14,10 @@
 #include "lcmloc/models/ins_sim.hpp"
 #include "lcmloc/pose_t.hpp"
 #include "lcmloc/replay/replay.hpp"
+#include "test_log_writer.hpp"
 
 using namespace lcmloc;
 namespace fs = std::filesystem;
-
-namespace {
-template <typename T>
-void put(lcm::LogFile& log, const std::string& ch, const T& m) {
-  std::vector<uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
-  m.encode(buf.data(), 0, static_cast<int>(buf.size()));
-  lcm::LogEvent ev;
-  ev.eventnum = 0;
-  ev.timestamp = m.utime;
-  ev.channel = ch;
-  ev.datalen = static_cast<int32_t>(buf.size());
-  ev.data = buf.data();
-  ASSERT_EQ(log.writeEvent(&ev), 0);
-}
-}  // namespace
 
 TEST(InsReplay, OdoInsAndLandmarkFixFromALog) {
   const fs::path dir = fs::temp_directory_path() / ("lcmloc_ins_replay_" + std::to_string(::getpid()));
@@ -46,12 +32,11 @@ TEST(InsReplay, OdoInsAndLandmarkFixFromALog) {
   models::InsSim sim(sc, 1000000);
   int64_t last = 0, seq = 0;
   {
-    lcm::LogFile log(in, "w");
-    ASSERT_TRUE(log.good());
+    testlog::LogWriter log(in);
     while (!sim.finished()) {
       const auto s = sim.step();
-      if (s.odometry) put(log, "ODOMETRY", common::toLcm(*s.odometry, seq));
-      if (s.imu) put(log, "IMU", common::toLcm(*s.imu, seq));
+      if (s.odometry) log.add("ODOMETRY", common::toLcm(*s.odometry, seq), s.odometry->input.utime);
+      if (s.imu) log.add("IMU", common::toLcm(*s.imu, seq), s.imu->utime);
       ++seq;
       last = s.truth.utime;
     }
@@ -67,7 +52,7 @@ TEST(InsReplay, OdoInsAndLandmarkFixFromALog) {
         b.bearings.push_back(std::remainder(std::atan2(lm[i][1] + 30.0, lm[i][0] - 40.0) - 2.3, 2 * M_PI));
       }
       b.bearing_std = 30.0 / 3600.0 * M_PI / 180.0;
-      put(log, "VISION", b);
+      log.add("VISION", b, b.utime);
     }
   }
   replay::ReplayOptions o;
