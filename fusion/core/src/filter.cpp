@@ -81,6 +81,14 @@ Vec3 detail::poseProcessNoise(const FilterConfig& c, double ds, double dtheta) {
 namespace {
 using detail::poseProcessNoise;
 
+/// Composes one increment of eq. 1-2 and its process noise into a batch (a non-finite one is
+/// skipped, as predict() skips it).
+void addToBatch(const FilterConfig& c, const OdometryInput& odo, OdometryBatch& batch) {
+  if (!isFinite(odo)) return;
+  const double dth = headingIncrement(odo, c.wheelbase);
+  batch.add(odo.delta_s, dth, odo.utime, poseProcessNoise(c, odo.delta_s, dth));
+}
+
 /// Initial state and covariance of a filter with these state names.
 void initialState(const FilterConfig& c, const std::vector<std::string>& names,
                   Eigen::VectorXd& x, Eigen::MatrixXd& P) {
@@ -130,19 +138,14 @@ void detail::copyMatching(const FilterState& from, const std::vector<std::string
 namespace {
 using detail::copyMatching;
 
-GateDecision makeDecision(const RulerDetection& det) {
-  GateDecision d;
-  d.utime = det.utime;
-  d.sensor = det.sensor;
-  d.measurement_seq = det.seq;
-  return d;
+GateDecision makeDecision(const RulerDetection& det, double gate) {
+  return detail::decision(det.utime, det.sensor, det.seq, gate);
 }
 
 }  // namespace
 
 GateDecision Filter::update(const RulerDetection& det) {
-  GateDecision d = makeDecision(det);
-  d.gate = kInf;
+  GateDecision d = makeDecision(det, kInf);
   d.reason = "ignored";
   return d;
 }
@@ -180,10 +183,7 @@ class DeadReckoningFilter final : public Filter {
     batch_.clear();
   }
   bool accumulate(const OdometryInput& odo) override {
-    if (isFinite(odo)) {
-      const double dth = headingIncrement(odo, cfg_.wheelbase);
-      batch_.add(odo.delta_s, dth, odo.utime, poseProcessNoise(cfg_, odo.delta_s, dth));
-    }
+    addToBatch(cfg_, odo, batch_);
     return true;
   }
   /// The Jacobians of eq. 1 are I + [0 0 -dy_k; 0 0 dx_k; 0 0 0] (world displacement of step k):
@@ -213,8 +213,7 @@ class DeadReckoningFilter final : public Filter {
     utime_ = odo.utime;
   }
   GateDecision update(const RulerDetection& det) override {
-    GateDecision d = makeDecision(det);
-    d.gate = kInf;
+    GateDecision d = makeDecision(det, kInf);
     d.reason = std::isfinite(det.lateral_offset) ? "dead_reckoning" : "bad_input";
     return d;
   }
@@ -279,10 +278,7 @@ class RulerUkf final : public Filter {
     if constexpr (N != 3) {
       return false;
     } else {
-      if (isFinite(odo)) {
-        const double dth = headingIncrement(odo, cfg_.wheelbase);
-        batch_.add(odo.delta_s, dth, odo.utime, poseProcessNoise(cfg_, odo.delta_s, dth));
-      }
+      addToBatch(cfg_, odo, batch_);
       return true;
     }
   }
@@ -327,8 +323,7 @@ class RulerUkf final : public Filter {
   }
 
   GateDecision update(const RulerDetection& det) override {
-    GateDecision d = makeDecision(det);
-    d.gate = gate_;
+    GateDecision d = makeDecision(det, gate_);
     typename U::Sigmas X;
     if (!std::isfinite(det.lateral_offset) || !std::isfinite(det.quality) ||
         !ukf_.sigmaPoints(X)) {

@@ -25,6 +25,18 @@ std::unique_ptr<Filter> makeLandmarkFilter(const FilterConfig& cfg, const Marker
 /// Pose process noise of one odometry step (x, y, theta variances): Pw over pw_distance of
 /// travel plus pw_turn |dtheta| on the heading.
 Vec3 poseProcessNoise(const FilterConfig& c, double ds, double dtheta);
+
+/// A gate decision for measurement `seq` of `sensor` at utime, with the gate's threshold;
+/// not accepted, no reason yet (the filter fills in the rest).
+inline GateDecision decision(int64_t utime, const std::string& sensor, int64_t seq, double gate) {
+  GateDecision d;
+  d.utime = utime;
+  d.sensor = sensor;
+  d.measurement_seq = seq;
+  d.gate = gate;
+  return d;
+}
+
 /// Gate decision, correction and lock-out bookkeeping of the gated UKFs (the magnetic-ruler
 /// filters and ukf_landmarks): FilterConfig::lockout_rejections consecutive rejections (gate or
 /// no candidate) declare a lock-out and inflate the covariance by lockout_inflation, again after

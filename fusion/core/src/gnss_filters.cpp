@@ -16,6 +16,8 @@
 namespace lcmloc::core {
 namespace {
 
+using detail::decision;
+
 constexpr double kInf = std::numeric_limits<double>::infinity();
 enum : int { kX = 0, kY = 1, kTheta = 2, kSpeed = 3, kDistance = 4, kN = 5 };
 
@@ -91,14 +93,6 @@ void inflate(M& P, std::initializer_list<int> idx, double f) {
   }
 }
 
-GateDecision decision(int64_t utime, const std::string& sensor, int64_t seq, double gate) {
-  GateDecision d;
-  d.utime = utime;
-  d.sensor = sensor;
-  d.measurement_seq = seq;
-  d.gate = gate;
-  return d;
-}
 
 /// One odometry interval as the time update sees it.
 struct Step {

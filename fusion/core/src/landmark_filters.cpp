@@ -16,6 +16,8 @@
 namespace lcmloc::core {
 namespace {
 
+using detail::decision;
+
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr AngleMask kThetaMask = 1u << 2;
 constexpr AngleMask kBearingMask = 1u << 1;
@@ -141,14 +143,6 @@ class LandmarkUkf final : public Filter {
  private:
   void reset() {
     ukf_.reset(cfg_.initial_pose, Mat3(cfg_.p0_diag.asDiagonal()));
-  }
-  static GateDecision decision(int64_t utime, const std::string& sensor, int64_t seq, double gate) {
-    GateDecision d;
-    d.utime = utime;
-    d.sensor = sensor;
-    d.measurement_seq = seq;
-    d.gate = gate;
-    return d;
   }
   template <int M>
   GateDecision finish(GateDecision& d, int id, Innovation<3, M>& in, double gate) {

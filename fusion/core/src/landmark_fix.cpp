@@ -89,6 +89,18 @@ bool checkGeometry(const Vec2& p, const std::vector<Vec2>& lms, const FixOptions
   return true;
 }
 
+/// gather() and checkGeometry() at a finite INS pose; false with r->error if the fix is refused.
+bool prepare(const std::map<int, Vec2>& map, const std::vector<Bearing>& bearings, const Vec2& p_ins,
+             double psi_ins, const FixOptions& o, std::vector<Vec2>* lms, std::vector<double>* alphas,
+             FixResult* r) {
+  if (!gather(map, bearings, lms, alphas, r)) return false;
+  if (!std::isfinite(psi_ins) || !p_ins.allFinite()) {
+    r->error = "INS pose is not finite";
+    return false;
+  }
+  return checkGeometry(p_ins, *lms, o, r);
+}
+
 /// Least-squares point of the lines through lms[i] with azimuths az[i]; false if singular.
 bool linesPoint(const std::vector<Vec2>& lms, const double* az, Vec2* p) {
   // Line i: n_i . p = n_i . L_i with normal n_i = (cos az, -sin az).
@@ -126,12 +138,7 @@ FixResult triangleFix(const std::map<int, Vec2>& map, const std::vector<Bearing>
   FixResult r;
   std::vector<Vec2> lms;
   std::vector<double> al;
-  if (!gather(map, bearings, &lms, &al, &r)) return r;
-  if (!std::isfinite(psi_ins) || !p_ins.allFinite()) {
-    r.error = "INS pose is not finite";
-    return r;
-  }
-  if (!checkGeometry(p_ins, lms, o, &r)) return r;
+  if (!prepare(map, bearings, p_ins, psi_ins, o, &lms, &al, &r)) return r;
   auto cost = [&](double dpsi) {
     double az[3];
     for (int i = 0; i < 3; ++i) az[i] = psi_ins - dpsi + al[i];
@@ -180,12 +187,7 @@ FixResult solveLs(const std::map<int, Vec2>& map, const std::vector<Bearing>& be
   FixResult r;
   std::vector<Vec2> lms;
   std::vector<double> al;
-  if (!gather(map, bearings, &lms, &al, &r)) return r;
-  if (!std::isfinite(psi_ins) || !p_ins.allFinite()) {
-    r.error = "INS pose is not finite";
-    return r;
-  }
-  if (!checkGeometry(p_ins, lms, o, &r)) return r;
+  if (!prepare(map, bearings, p_ins, psi_ins, o, &lms, &al, &r)) return r;
   Eigen::Vector3d x(p_ins.x(), p_ins.y(), psi_ins);
   auto residual = [&](const Eigen::Vector3d& s) {
     Eigen::Vector3d e;
