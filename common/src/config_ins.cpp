@@ -4,6 +4,21 @@
 #include <limits>
 
 namespace lcmloc::common::ins_config {
+namespace {
+
+/// The IMU error model's keys, the same in the simulator's and in the filter's section: the
+/// filter models the sensor the simulator draws (first-order Markov + white noise per axis).
+template <class Config>
+void readImuErrorModel(KeyReader& r, Config& c) {
+  r.get("gyro_markov", c.gyro_markov, 0.0, 1e6, "deg/h");
+  r.get("gyro_tau", c.gyro_tau, 1e-3, 1e9);
+  r.get("gyro_white", c.gyro_white, 0.0, 1e6, "deg/h");
+  r.get("accel_markov", c.accel_markov, 0.0, 1.0, "g");
+  r.get("accel_tau", c.accel_tau, 1e-3, 1e9);
+  r.get("accel_white", c.accel_white, 0.0, 1.0, "g");
+}
+
+}  // namespace
 
 void parseInsSim(KeyReader& root, models::InsSimConfig& c) {
   KeyReader r(root.child("ins_sim"), root.file(), "ins_sim");
@@ -29,12 +44,7 @@ void parseInsSim(KeyReader& root, models::InsSimConfig& c) {
   r.get("longitude", c.longitude, -180.0, 180.0);
   r.get("height", c.height, -1e4, 1e5);
   r.get("heading", c.heading, -M_PI, M_PI);
-  r.get("gyro_markov", c.gyro_markov, 0.0, 1e6, "deg/h");
-  r.get("gyro_tau", c.gyro_tau, 1e-3, 1e9);
-  r.get("gyro_white", c.gyro_white, 0.0, 1e6, "deg/h");
-  r.get("accel_markov", c.accel_markov, 0.0, 1.0, "g");
-  r.get("accel_tau", c.accel_tau, 1e-3, 1e9);
-  r.get("accel_white", c.accel_white, 0.0, 1.0, "g");
+  readImuErrorModel(r, c);
   r.get("scale_error", c.scale_error, -0.5, 0.5);
   r.get("scale_markov", c.scale_markov, 0.0, 0.5);
   r.get("scale_tau", c.scale_tau, 1e-3, 1e9);
@@ -55,12 +65,7 @@ void parseInsFilter(KeyReader& filter, core::InsFilterConfig& c) {
   r.get("init_vel_std", c.init_vel_std, 1e-9, 1e3);
   r.get("init_pos_std", c.init_pos_std, 1e-9, 1e6);
   r.get("meas_vel_std", c.meas_vel_std, 1e-9, 1e3);
-  r.get("gyro_markov", c.gyro_markov, 0.0, 1e6, "deg/h");
-  r.get("gyro_tau", c.gyro_tau, 1e-3, 1e9);
-  r.get("gyro_white", c.gyro_white, 0.0, 1e6, "deg/h");
-  r.get("accel_markov", c.accel_markov, 0.0, 1.0, "g");
-  r.get("accel_tau", c.accel_tau, 1e-3, 1e9);
-  r.get("accel_white", c.accel_white, 0.0, 1.0, "g");
+  readImuErrorModel(r, c);
   r.get("odo_scale", c.odo_scale, 0.0, 0.5);
   r.get("odo_markov", c.odo_markov, 0.0, 0.5);
   r.get("odo_tau", c.odo_tau, 1e-3, 1e9);
