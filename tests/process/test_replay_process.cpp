@@ -20,6 +20,7 @@
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
 #include "lcmloc/replay/replay.hpp"
+#include "test_log_writer.hpp"
 
 using namespace std::chrono_literals;
 namespace fs = std::filesystem;
@@ -27,22 +28,8 @@ using lcmloc::common::Bus;
 
 namespace {
 
-struct Event {
-  int64_t timestamp = 0;
-  std::string channel;
-  std::vector<uint8_t> data;
-};
-
-std::vector<Event> readEvents(const std::string& path) {
-  std::vector<Event> out;
-  lcm::LogFile log(path, "r");
-  if (!log.good()) return out;
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
-    const auto* p = static_cast<const uint8_t*>(ev->data);
-    out.push_back({ev->timestamp, ev->channel, std::vector<uint8_t>(p, p + ev->datalen)});
-  }
-  return out;
-}
+using lcmloc::testlog::Event;
+using lcmloc::testlog::readEvents;
 
 /// Payloads per channel, in order.
 std::map<std::string, std::vector<std::vector<uint8_t>>> byChannel(const std::vector<Event>& events) {

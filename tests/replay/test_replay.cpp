@@ -16,6 +16,7 @@
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/pose_t.hpp"
 #include "lcmloc/replay/replay.hpp"
+#include "test_log_writer.hpp"
 
 using namespace lcmloc;
 using namespace std::chrono_literals;
@@ -23,21 +24,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Event {
-  int64_t timestamp = 0;
-  std::string channel;
-  std::vector<uint8_t> data;
-};
-
-std::vector<Event> readEvents(const std::string& path) {
-  std::vector<Event> out;
-  lcm::LogFile log(path, "r");
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
-    const auto* p = static_cast<const uint8_t*>(ev->data);
-    out.push_back({ev->timestamp, ev->channel, std::vector<uint8_t>(p, p + ev->datalen)});
-  }
-  return out;
-}
+using lcmloc::testlog::Event;
+using lcmloc::testlog::readEvents;
 
 void writeEvents(const std::string& path, const std::vector<Event>& events) {
   lcm::LogFile log(path, "w");
