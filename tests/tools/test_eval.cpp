@@ -205,6 +205,26 @@ TEST_F(EvalTest, CountsAndMetricsOfEachFilter) {
   }
 }
 
+TEST_F(EvalTest, FiltersNeedingOtherSensorsAreRefusedNotScoredOnOdometryAlone) {
+  writeRun(file("run.lcmlog"), false);
+  const auto data = eval::readLog(file("run.lcmlog"), cfg_.channels);
+  for (const std::string f : {"tvekf", "ukf_gps", "ukf_landmarks", "odo_ins"}) {
+    auto setup = setup_;
+    setup.filters = {"ukf_gated", f};
+    try {
+      eval::evaluate(data, setup);
+      ADD_FAILURE() << f << " was evaluated";
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("filter '" + f + "' needs"), std::string::npos) << what;
+      EXPECT_NE(what.find("lcmloc-replay"), std::string::npos) << what;
+    }
+  }
+  auto setup = setup_;
+  setup.filters = {"ukf_calib"};
+  EXPECT_EQ(eval::evaluate(data, setup).filters.size(), 1u);
+}
+
 TEST_F(EvalTest, LivePoseIsScoredAndComparedWithReplay) {
   writeRun(file("run.lcmlog"), true);
   const auto data = eval::readLog(file("run.lcmlog"), cfg_.channels);

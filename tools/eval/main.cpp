@@ -38,7 +38,8 @@ int main(int argc, char** argv) {
                  "system config (YAML) giving filter parameters, marker map and channels; "
                  "built-in defaults (the paper's experiment) when omitted");
   app.add_option("-o,--out", out_dir, "output directory for report.json and figures")->capture_default_str();
-  app.add_option("--filters", filters, "filters to replay (dead_reckoning, ukf, ukf_gated, ukf_calib)")
+  app.add_option("--filters", filters, "filters to replay: dead_reckoning, ukf, ukf_gated, ukf_calib (odometry and ruler detections are replayed; "
+                 "for the IMU, GPS and landmark filters use lcmloc-replay + lcmloc-evaluate)")
       ->delimiter(',')->capture_default_str();
   app.add_flag("--no-plots", no_plots, "do not draw figures");
   app.add_option("--lcm-url", lcm_url, "accepted for uniformity with the other processes; unused "

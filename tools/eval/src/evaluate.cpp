@@ -143,9 +143,25 @@ std::optional<TruthSample> truthAt(const std::vector<TruthSample>& truth, int64_
 
 Evaluation evaluate(const LogData& data, const EvalSetup& setup) {
   const auto known = core::filterTypes();
-  for (const auto& f : setup.filters)
+  for (const auto& f : setup.filters) {
     if (std::find(known.begin(), known.end(), f) == known.end())
       throw std::invalid_argument("unknown filter '" + f + "'");
+    // The log reader decodes odometry and ruler detections only: a filter that needs another
+    // sensor would be scored on odometry alone, a number that means nothing.
+    core::FilterConfig c = setup.filter;
+    c.type = f;
+    const auto filter = core::makeFilter(c, setup.map);
+    for (const auto& [m, what] : {std::pair{core::Measurement::Imu, "IMU samples"},
+                                  std::pair{core::Measurement::Gps, "GPS fixes"},
+                                  std::pair{core::Measurement::Landmark, "landmark observations"},
+                                  std::pair{core::Measurement::Beacon, "beacon ranges"}})
+      if (filter->uses(m))
+        throw std::invalid_argument(
+            "filter '" + f + "' needs " + what +
+            ", and this evaluation replays odometry and ruler detections only (filters: dead_reckoning, "
+            "ukf, ukf_gated, ukf_calib); replay the log with lcmloc-replay and score the output with "
+            "lcmloc-evaluate");
+  }
 
   Evaluation ev;
   ev.gate_threshold = setup.filter.gate.threshold(2);
