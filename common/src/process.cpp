@@ -40,7 +40,11 @@ void addCommonOptions(CLI::App& app, CommonOptions& opts) {
   app.add_option("--config", opts.config, "scenario YAML file")->capture_default_str();
   app.add_option("--lcm-url", opts.lcm_url, "LCM provider URL (default: $LCM_DEFAULT_URL or udpm)")
       ->capture_default_str();
-  app.add_option("--log-level", opts.log_level, "trace, debug, info, warn, error, critical, off")
+  addLogLevelOption(app, opts.log_level);
+}
+
+void addLogLevelOption(CLI::App& app, std::string& level) {
+  app.add_option("--log-level", level, "trace, debug, info, warn, error, critical, off")
       ->capture_default_str()
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
 }
@@ -64,6 +68,7 @@ void installSignalHandlers() {
 }
 
 bool stopRequested() { return g_stop.load(); }
+const std::atomic<bool>& stopFlag() { return g_stop; }
 void requestStop() { g_stop.store(true); }
 int stopSignal() { return g_signal.load(); }
 

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -361,6 +362,14 @@ TEST_F(EvalTest, CommandLineFailsWhenNothingIsUsable) {
                 " --filters nope --no-plots --out " + file("out") + " > /dev/null 2>&1"), 2);
   EXPECT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") + " --config " +
                 file("missing.yaml") + " --no-plots --out " + file("out") + " > /dev/null 2>&1"), 2);
+  EXPECT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") +
+                " --filters ukf_gated,tvekf --no-plots --out " + file("out") + " > /dev/null 2>&1"), 2);
+  // A misspelt log level is refused (it used to switch logging off silently).
+  EXPECT_NE(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") + " --log-level loud --no-plots --out " +
+                file("out") + " > " + file("level.txt") + " 2>&1"), 0);
+  std::ifstream level(file("level.txt"));
+  const std::string text((std::istreambuf_iterator<char>(level)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("--log-level: loud not in"), std::string::npos) << text;
 }
 
 }  // namespace

@@ -522,6 +522,8 @@ TEST_F(EvaluateTest, BadInputsGiveClearErrors) {
   // Bad options.
   EXPECT_EQ(evaluate(file("apart.lcmlog") + out + " --datum 95,0"), 2);
   EXPECT_EQ(evaluate(file("apart.lcmlog") + out + " --config " + file("missing.yaml")), 2);
+  EXPECT_NE(evaluate(file("apart.lcmlog") + out + " --log-level loud"), 0);
+  EXPECT_NE(output_.find("--log-level: loud not in"), std::string::npos) << output_;
 }
 
 TEST_F(EvaluateTest, DamagedLogIsReportedAndTheRestUsed) {

@@ -2,9 +2,7 @@
 // against the ground truth recorded with them: position / heading / drift errors, NEES against
 // its chi-square bounds, gate statistics from GATE; writes report.json, PNG figures and, on
 // request, TUM trajectory files for the evo tools. Nothing is replayed (that is lcmloc-eval).
-#include <atomic>
 #include <chrono>
-#include <csignal>
 #include <filesystem>
 #include <iostream>
 #include <sstream>
@@ -13,16 +11,14 @@
 #include <spdlog/spdlog.h>
 
 #include "lcmloc/common/config.hpp"
+#include "lcmloc/common/process.hpp"
 #include "lcmloc/eval/trajectory.hpp"
 #include "lcmloc/eval/trajectory_report.hpp"
 
 namespace {
 
-std::atomic<bool> g_stop{false};
-void onSignal(int) { g_stop = true; }
-
-constexpr int kExitNothingUsable = 1;
-constexpr int kExitBadConfig = 2;
+constexpr int kExitNothingUsable = lcmloc::common::kExitRuntimeError;
+constexpr int kExitBadConfig = lcmloc::common::kExitConfigError;
 
 std::string channelList(const std::map<std::string, int64_t>& counts) {
   if (counts.empty()) return "none";
@@ -50,14 +46,16 @@ int main(int argc, char** argv) {
   CLI::App app{"lcmloc-evaluate: scores the estimates recorded in an LCM log (pose_t) against the ground truth "
                "recorded with them: position, heading and drift errors, NEES against its chi-square bounds, gate "
                "statistics; writes report.json, PNG figures and TUM files (docs/evaluate.md)."};
-  std::string log_path, config_path, out_dir = "out/evaluate", tum_dir, lcm_url, level = "info";
+  std::string log_path, config_path, out_dir = "out/evaluate", tum_dir, lcm_url;
+  common::CommonOptions opts;  // --log-level only: --config is optional here
   eval::TrajectoryLogOptions lo;
   eval::EvaluateOptions eo;
   eval::TrajectoryPlotOptions po;
   std::vector<double> datum;
   bool no_plots = false, export_only = false;
   app.add_option("log", log_path, "LCM log file holding estimates (and ground truth)")->required();
-  auto* o_pose = app.add_option("--pose-channel", lo.pose_channel, "channel of the estimates (pose_t)")->capture_default_str();
+  auto* o_pose =
+      app.add_option("--pose-channel", lo.pose_channel, "channel of the estimates (pose_t)")->capture_default_str();
   app.add_flag("--all-poses", lo.all_pose_channels, "also score every other POSE_* channel (shadow filters)");
   auto* o_truth = app.add_option("--truth-channel", lo.truth_channel,
                                  "channel of the reference: ground_truth_t, or gps_fix_t (needs a datum)")
@@ -86,150 +84,148 @@ int main(int argc, char** argv) {
   app.add_flag("--no-plots", no_plots, "do not draw figures");
   app.add_option("--lcm-url", lcm_url, "accepted for uniformity with the other processes; unused (the log is read "
                  "directly, without LCM networking)");
-  app.add_option("--log-level", level, "trace, debug, info, warn, error")->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
-  spdlog::set_level(spdlog::level::from_str(level));
-  std::signal(SIGINT, onSignal);
-  std::signal(SIGTERM, onSignal);
-
-  if (export_only && tum_dir.empty()) {
-    spdlog::error("--export-only needs --tum-dir DIR");
-    return kExitBadConfig;
-  }
-  try {
-    if (!config_path.empty()) {
-      const auto cfg = common::loadSystemConfig(config_path);
-      if (!o_pose->count()) lo.pose_channel = cfg.channels.pose;
-      if (!o_truth->count()) lo.truth_channel = cfg.channels.ground_truth;
-      if (!o_gate->count()) lo.gate_channel = cfg.channels.gate;
-      lo.datum = cfg.datum;
+  common::addLogLevelOption(app, opts.log_level);
+  return common::runProcess(app, argc, argv, opts, "lcmloc-evaluate", [&] {
+    if (export_only && tum_dir.empty()) {
+      spdlog::error("--export-only needs --tum-dir DIR");
+      return kExitBadConfig;
     }
-    if (!datum.empty()) {
-      common::Datum d;
-      d.latitude = datum[0];
-      d.longitude = datum[1];
-      d.altitude = datum.size() > 2 ? datum[2] : 0.0;
-      common::LocalFrame check(d);  // throws std::invalid_argument when out of range
-      lo.datum = d;
-    }
-  } catch (const std::exception& e) {
-    spdlog::error("{}", e.what());
-    return kExitBadConfig;
-  }
-
-  eval::TrajectoryLog log;
-  try {
-    // A progress line every 2 s of wall time on long logs.
-    const auto start = std::chrono::steady_clock::now();
-    auto last = start;
-    log = eval::readTrajectoryLog(log_path, lo, &g_stop, [&](int64_t pos, int64_t size) {
-      const auto now = std::chrono::steady_clock::now();
-      if (now - last < std::chrono::seconds(2)) return;
-      last = now;
-      spdlog::info("reading {}: {:.0f} of {:.0f} MB ({:.0f} %)", log_path, pos / 1e6, size / 1e6,
-                   size > 0 ? 100.0 * static_cast<double>(pos) / static_cast<double>(size) : 100.0);
-    });
-  } catch (const std::exception& e) {
-    spdlog::error("{}", e.what());
-    return kExitNothingUsable;
-  }
-  for (const auto& i : log.issues)
-    spdlog::warn("{}: event {} at byte {}: {}", log_path, i.event_index, i.byte_offset, i.what);
-  if (log.damaged)
-    spdlog::warn("{}: damaged log: {} of {} bytes unreadable; evaluating the {} intact events", log_path,
-                 log.bytes_unreadable, log.file_size, log.events_read);
-  if (log.interrupted) spdlog::warn("interrupted: evaluating the {} events read so far", log.events_read);
-
-  // Tracks with estimates; the pose channel first.
-  std::vector<eval::EstimateTrack> tracks;
-  for (const auto& t : log.tracks)
-    if (!t.poses.empty()) tracks.push_back(t);
-  if (tracks.empty()) {
-    spdlog::error("{}: no estimates (pose_t) on channel {}{} in {} events; channels in the log: {}", log_path,
-                  lo.pose_channel, lo.all_pose_channels ? " or POSE_*" : "", log.events_read,
-                  channelList(log.channel_counts));
-    return kExitNothingUsable;
-  }
-  if (log.tracks.front().poses.empty())
-    spdlog::warn("{}: no estimates on {}; scoring {}", log_path, lo.pose_channel, tracks.front().channel);
-
-  if (!tum_dir.empty()) {
     try {
-      std::filesystem::create_directories(tum_dir);
-      for (const auto& t : tracks) {
-        const std::string file = tum_dir + "/" + (t.channel == lo.pose_channel ? "estimate" : "estimate_" + t.channel) + ".tum";
-        const auto n = eval::writeTum(file, t.poses);
-        std::cout << "TUM: " << file << " (" << n << " poses";
-        if (n != t.poses.size()) std::cout << "; " << t.poses.size() - n << " with a repeated utime left out";
-        std::cout << ")\n";
+      if (!config_path.empty()) {
+        const auto cfg = common::loadSystemConfig(config_path);
+        if (!o_pose->count()) lo.pose_channel = cfg.channels.pose;
+        if (!o_truth->count()) lo.truth_channel = cfg.channels.ground_truth;
+        if (!o_gate->count()) lo.gate_channel = cfg.channels.gate;
+        lo.datum = cfg.datum;
       }
-      if (!log.truth.empty()) {
-        eval::writeTum(tum_dir + "/truth.tum", log.truth);
-        std::cout << "TUM: " << tum_dir << "/truth.tum (" << log.truth.size() << " poses"
-                  << (log.truth.front().has_heading ? "" : ", no heading: identity rotation") << ")\n";
+      if (!datum.empty()) {
+        common::Datum d;
+        d.latitude = datum[0];
+        d.longitude = datum[1];
+        d.altitude = datum.size() > 2 ? datum[2] : 0.0;
+        common::LocalFrame check(d);  // throws std::invalid_argument when out of range
+        lo.datum = d;
       }
     } catch (const std::exception& e) {
-      spdlog::error("TUM export to '{}': {}", tum_dir, e.what());
+      spdlog::error("{}", e.what());
+      return kExitBadConfig;
+    }
+
+    eval::TrajectoryLog log;
+    try {
+      // A progress line every 2 s of wall time on long logs.
+      const auto start = std::chrono::steady_clock::now();
+      auto last = start;
+      log = eval::readTrajectoryLog(log_path, lo, &common::stopFlag(), [&](int64_t pos, int64_t size) {
+        const auto now = std::chrono::steady_clock::now();
+        if (now - last < std::chrono::seconds(2)) return;
+        last = now;
+        spdlog::info("reading {}: {:.0f} of {:.0f} MB ({:.0f} %)", log_path, pos / 1e6, size / 1e6,
+                     size > 0 ? 100.0 * static_cast<double>(pos) / static_cast<double>(size) : 100.0);
+      });
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
       return kExitNothingUsable;
     }
-    if (export_only) return 0;
-  }
+    for (const auto& i : log.issues)
+      spdlog::warn("{}: event {} at byte {}: {}", log_path, i.event_index, i.byte_offset, i.what);
+    if (log.damaged)
+      spdlog::warn("{}: damaged log: {} of {} bytes unreadable; evaluating the {} intact events", log_path,
+                   log.bytes_unreadable, log.file_size, log.events_read);
+    if (log.interrupted) spdlog::warn("interrupted: evaluating the {} events read so far", log.events_read);
 
-  if (log.truth.empty()) {
-    spdlog::error("{}: no ground truth on channel {} ({}); channels in the log: {}. Choose it with --truth-channel, "
-                  "or export the estimates only with --tum-dir DIR --export-only",
-                  log_path, lo.truth_channel,
-                  log.channel_counts.count(lo.truth_channel) ? "present but not usable, see the warnings above"
-                                                             : "not in the log",
-                  channelList(log.channel_counts));
-    return kExitNothingUsable;
-  }
-
-  std::vector<eval::TrackScore> scores;
-  bool any_scored = false;
-  for (const auto& t : tracks) {
-    scores.push_back(eval::scoreTrack(t, log.truth, eo));
-    const auto& s = scores.back();
-    any_scored = any_scored || s.scored > 0;
-    if (s.before_truth + s.after_truth + s.in_truth_gap > 0)
-      spdlog::warn("{}: {} of {} estimates not scored: {} before the first truth sample, {} after the last, {} in "
-                   "truth gaps longer than {} s",
-                   s.channel, s.before_truth + s.after_truth + s.in_truth_gap, s.estimates, s.before_truth,
-                   s.after_truth, s.in_truth_gap, eo.max_truth_gap_s);
-  }
-  if (!any_scored) {
-    const auto& t = tracks.front();
-    spdlog::error("{}: no estimate lies inside the ground truth: estimates on {} span {}, truth on {} spans {}{}",
-                  log_path, t.channel, utimeSpan(t.poses.front().utime, t.poses.back().utime), lo.truth_channel,
-                  utimeSpan(log.truth.front().utime, log.truth.back().utime),
-                  eo.max_truth_gap_s > 0 ? " (gaps over --max-truth-gap excluded)" : "");
-    return kExitNothingUsable;
-  }
-  const auto gates = eval::gateStatistics(log.gates, eo.confidence);
-
-  std::error_code ec;
-  std::filesystem::create_directories(out_dir, ec);
-  if (ec) {
-    spdlog::error("cannot create output directory '{}': {}", out_dir, ec.message());
-    return kExitNothingUsable;
-  }
-  try {
-    eval::writeJson(eval::makeTrajectoryReport(log, scores, gates, {lo, eo}), out_dir + "/report.json");
-  } catch (const std::exception& e) {
-    spdlog::error("{}", e.what());
-    return kExitNothingUsable;
-  }
-  eval::printTrajectorySummary(std::cout, log, scores, gates);
-  std::cout << "report: " << out_dir << "/report.json\n";
-  if (!no_plots) {
-    const auto plots = eval::writeTrajectoryPlots(log, scores, po, out_dir);
-    if (plots.ok) {
-      std::cout << "figures:";
-      for (const auto& f : plots.figures) std::cout << " " << f;
-      std::cout << "\n";
-    } else {
-      spdlog::warn("{}", plots.message);
+    // Tracks with estimates; the pose channel first.
+    std::vector<eval::EstimateTrack> tracks;
+    for (const auto& t : log.tracks)
+      if (!t.poses.empty()) tracks.push_back(t);
+    if (tracks.empty()) {
+      spdlog::error("{}: no estimates (pose_t) on channel {}{} in {} events; channels in the log: {}", log_path,
+                    lo.pose_channel, lo.all_pose_channels ? " or POSE_*" : "", log.events_read,
+                    channelList(log.channel_counts));
+      return kExitNothingUsable;
     }
-  }
-  return 0;
+    if (log.tracks.front().poses.empty())
+      spdlog::warn("{}: no estimates on {}; scoring {}", log_path, lo.pose_channel, tracks.front().channel);
+
+    if (!tum_dir.empty()) {
+      try {
+        std::filesystem::create_directories(tum_dir);
+        for (const auto& t : tracks) {
+          const std::string name = t.channel == lo.pose_channel ? "estimate" : "estimate_" + t.channel;
+          const std::string file = tum_dir + "/" + name + ".tum";
+          const auto n = eval::writeTum(file, t.poses);
+          std::cout << "TUM: " << file << " (" << n << " poses";
+          if (n != t.poses.size()) std::cout << "; " << t.poses.size() - n << " with a repeated utime left out";
+          std::cout << ")\n";
+        }
+        if (!log.truth.empty()) {
+          eval::writeTum(tum_dir + "/truth.tum", log.truth);
+          std::cout << "TUM: " << tum_dir << "/truth.tum (" << log.truth.size() << " poses"
+                    << (log.truth.front().has_heading ? "" : ", no heading: identity rotation") << ")\n";
+        }
+      } catch (const std::exception& e) {
+        spdlog::error("TUM export to '{}': {}", tum_dir, e.what());
+        return kExitNothingUsable;
+      }
+      if (export_only) return 0;
+    }
+
+    if (log.truth.empty()) {
+      spdlog::error("{}: no ground truth on channel {} ({}); channels in the log: {}. Choose it with --truth-channel, "
+                    "or export the estimates only with --tum-dir DIR --export-only",
+                    log_path, lo.truth_channel,
+                    log.channel_counts.count(lo.truth_channel) ? "present but not usable, see the warnings above"
+                                                               : "not in the log",
+                    channelList(log.channel_counts));
+      return kExitNothingUsable;
+    }
+
+    std::vector<eval::TrackScore> scores;
+    bool any_scored = false;
+    for (const auto& t : tracks) {
+      scores.push_back(eval::scoreTrack(t, log.truth, eo));
+      const auto& s = scores.back();
+      any_scored = any_scored || s.scored > 0;
+      if (s.before_truth + s.after_truth + s.in_truth_gap > 0)
+        spdlog::warn("{}: {} of {} estimates not scored: {} before the first truth sample, {} after the last, {} in "
+                     "truth gaps longer than {} s",
+                     s.channel, s.before_truth + s.after_truth + s.in_truth_gap, s.estimates, s.before_truth,
+                     s.after_truth, s.in_truth_gap, eo.max_truth_gap_s);
+    }
+    if (!any_scored) {
+      const auto& t = tracks.front();
+      spdlog::error("{}: no estimate lies inside the ground truth: estimates on {} span {}, truth on {} spans {}{}",
+                    log_path, t.channel, utimeSpan(t.poses.front().utime, t.poses.back().utime), lo.truth_channel,
+                    utimeSpan(log.truth.front().utime, log.truth.back().utime),
+                    eo.max_truth_gap_s > 0 ? " (gaps over --max-truth-gap excluded)" : "");
+      return kExitNothingUsable;
+    }
+    const auto gates = eval::gateStatistics(log.gates, eo.confidence);
+
+    std::error_code ec;
+    std::filesystem::create_directories(out_dir, ec);
+    if (ec) {
+      spdlog::error("cannot create output directory '{}': {}", out_dir, ec.message());
+      return kExitNothingUsable;
+    }
+    try {
+      eval::writeJson(eval::makeTrajectoryReport(log, scores, gates, {lo, eo}), out_dir + "/report.json");
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
+      return kExitNothingUsable;
+    }
+    eval::printTrajectorySummary(std::cout, log, scores, gates);
+    std::cout << "report: " << out_dir << "/report.json\n";
+    if (!no_plots) {
+      const auto plots = eval::writeTrajectoryPlots(log, scores, po, out_dir);
+      if (plots.ok) {
+        std::cout << "figures:";
+        for (const auto& f : plots.figures) std::cout << " " << f;
+        std::cout << "\n";
+      } else {
+        spdlog::warn("{}", plots.message);
+      }
+    }
+    return 0;
+  });
 }

@@ -2,6 +2,7 @@
 // What every lcmloc process shares: the command line (--config, --lcm-url, --log-level),
 // spdlog set-up, SIGINT/SIGTERM -> stop flag, the HEARTBEAT publisher and a pacer that runs
 // simulated time against wall time with a real-time factor.
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -29,6 +30,9 @@ std::string defaultConfigPath();
 
 /// Adds --config, --lcm-url, --log-level to app, with defaults filled into opts.
 void addCommonOptions(CLI::App& app, CommonOptions& opts);
+/// Adds --log-level alone (checked against spdlog's level names), for commands whose --config
+/// means something else than a scenario to run.
+void addLogLevelOption(CLI::App& app, std::string& level);
 
 /// Sets the default spdlog logger (stderr, "[name] " prefix) at level ("trace".."off").
 void setupLogging(const std::string& process_name, const std::string& level);
@@ -36,6 +40,8 @@ void setupLogging(const std::string& process_name, const std::string& level);
 /// Installs SIGINT/SIGTERM handlers (no SA_RESTART, so a blocking handleTimeout returns early).
 void installSignalHandlers();
 bool stopRequested();
+/// The flag behind stopRequested(), for readers that poll an atomic.
+const std::atomic<bool>& stopFlag();
 void requestStop();
 /// Signal number that requested the stop (0 if none).
 int stopSignal();
