@@ -17,6 +17,12 @@
 namespace lcmloc::common {
 
 namespace {
+void addLogLevelOption(CLI::App& app, std::string& level) {
+  app.add_option("--log-level", level, "trace, debug, info, warn, error, critical, off")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
+}
+
 std::atomic<bool> g_stop{false};
 std::atomic<int> g_signal{0};
 
@@ -43,10 +49,12 @@ void addCommonOptions(CLI::App& app, CommonOptions& opts) {
   addLogLevelOption(app, opts.log_level);
 }
 
-void addLogLevelOption(CLI::App& app, std::string& level) {
-  app.add_option("--log-level", level, "trace, debug, info, warn, error, critical, off")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
+CLI::Option* addOfflineOptions(CLI::App& app, CommonOptions& opts, const std::string& config_help) {
+  CLI::Option* config = app.add_option("--config", opts.config, config_help);
+  app.add_option("--lcm-url", opts.lcm_url,
+                 "accepted for uniformity with the processes on the bus; unused (files only, no LCM networking)");
+  addLogLevelOption(app, opts.log_level);
+  return config;
 }
 
 void setupLogging(const std::string& process_name, const std::string& level) {
@@ -77,7 +85,9 @@ int runProcess(CLI::App& app, int argc, char** argv, const CommonOptions& opts,
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help / --version exit 0; any other command-line error is a configuration error
+    // (exit 2, as a bad config file), with CLI11's message.
+    return app.exit(e) == 0 ? kExitOk : kExitConfigError;
   }
   setupLogging(process_name, opts.log_level);
   installSignalHandlers();

@@ -276,6 +276,10 @@ TEST_F(ProcessTest, EveryExecutableHasHelp) {
     EXPECT_NE(out.find(name), std::string::npos) << out;
     for (const char* opt : {"--config", "--lcm-url", "--log-level"})
       EXPECT_NE(out.find(opt), std::string::npos) << name << " lacks " << opt;
+    // A bad command line is a configuration error: exit 2 with CLI11's message.
+    Child bad(exe, {"--no-such-option"}, path(name + ".bad-option"));
+    EXPECT_EQ(bad.wait(10s), std::optional<int>(2)) << name << "\n" << bad.output();
+    EXPECT_NE(bad.output().find("--no-such-option"), std::string::npos) << name << "\n" << bad.output();
   }
 }
 

@@ -46,8 +46,9 @@ int main(int argc, char** argv) {
   CLI::App app{"lcmloc-evaluate: scores the estimates recorded in an LCM log (pose_t) against the ground truth "
                "recorded with them: position, heading and drift errors, NEES against its chi-square bounds, gate "
                "statistics; writes report.json, PNG figures and TUM files (docs/evaluate.md)."};
-  std::string log_path, config_path, out_dir = "out/evaluate", tum_dir, lcm_url;
-  common::CommonOptions opts;  // --log-level only: --config is optional here
+  std::string log_path, out_dir = "out/evaluate", tum_dir;
+  common::CommonOptions opts;
+  const std::string& config_path = opts.config;
   eval::TrajectoryLogOptions lo;
   eval::EvaluateOptions eo;
   eval::TrajectoryPlotOptions po;
@@ -62,9 +63,6 @@ int main(int argc, char** argv) {
                       ->capture_default_str();
   auto* o_gate = app.add_option("--gate-channel", lo.gate_channel, "channel of the gate decisions (gate_decision_t)")
                      ->capture_default_str();
-  app.add_option("--config", config_path,
-                 "system config (YAML): its channels.pose, channels.ground_truth, channels.gate and datum are the "
-                 "defaults of the options above");
   app.add_option("--datum", datum, "LAT,LON[,ALT]: origin of the local frame for gps_fix_t truth [deg, deg, m]")
       ->delimiter(',')->expected(2, 3);
   app.add_option("-o,--out", out_dir, "output directory for report.json and figures")->capture_default_str();
@@ -82,9 +80,9 @@ int main(int argc, char** argv) {
   app.add_option("--ellipse-sigma", po.ellipse_sigma, "ellipse size in standard deviations")
       ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_flag("--no-plots", no_plots, "do not draw figures");
-  app.add_option("--lcm-url", lcm_url, "accepted for uniformity with the other processes; unused (the log is read "
-                 "directly, without LCM networking)");
-  common::addLogLevelOption(app, opts.log_level);
+  common::addOfflineOptions(app, opts,
+                            "system config (YAML): its channels.pose, channels.ground_truth, channels.gate and "
+                            "datum are the defaults of --pose-channel, --truth-channel, --gate-channel and --datum");
   return common::runProcess(app, argc, argv, opts, "lcmloc-evaluate", [&] {
     if (export_only && tum_dir.empty()) {
       spdlog::error("--export-only needs --tum-dir DIR");

@@ -26,23 +26,21 @@ constexpr int kExitBadConfig = lcmloc::common::kExitConfigError;
 int main(int argc, char** argv) {
   CLI::App app{"Offline evaluation of an lcmloc log: replays the sensor channels through each "
                "filter, scores them against ground truth, writes report.json and PNG figures."};
-  std::string log_path, config_path, out_dir = "out/eval", lcm_url;
-  lcmloc::common::CommonOptions opts;  // --log-level only: --config is optional here
+  std::string log_path, out_dir = "out/eval";
+  lcmloc::common::CommonOptions opts;
+  const std::string& config_path = opts.config;
   std::vector<std::string> filters{"dead_reckoning", "ukf", "ukf_gated"};
   bool no_plots = false;
   app.add_option("log", log_path, "LCM log file to evaluate")->required();
-  app.add_option("--config", config_path,
-                 "system config (YAML) giving filter parameters, marker map and channels; "
-                 "built-in defaults (the paper's experiment) when omitted");
   app.add_option("-o,--out", out_dir, "output directory for report.json and figures")->capture_default_str();
   app.add_option("--filters", filters,
                  "filters to replay: dead_reckoning, ukf, ukf_gated, ukf_calib (odometry and ruler detections "
                  "are replayed; for the IMU, GPS and landmark filters use lcmloc-replay + lcmloc-evaluate)")
       ->delimiter(',')->capture_default_str();
   app.add_flag("--no-plots", no_plots, "do not draw figures");
-  app.add_option("--lcm-url", lcm_url, "accepted for uniformity with the other processes; unused "
-                 "(the log is read directly, without LCM networking)");
-  lcmloc::common::addLogLevelOption(app, opts.log_level);
+  lcmloc::common::addOfflineOptions(app, opts,
+                                    "system config (YAML) giving filter parameters, marker map and channels; "
+                                    "built-in defaults (the paper's experiment) when omitted");
   return lcmloc::common::runProcess(app, argc, argv, opts, "lcmloc-eval", [&] {
     lcmloc::common::SystemConfig cfg;
     try {

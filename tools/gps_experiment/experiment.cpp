@@ -89,12 +89,16 @@ bool writeReport(const Result& r, const Options& opt, const std::string& dir) {
   j["hold_s"] = opt.hold_s;
   j["gps_rmse_all_m"] = r.gps_rmse_all_m;
   j["truth_start"] = {r.scenario.truth.front().x, r.scenario.truth.front().y};
-  for (const auto& s : r.filters)
-    j["filters"][s.filter] = {{"convergence_s", s.convergence_s}, {"steady_rmse_m", s.steady_rmse_m},
-                              {"steady_max_m", s.steady_max_m}, {"gps_rmse_same_period_m", s.gps_rmse_m},
-                              {"ratio_to_gps", s.gps_rmse_m > 0 ? s.steady_rmse_m / s.gps_rmse_m : 0.0},
+  for (const auto& s : r.filters) {
+    // A filter that never converged has no steady state: null, not a zero error.
+    auto steady = [&s](double v) { return s.converged() ? nlohmann::json(v) : nlohmann::json(nullptr); };
+    j["filters"][s.filter] = {{"converged", s.converged()},
+                              {"convergence_s", steady(s.convergence_s)}, {"steady_rmse_m", steady(s.steady_rmse_m)},
+                              {"steady_max_m", steady(s.steady_max_m)}, {"gps_rmse_same_period_m", steady(s.gps_rmse_m)},
+                              {"ratio_to_gps", steady(s.gps_rmse_m > 0 ? s.steady_rmse_m / s.gps_rmse_m : 0.0)},
                               {"gps_accepted", s.gps_accepted}, {"gps_rejected", s.gps_rejected},
                               {"lockouts", s.lockouts}};
+  }
   std::ofstream(dir + "/report.json") << std::setw(2) << j << "\n";
   {
     std::ofstream f(dir + "/truth.dat");

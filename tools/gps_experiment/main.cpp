@@ -38,9 +38,14 @@ int main(int argc, char** argv) {
     const bool plotted = gps_experiment::writeReport(r, eo, out);
     std::printf("%-16s %12s %14s %12s %14s %8s %8s\n", "filter", "converge[s]", "steady_rmse[m]", "max[m]",
                 "gps_rmse[m]", "gps_rej", "lockout");
-    for (const auto& s : r.filters)
-      std::printf("%-16s %12.2f %14.3f %12.3f %14.3f %8d %8d\n", s.filter.c_str(), s.convergence_s,
-                  s.steady_rmse_m, s.steady_max_m, s.gps_rmse_m, s.gps_rejected, s.lockouts);
+    for (const auto& s : r.filters) {
+      if (s.converged())
+        std::printf("%-16s %12.2f %14.3f %12.3f %14.3f %8d %8d\n", s.filter.c_str(), s.convergence_s,
+                    s.steady_rmse_m, s.steady_max_m, s.gps_rmse_m, s.gps_rejected, s.lockouts);
+      else  // no steady state to score
+        std::printf("%-16s %12s %14s %12s %14s %8d %8d\n", s.filter.c_str(), "never", "-", "-", "-",
+                    s.gps_rejected, s.lockouts);
+    }
     std::printf("raw GPS RMSE over the run: %.3f m; report: %s/report.json%s\n", r.gps_rmse_all_m, out.c_str(),
                 plotted ? ", figures fig1a_tracks.png, fig1b_error.png" : " (gnuplot failed: no figures)");
     return common::kExitOk;

@@ -297,11 +297,7 @@ int main(int argc, char** argv) {
                "A truncated or damaged log is read up to and past the damage, which is reported with its\n"
                "byte offset and event number."};
   common::CommonOptions opts;
-  opts.config = "";
-  app.add_option("--config", opts.config, "system YAML file (checked when given; the log tools need no settings)");
-  app.add_option("--log-level", opts.log_level, "trace, debug, info, warn, error, critical, off")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
+  common::addOfflineOptions(app, opts, "system YAML file (checked when given; the log tools need no settings)");
   app.require_subcommand(1);
   std::string log_path, output;
   std::vector<std::string> channels;

@@ -21,7 +21,6 @@ using lcmloc::common::ConfigError;
 
 struct Options {
   std::string config;  // empty: built-in defaults (the paper's scenario)
-  std::string log_level = "info";
   int runs = 200;
   int64_t seed_base = -1;  // -1: the config's seed
   double scale_error = 0.01;
@@ -171,11 +170,9 @@ int run(const Options& o) {
 int main(int argc, char** argv) {
   Options o;
   CLI::App app{"Monte Carlo of the magnetic-ruler scenario: N seeded in-process runs per filter"};
-  app.add_option("--config", o.config, "system YAML file (default: built-in paper scenario)")
+  lcmloc::common::CommonOptions common;
+  lcmloc::common::addOfflineOptions(app, common, "system YAML file (default: built-in paper scenario)")
       ->check(CLI::ExistingFile);
-  app.add_option("--log-level", o.log_level, "trace, debug, info, warn, error, critical, off")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
   app.add_option("--runs", o.runs, "number of runs")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--seed-base", o.seed_base, "seed of the first run (default: the config's seed)");
   app.add_option("--scale-error", o.scale_error, "odometer scale error k [-]")->capture_default_str();
@@ -184,10 +181,8 @@ int main(int argc, char** argv) {
   app.add_flag("--no-faults", o.no_faults, "run without the configured fault markers");
   app.add_option("--filters", o.filters, "comma-separated filter types")->capture_default_str();
   app.add_option("--out", o.out, "JSON report path")->capture_default_str();
-  lcmloc::common::CommonOptions common;
-  common.log_level = o.log_level;
-  return lcmloc::common::runProcess(app, argc, argv, common, "montecarlo", [&] {
-    spdlog::set_level(spdlog::level::from_str(o.log_level));
+  return lcmloc::common::runProcess(app, argc, argv, common, "lcmloc-montecarlo", [&] {
+    o.config = common.config;
     return run(o);
   });
 }

@@ -30,9 +30,10 @@ std::string defaultConfigPath();
 
 /// Adds --config, --lcm-url, --log-level to app, with defaults filled into opts.
 void addCommonOptions(CLI::App& app, CommonOptions& opts);
-/// Adds --log-level alone (checked against spdlog's level names), for commands whose --config
-/// means something else than a scenario to run.
-void addLogLevelOption(CLI::App& app, std::string& level);
+/// The offline tools' version (they read and write files only): --config with the tool's own
+/// meaning and no default (opts.config stays empty unless given), --lcm-url accepted for
+/// uniformity with the processes on the bus and unused, --log-level. Returns the --config option.
+CLI::Option* addOfflineOptions(CLI::App& app, CommonOptions& opts, const std::string& config_help);
 
 /// Sets the default spdlog logger (stderr, "[name] " prefix) at level ("trace".."off").
 void setupLogging(const std::string& process_name, const std::string& level);
@@ -47,7 +48,8 @@ void requestStop();
 int stopSignal();
 
 /// Parses the command line and runs body(), turning exceptions into one clear error line and
-/// an exit code (ConfigError -> 2, anything else -> 1). Returns the process exit code.
+/// an exit code (ConfigError -> 2, anything else -> 1). A bad command line exits 2 with CLI11's
+/// message (--help: 0). Returns the process exit code.
 int runProcess(CLI::App& app, int argc, char** argv, const CommonOptions& opts,
                const std::string& process_name, const std::function<int()>& body);
 

@@ -18,10 +18,11 @@ struct Options {
 struct FilterSummary {
   std::string filter;
   double convergence_s = -1;  ///< first time after which the error stayed < converged_m for hold_s (-1: never)
-  double steady_rmse_m = 0;   ///< position RMSE after convergence
+  double steady_rmse_m = 0;   ///< position RMSE after convergence (meaningless unless converged())
   double steady_max_m = 0;
   double gps_rmse_m = 0;      ///< raw GPS error over the same period (fixes with a fix)
   int gps_accepted = 0, gps_rejected = 0, lockouts = 0;
+  bool converged() const { return convergence_s >= 0; }
 };
 
 struct Result {
