@@ -240,6 +240,13 @@ TEST_F(LogTools, CutKeepsTheTimeWindowAndChannelsAndLcmReadsTheResult) {
   }
   EXPECT_EQ(n, 30);  // seq 20 .. 50 (0.20 .. 0.50 s inclusive), 50 missing
   EXPECT_NE(r.err.find("wrote 30 of 135 events"), std::string::npos) << r.err;
+
+  // Cutting a log onto itself is refused before the file is opened for writing.
+  const auto size = fs::file_size(log);
+  const ToolRun self = tool("cut " + log + " -o " + log);
+  EXPECT_EQ(self.rc, 1) << self.err;
+  EXPECT_NE(self.err.find("is the input log"), std::string::npos) << self.err;
+  EXPECT_EQ(fs::file_size(log), size);
 }
 
 TEST_F(LogTools, EveryToolReadsATruncatedLogUpToTheDamageAndSaysWhere) {

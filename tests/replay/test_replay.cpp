@@ -308,6 +308,20 @@ TEST_F(ReplayTest, DamagedLogIsReplayedUpToTheDamageAndSaysWhere) {
   EXPECT_NE(missing.output().find("no such file"), std::string::npos) << missing.output();
 }
 
+TEST_F(ReplayTest, OutputOverTheInputIsRefusedAndTheInputKept) {
+  const std::string before = slurp(log_);
+  EXPECT_THROW(run(log_, log_, cfg_), std::runtime_error);
+  const std::string link = path("link.lcmlog");  // the same file under another name
+  fs::create_symlink(log_, link);
+  EXPECT_THROW(run(log_, link, cfg_), std::runtime_error);
+  EXPECT_EQ(slurp(log_), before);  // not truncated
+
+  Child exe(LCMLOC_REPLAY, {log_, "-o", link, "--config", LCMLOC_PAPER_YAML}, path("same.out"));
+  EXPECT_EQ(exe.wait(30s).value_or(-1), 1) << exe.output();
+  EXPECT_NE(exe.output().find("is the input log"), std::string::npos) << exe.output();
+  EXPECT_EQ(slurp(log_), before);
+}
+
 TEST_F(ReplayTest, CheckpointRoundTripsExactlyAndRejectsGarbage) {
   core::FilterState s;
   s.utime = 123456789;

@@ -264,8 +264,7 @@ struct CutOptions {
 };
 
 int cut(const std::string& path, const std::string& output, const CutOptions& o) {
-  if (fs::exists(output) && fs::equivalent(output, path))
-    throw std::runtime_error("output '" + output + "' is the input log");
+  eval::refuseOutputOverInput(path, output);
   const std::regex re = channelRegex(o.channels);
   logger::EventFile out(output);
   int64_t t0 = -1, kept = 0, err = 0;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <set>
 #include <sstream>
@@ -290,6 +291,12 @@ LogData readLog(const std::string& path, const common::ChannelConfig& channels,
   std::stable_sort(out.truth.begin(), out.truth.end(),
                    [](const TruthSample& a, const TruthSample& b) { return a.utime < b.utime; });
   return out;
+}
+
+void refuseOutputOverInput(const std::string& input, const std::string& output) {
+  std::error_code ec;  // either missing: not the same file
+  if (std::filesystem::equivalent(input, output, ec) && !ec)
+    throw std::runtime_error("output '" + output + "' is the input log '" + input + "': choose another output file");
 }
 
 }  // namespace lcmloc::eval
