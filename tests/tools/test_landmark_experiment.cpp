@@ -166,6 +166,7 @@ TEST(LandmarkExperiment, CommandWritesReportAndRefusesBadInput) {
   std::tie(rc, out) = runCmd("--help");
   EXPECT_EQ(rc, 0);
   EXPECT_NE(out.find("--runs"), std::string::npos);
+  EXPECT_NE(out.find("landmark_paper.yaml"), std::string::npos) << out;  // the default it uses
   std::tie(rc, out) = runCmd("--runs 0");
   EXPECT_NE(rc, 0);
   std::ofstream(dir / "bad.yaml") << "vision: {resolution: -1}\n";

@@ -83,8 +83,8 @@ int main(int argc, char** argv) {
       "the landmarks are placed by the experiment (equilateral triangle, both readings of the distance), "
       "not taken from the config's `landmarks` map"};
   common::CommonOptions opts;
-  common::addCommonOptions(app, opts);
   opts.config = std::string(LCMLOC_CONFIG_DIR) + "/landmark_paper.yaml";
+  common::addCommonOptions(app, opts);
   landmark_experiment::Options eo;
   std::string out = "out/landmark_experiment";
   uint64_t seed = 0;

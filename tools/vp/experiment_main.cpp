@@ -16,8 +16,8 @@ int main(int argc, char** argv) {
       "through the fusion daemon's code once per filter and scores each fused track at the held-out fixes "
       "(RMSE, median, p95, max); writes report.json, drive.png and error.png."};
   common::CommonOptions opts;
-  common::addCommonOptions(app, opts);
   opts.config = std::string(LCMLOC_CONFIG_DIR) + "/victoria_park.yaml";
+  common::addCommonOptions(app, opts);
   vp::ImportOptions io;
   vp::ExperimentOptions eo;
   std::string dir = LCMLOC_VP_DIR;
