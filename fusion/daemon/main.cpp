@@ -52,7 +52,7 @@ int main(int argc, char** argv) {
   common::addCommonOptions(app, opts);
   std::string filter, checkpoint;
   double init_from_bus = 0.0, checkpoint_period = 1.0;
-  app.add_option("--filter", filter, "override fusion.filter.type (dead_reckoning, ukf, ukf_gated, ukf_calib, tvekf, ukf_gps)");
+  app.add_option("--filter", filter, "override fusion.filter.type (" + lcmloc::core::filterTypeList() + ")");
   app.add_option("--init-from-bus", init_from_bus,
                  "hand-over from a running daemon: wait up to SECONDS for its POSE, until it reports stopped, "
                  "and start from its last POSE (inputs are queued meanwhile); 0 = off")

@@ -38,7 +38,7 @@ int main(int argc, char** argv) {
   replay::BenchOptions bo;
   app.add_option("log", input, "input LCM log file");
   app.add_option("-o,--output", output, "output LCM log (the daemon's outputs)");
-  app.add_option("--filter", filter, "override fusion.filter.type (dead_reckoning, ukf, ukf_gated, ukf_calib, tvekf, ukf_gps, ukf_landmarks)");
+  app.add_option("--filter", filter, "override fusion.filter.type (" + core::filterTypeList() + ")");
   app.add_option("--shadow", shadow, "override fusion.shadow: comma-separated filter types (POSE_<TYPE>)");
   app.add_flag("--no-shadow", no_shadow, "run no shadow filters");
   app.add_flag("--with-inputs", with_inputs,

@@ -392,6 +392,12 @@ std::vector<std::string> filterTypes() {
           "odo_ins_uncal"};
 }
 
+std::string filterTypeList() {
+  std::string s;
+  for (const auto& t : filterTypes()) s += (s.empty() ? "" : ", ") + t;
+  return s;
+}
+
 bool Filter::applyFix(const PoseFix& fix) {
   if (!fix.pose.allFinite() || !fix.cov.allFinite()) return false;
   FilterState s = state();
@@ -414,8 +420,7 @@ std::unique_ptr<Filter> makeFilter(const FilterConfig& cfg, const MarkerMap& map
   if (auto f = detail::makeGnssFilter(cfg)) return f;
   if (auto f = detail::makeLandmarkFilter(cfg, map)) return f;
   if (auto f = detail::makeOdoInsFilter(cfg)) return f;
-  throw std::invalid_argument("filter config: unknown type '" + cfg.type +
-                              "' (known: dead_reckoning, ukf, ukf_gated, ukf_calib, tvekf, ukf_gps, ukf_landmarks, odo_ins, odo_ins_uncal)");
+  throw std::invalid_argument("filter config: unknown type '" + cfg.type + "' (known: " + filterTypeList() + ")");
 }
 
 }  // namespace lcmloc::core

@@ -194,5 +194,7 @@ std::unique_ptr<Filter> makeFilter(const FilterConfig& cfg, const MarkerMap& map
 
 /// Names accepted by makeFilter.
 std::vector<std::string> filterTypes();
+/// filterTypes() as "a, b, c" (help texts, error messages).
+std::string filterTypeList();
 
 }  // namespace lcmloc::core
