@@ -1,6 +1,8 @@
 #include "checkpoint.hpp"
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <stdexcept>
@@ -25,6 +27,15 @@ void writeCheckpoint(const std::string& path, const core::FilterState& state, co
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0)
     throw std::runtime_error("checkpoint: cannot rename '" + tmp + "' to '" + path + "'");
+}
+
+std::string checkpointUnwritable(const std::string& path) {
+  const std::string tmp = path + ".tmp";
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) return "cannot create '" + tmp + "': " + std::strerror(errno);
+  std::fclose(f);
+  std::remove(tmp.c_str());
+  return "";
 }
 
 std::optional<Checkpoint> readCheckpoint(const std::string& path) {

@@ -13,6 +13,11 @@ namespace lcmloc::fusion {
 /// Writes state to path (path.tmp, then rename). Throws std::runtime_error on I/O failure.
 void writeCheckpoint(const std::string& path, const core::FilterState& state, const std::string& filter);
 
+/// Why the checkpoint could not be written at path ("" if it can): creates and removes
+/// path.tmp, so a missing directory, a read-only file system or missing permissions are found
+/// at start-up rather than at the first periodic write.
+std::string checkpointUnwritable(const std::string& path);
+
 struct Checkpoint {
   core::FilterState state;
   std::string filter;

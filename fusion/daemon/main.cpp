@@ -71,7 +71,11 @@ int main(int argc, char** argv) {
       cfg.fusion.filter = common::parseFilterConfig(n, cfg.fusion.filter, "--filter", "fusion.filter");
     }
     std::optional<fusion::Checkpoint> saved;
-    if (!checkpoint.empty()) saved = fusion::readCheckpoint(checkpoint);  // a corrupt file is an error now
+    if (!checkpoint.empty()) {
+      saved = fusion::readCheckpoint(checkpoint);  // a corrupt file is an error now
+      if (const std::string why = fusion::checkpointUnwritable(checkpoint); !why.empty())
+        throw common::ConfigError(checkpoint, "--checkpoint", why);
+    }
     common::Bus bus(opts.lcm_url);
     const bool hold = init_from_bus > 0 || !checkpoint.empty();
     fusion::FusionDaemon daemon(cfg, bus, fusion::FusionDaemon::Options{hold});
@@ -90,12 +94,18 @@ int main(int argc, char** argv) {
       if (!init) source = init_from_bus > 0 ? "no POSE on the bus and no checkpoint" : "no checkpoint yet";
       daemon.release(init, source);
     }
+    // A failing write is logged when it starts failing and when it works again (not every period).
+    bool checkpoint_failing = false, checkpoint_written = false;
     auto saveCheckpoint = [&] {
       if (checkpoint.empty() || daemon.processed() == 0) return;
       try {
         fusion::writeCheckpoint(checkpoint, daemon.activeState(), daemon.activeFilter());
+        if (checkpoint_failing) spdlog::info("checkpoint {} written again", checkpoint);
+        checkpoint_failing = false;
+        checkpoint_written = true;
       } catch (const std::exception& e) {
-        spdlog::error("{}", e.what());
+        if (!checkpoint_failing) spdlog::error("{} (retried every {} s)", e.what(), checkpoint_period);
+        checkpoint_failing = true;
       }
     };
     auto last_checkpoint = std::chrono::steady_clock::now();
@@ -111,8 +121,16 @@ int main(int argc, char** argv) {
     while (bus.handle(0) > 0) {}  // what already arrived is processed too
     daemon.shutdown();
     saveCheckpoint();
-    if (!checkpoint.empty()) spdlog::info("checkpoint written to {}", checkpoint);
     hb.publish("stopping");
+    if (checkpoint.empty()) return common::kExitOk;
+    if (checkpoint_failing) {
+      spdlog::error("the checkpoint {} could not be written at exit", checkpoint);
+      return common::kExitRuntimeError;
+    }
+    if (checkpoint_written)
+      spdlog::info("checkpoint written to {}", checkpoint);
+    else
+      spdlog::info("no input processed: checkpoint {} left as it was", checkpoint);
     return common::kExitOk;
   });
 }

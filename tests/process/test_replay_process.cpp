@@ -9,6 +9,7 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <thread>
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -275,7 +276,8 @@ TEST_F(ReplayProcessTest, LogplayerIntoDaemonEqualsOfflineReplayAndDropsAreRepor
 TEST_F(ReplayProcessTest, HandOverFromTheBusAndFromACheckpoint) {
   Bus bus(url_);
   Watch w(bus);
-  const std::string ck = path("fusion.ck");
+  fs::create_directories(path("ck"));
+  const std::string ck = path("ck/fusion.ck");
   Child a(LCMLOC_FUSION, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML, "--filter", "ukf_gated"}, path("a.out"));
   ASSERT_TRUE(waitFor(bus, [&] { return w.alive.count(a.pid()) > 0; }, 10s)) << a.output();
   const int64_t t0 = 1000000, dt = 10000;
@@ -329,8 +331,22 @@ TEST_F(ReplayProcessTest, HandOverFromTheBusAndFromACheckpoint) {
   EXPECT_EQ(c_first.filter, "dead_reckoning");
   EXPECT_EQ(c_first.utime, t0 + 200 * dt);
   EXPECT_LT(std::hypot(c_first.state[0] - b_last.state[0], c_first.state[1] - b_last.state[1]), 0.02);
+  // The checkpoint's directory goes away: the failure is reported once, and the exit says so.
+  fs::remove_all(path("ck"));
+  std::this_thread::sleep_for(2500ms);  // two periodic writes fail
   c.signal(SIGTERM);
-  EXPECT_EQ(c.wait(10s).value_or(-1), 0) << c.output();
+  EXPECT_EQ(c.wait(10s).value_or(-1), 1) << c.output();
+  const std::string out = c.output();
+  const auto first = out.find("checkpoint: cannot write");
+  ASSERT_NE(first, std::string::npos) << out;
+  EXPECT_EQ(out.find("checkpoint: cannot write", first + 1), std::string::npos) << "reported once\n" << out;
+  EXPECT_NE(out.find("could not be written at exit"), std::string::npos) << out;
+
+  // A checkpoint that cannot be written is refused at start-up (exit 2), not found out later.
+  Child d(LCMLOC_FUSION, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML, "--checkpoint", path("no/dir/ck")},
+          path("d.out"));
+  EXPECT_EQ(d.wait(10s).value_or(-1), 2) << d.output();
+  EXPECT_NE(d.output().find("--checkpoint: cannot create"), std::string::npos) << d.output();
 }
 
 TEST_F(ReplayProcessTest, HelpAndCtlWithoutDaemonOrWithBadArguments) {

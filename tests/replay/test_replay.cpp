@@ -340,4 +340,8 @@ TEST_F(ReplayTest, CheckpointRoundTripsExactlyAndRejectsGarbage) {
   EXPECT_FALSE(fusion::readCheckpoint(path("absent")).has_value());
   std::ofstream(path("garbage")) << "not a checkpoint";
   EXPECT_THROW(fusion::readCheckpoint(path("garbage")), std::runtime_error);
+
+  EXPECT_EQ(fusion::checkpointUnwritable(path("new.ck")), "");
+  EXPECT_FALSE(fs::exists(path("new.ck.tmp")));  // the probe is removed again
+  EXPECT_NE(fusion::checkpointUnwritable(path("no/such/dir/ck")).find("No such file or directory"), std::string::npos);
 }
