@@ -37,8 +37,9 @@ class ProcessFixture : public ::testing::Test {
   std::string url_;
 };
 
-/// One event of a log read back whole (channel and encoded message).
+/// One event of a log read back whole (event timestamp, channel and encoded message).
 struct LogEvent {
+  int64_t timestamp = 0;
   std::string channel;
   std::vector<uint8_t> data;
 };
@@ -50,7 +51,7 @@ inline std::vector<LogEvent> readLog(const std::string& file) {
   if (!log.good()) return out;
   while (const lcm::LogEvent* ev = log.readNextEvent()) {
     const auto* p = static_cast<const uint8_t*>(ev->data);
-    out.push_back({ev->channel, std::vector<uint8_t>(p, p + ev->datalen)});
+    out.push_back({ev->timestamp, ev->channel, std::vector<uint8_t>(p, p + ev->datalen)});
   }
   return out;
 }

@@ -21,7 +21,6 @@
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
 #include "lcmloc/replay/replay.hpp"
-#include "test_log_writer.hpp"
 
 using namespace std::chrono_literals;
 namespace fs = std::filesystem;
@@ -29,8 +28,7 @@ using lcmloc::common::Bus;
 
 namespace {
 
-using lcmloc::testlog::Event;
-using lcmloc::testlog::readEvents;
+using Event = LogEvent;
 
 /// Payloads per channel, in order.
 std::map<std::string, std::vector<std::vector<uint8_t>>> byChannel(const std::vector<Event>& events) {
@@ -67,7 +65,7 @@ class ReplayProcessTest : public ProcessFixture {
     const auto rc = r.wait(60s);
     EXPECT_TRUE(rc.has_value());
     EXPECT_EQ(rc.value_or(-1), 0) << r.output();
-    return readEvents(path(name));
+    return readLog(path(name));
   }
   /// The scenario of a live launcher run at four times real time, recording into log.
   std::string liveScenario(const std::string& log, const std::string& fusion) {
@@ -163,7 +161,7 @@ TEST_F(ReplayProcessTest, LiveRunEqualsOfflineReplayByteForByteWithSwitchAndShad
   const auto rc = launcher.wait(90s);
   ASSERT_TRUE(rc.has_value()) << launcher.output();
   ASSERT_EQ(*rc, 0) << launcher.output();
-  auto live = byChannel(readEvents(log));
+  auto live = byChannel(readLog(log));
   ASSERT_FALSE(live["POSE"].empty());
   EXPECT_EQ(decode<lcmloc::pose_t>(live["POSE"].back()).filter, "ukf_calib");
   ASSERT_EQ(live["FUSION_CONTROL"].size(), 3u) << "the logger records the commands";
@@ -192,7 +190,7 @@ TEST_F(ReplayProcessTest, LiveRunWithOutputEveryEqualsOfflineReplayByteForByte) 
   const auto rc = launcher.wait(90s);
   ASSERT_TRUE(rc.has_value()) << launcher.output();
   ASSERT_EQ(*rc, 0) << launcher.output();
-  auto live = byChannel(readEvents(log));
+  auto live = byChannel(readLog(log));
   const std::size_t odometry = live["ODOMETRY"].size(), detections = live["MAGRULER"].size() + live["MAGRULER_FAULT"].size();
   ASSERT_GT(odometry, 1000u);
   // About one pose per ten odometry messages, plus one per detection and the final one.
@@ -225,7 +223,7 @@ TEST_F(ReplayProcessTest, LogplayerIntoDaemonEqualsOfflineReplayAndDropsAreRepor
   const std::string gapped = path("gapped.lcmlog");
   {
     lcm::LogFile out(gapped, "w");
-    for (const auto& e : readEvents(full)) {
+    for (const auto& e : readLog(full)) {
       if (e.channel == "ODOMETRY") {
         const auto m = decode<lcmloc::odometry_t>(e.data);
         if (m.seq >= 500 && m.seq < 505) continue;

@@ -9,14 +9,13 @@
 
 #include <lcm/lcm-cpp.hpp>
 
-#include "child.hpp"
+#include "process_fixture.hpp"
 #include "daemon/checkpoint.hpp"
 #include "lcmloc/common/convert.hpp"
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/pose_t.hpp"
 #include "lcmloc/replay/replay.hpp"
-#include "test_log_writer.hpp"
 
 using namespace lcmloc;
 using namespace std::chrono_literals;
@@ -24,8 +23,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-using lcmloc::testlog::Event;
-using lcmloc::testlog::readEvents;
+using Event = LogEvent;
 
 void writeEvents(const std::string& path, const std::vector<Event>& events) {
   lcm::LogFile log(path, "w");
@@ -45,13 +43,6 @@ Event encode(const std::string& channel, const T& m) {
   Event e{m.utime, channel, std::vector<uint8_t>(static_cast<std::size_t>(m.getEncodedSize()))};
   m.encode(e.data.data(), 0, static_cast<int>(e.data.size()));
   return e;
-}
-
-template <typename T>
-T decode(const Event& e) {
-  T m;
-  EXPECT_GE(m.decode(e.data.data(), 0, static_cast<int>(e.data.size())), 0);
-  return m;
 }
 
 std::string slurp(const std::string& path) {
@@ -112,7 +103,7 @@ TEST_F(ReplayTest, SameLogAndConfigGiveByteIdenticalOutput) {
   // Message utime = measurement time, POSE seq counts 0, 1, 2, ...; event timestamps = utime.
   int64_t seq = 0, last = -1;
   int accepted = 0;
-  for (const auto& e : readEvents(path("a.lcmlog"))) {
+  for (const auto& e : readLog(path("a.lcmlog"))) {
     if (e.channel == "POSE") {
       const auto p = decode<lcmloc::pose_t>(e);
       EXPECT_EQ(p.seq, seq++);
@@ -154,14 +145,14 @@ TEST_F(ReplayTest, OutputEveryDecimatesPosesKeepsDecisionsAndIsDeterministic) {
   EXPECT_TRUE(fa == fb) << "two replays of the same log differ";
   // Same decisions at the same times; the last POSE is the state after the last input.
   std::vector<lcmloc::gate_decision_t> dp, da;
-  for (const auto& e : readEvents(path("per.lcmlog")))
+  for (const auto& e : readLog(path("per.lcmlog")))
     if (e.channel == "GATE") dp.push_back(decode<lcmloc::gate_decision_t>(e));
   int64_t last_pose_utime = 0, last_input_utime = 0;
-  for (const auto& e : readEvents(path("a.lcmlog"))) {
+  for (const auto& e : readLog(path("a.lcmlog"))) {
     if (e.channel == "GATE") da.push_back(decode<lcmloc::gate_decision_t>(e));
     if (e.channel == "POSE") last_pose_utime = decode<lcmloc::pose_t>(e).utime;
   }
-  for (const auto& e : readEvents(log_)) last_input_utime = std::max(last_input_utime, e.timestamp);
+  for (const auto& e : readLog(log_)) last_input_utime = std::max(last_input_utime, e.timestamp);
   EXPECT_EQ(last_pose_utime, last_input_utime);
   ASSERT_EQ(dp.size(), da.size());
   for (std::size_t i = 0; i < dp.size(); ++i) {
@@ -173,7 +164,7 @@ TEST_F(ReplayTest, OutputEveryDecimatesPosesKeepsDecisionsAndIsDeterministic) {
 
 TEST_F(ReplayTest, RecordedSwitchesArePerformedAtTheSamePointWithoutGapOrJump) {
   // Insert control commands at fixed message times into the log (as the logger records them).
-  auto events = readEvents(log_);
+  auto events = readLog(log_);
   const int64_t t0 = events.front().timestamp;
   struct Cmd { double at_s; std::string filter, params; };
   const std::vector<Cmd> cmds{{10.0, "ukf_calib", ""},
@@ -207,14 +198,14 @@ TEST_F(ReplayTest, RecordedSwitchesArePerformedAtTheSamePointWithoutGapOrJump) {
   EXPECT_EQ(r1.used, stats_.odometry + stats_.detections + static_cast<int64_t>(cmds.size()) - 2);
 
   // Reference: the same log without switches (the gated UKF throughout).
-  const auto ref_events = (run(log_, path("ref.lcmlog"), cfg_), readEvents(path("ref.lcmlog")));
+  const auto ref_events = (run(log_, path("ref.lcmlog"), cfg_), readLog(path("ref.lcmlog")));
   std::vector<lcmloc::pose_t> ref;
   for (const auto& e : ref_events)
     if (e.channel == "POSE") ref.push_back(decode<lcmloc::pose_t>(e));
 
   std::vector<lcmloc::pose_t> poses;
   std::vector<lcmloc::fusion_status_t> status;
-  for (const auto& e : readEvents(path("out1.lcmlog"))) {
+  for (const auto& e : readLog(path("out1.lcmlog"))) {
     if (e.channel == "POSE") poses.push_back(decode<lcmloc::pose_t>(e));
     if (e.channel == "FUSION_STATUS") status.push_back(decode<lcmloc::fusion_status_t>(e));
   }
@@ -259,7 +250,7 @@ TEST_F(ReplayTest, RecordedSwitchesArePerformedAtTheSamePointWithoutGapOrJump) {
 }
 
 TEST_F(ReplayTest, DamagedLogIsReplayedUpToTheDamageAndSaysWhere) {
-  auto events = readEvents(log_);
+  auto events = readLog(log_);
   // Byte offsets of the events in the file.
   std::vector<int64_t> offset{0};
   for (const auto& e : events) offset.push_back(offset.back() + 28 + static_cast<int64_t>(e.channel.size() + e.data.size()));

@@ -1,7 +1,6 @@
 #pragma once
-// Test helpers: writes LCM log files event by event with lcm::LogFile and remembers where each
-// event starts (byte offset) and its channel, so tests can damage a chosen event; reads a whole
-// log back into memory.
+// Test helper: writes LCM log files event by event with lcm::LogFile and remembers where each
+// event starts (byte offset) and its channel, so tests can damage a chosen event.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -42,24 +41,5 @@ class LogWriter {
   lcm::LogFile log_;
   int64_t offset_ = 0;
 };
-
-/// One event of a log read back.
-struct Event {
-  int64_t timestamp = 0;
-  std::string channel;
-  std::vector<uint8_t> data;
-};
-
-/// Every event of the log at path, in file order (none if it cannot be opened).
-inline std::vector<Event> readEvents(const std::string& path) {
-  std::vector<Event> out;
-  lcm::LogFile log(path, "r");
-  if (!log.good()) return out;
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
-    const auto* p = static_cast<const uint8_t*>(ev->data);
-    out.push_back({ev->timestamp, ev->channel, std::vector<uint8_t>(p, p + ev->datalen)});
-  }
-  return out;
-}
 
 }  // namespace lcmloc::testlog
