@@ -283,6 +283,19 @@ TEST_F(ProcessTest, EveryExecutableHasHelp) {
   }
 }
 
+TEST_F(ProcessTest, LauncherRefusesTwoProcessesOfTheSameName) {
+  // Unnamed processes are named after their executable: two magnetic rulers need names.
+  const std::string system = writeFile("system.yaml", std::string("processes:\n") +
+                                                          "  - {executable: " + LCMLOC_MAGRULER + "}\n" +
+                                                          "  - {executable: " + LCMLOC_MAGRULER + "}\n");
+  Child launcher(LCMLOC_LAUNCHER, {"--system", system, "--lcm-url", url_}, path("launcher.out"));
+  EXPECT_EQ(launcher.wait(10s), std::optional<int>(2)) << launcher.output();
+  EXPECT_NE(launcher.output().find("processes[1].name: '" + std::string(LCMLOC_MAGRULER) +
+                                   "' is also the name of processes[0]"),
+            std::string::npos)
+      << launcher.output();
+}
+
 TEST_F(ProcessTest, LauncherFailsWhenAChildFailsAndStopsTheOthers) {
   const std::string log = path("fail.lcmlog");
   const std::string scenario = writeFile("scenario.yaml", "logger: {output: " + log + "}\n");

@@ -38,6 +38,11 @@ LaunchConfig loadLaunchConfig(const std::string& path) {
     pr.finish();
     if (p.executable.empty()) throw ConfigError(path, kp + ".executable", "missing");
     if (p.name.empty()) p.name = p.executable;
+    for (std::size_t j = 0; j < cfg.processes.size(); ++j)
+      if (cfg.processes[j].name == p.name)  // the summary, heartbeats and errors name processes
+        throw ConfigError(path, kp + ".name",
+                          "'" + p.name + "' is also the name of processes[" + std::to_string(j) +
+                              "] (the executable's name when none is given): give each process its own name");
     cfg.processes.push_back(p);
   }
   r.finish();
