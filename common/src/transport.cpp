@@ -55,6 +55,14 @@ bool MessageBus::publishFailed(const std::string& channel, const char* what) {
 }
 
 void Bus::subscribeRaw(const std::string& channel, RawHandler handler) {
+  // LCM 1.3.1's C++ subscribe returns a Subscription even when the channel regex does not
+  // compile (its C subscription is then null, and the first use of it crashes): probe with the
+  // C API, which returns null (and prints GLib's reason on stderr).
+  lcm_t* c = lcm_->getUnderlyingLCM();
+  lcm_subscription_t* probe =
+      lcm_subscribe(c, channel.c_str(), [](const lcm_recv_buf_t*, const char*, void*) {}, nullptr);
+  if (!probe) throw TransportError("cannot subscribe to '" + channel + "': not a valid channel regex");
+  lcm_unsubscribe(c, probe);
   auto sub = std::make_unique<Sub>();
   sub->handler = std::move(handler);
   lcm::Subscription* s = lcm_->subscribe(channel, &Sub::onMessage, sub.get());

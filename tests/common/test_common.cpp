@@ -355,6 +355,22 @@ TEST(Transport, BadUrlThrowsClearError) {
   }
 }
 
+TEST(Transport, InvalidChannelRegexThrowsInsteadOfCrashing) {
+  common::Bus bus("memq://");
+  try {
+    bus.subscribeRaw("([", [](const std::string&, const uint8_t*, std::size_t, int64_t) {});
+    FAIL() << "no error";
+  } catch (const common::TransportError& e) {
+    EXPECT_NE(std::string(e.what()).find("'([': not a valid channel regex"), std::string::npos) << e.what();
+  }
+  int n = 0;  // the bus still works
+  bus.subscribeRaw("A|B", [&](const std::string&, const uint8_t*, std::size_t, int64_t) { ++n; });
+  const uint8_t byte = 0;
+  bus.publishRaw("B", &byte, 1);
+  for (int i = 0; i < 10 && n == 0; ++i) bus.handle(100);
+  EXPECT_EQ(n, 1);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Process helpers
 
