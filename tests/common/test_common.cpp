@@ -8,7 +8,9 @@
 #include "lcmloc/common/convert.hpp"
 #include "lcmloc/common/process.hpp"
 #include "lcmloc/common/transport.hpp"
+#include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/heartbeat_t.hpp"
+#include "lcmloc/pose_t.hpp"
 
 using namespace lcmloc;
 using common::ConfigError;
@@ -352,6 +354,53 @@ TEST(Transport, BadUrlThrowsClearError) {
     FAIL() << "no error";
   } catch (const common::TransportError& e) {
     EXPECT_NE(std::string(e.what()).find("cannot start LCM on 'nonsense://nowhere'"), std::string::npos);
+  }
+}
+
+/// Writes a big-endian int32 at byte i of an encoded message.
+void putInt32(std::vector<uint8_t>& b, std::size_t i, int32_t v) {
+  const auto u = static_cast<uint32_t>(v);
+  for (int k = 0; k < 4; ++k) b[i + static_cast<std::size_t>(k)] = static_cast<uint8_t>(u >> (24 - 8 * k));
+}
+
+template <typename T>
+std::vector<uint8_t> encoded(const T& m) {
+  std::vector<uint8_t> b(static_cast<std::size_t>(m.getEncodedSize()));
+  EXPECT_GE(m.encode(b.data(), 0, static_cast<int>(b.size())), 0);
+  return b;
+}
+
+TEST(Transport, CorruptLengthsInAMessageFailTheDecodeInsteadOfCrashing) {
+  // lcm-gen's decoders are hardened at build time (lcmtypes/harden_decode.cmake).
+  lcmloc::fusion_control_t c{};
+  c.filter = "ukf";
+  const auto good = encoded(c);
+  lcmloc::fusion_control_t dc;
+  ASSERT_EQ(dc.decode(good.data(), 0, static_cast<int>(good.size())), static_cast<int>(good.size()));
+  EXPECT_EQ(dc.filter, "ukf");
+  // The filter string's length (hash 8, utime 8, seq 8, command 4: byte 28). INT_MIN made the
+  // decoder copy 2 GB from past the buffer.
+  for (int32_t len : {std::numeric_limits<int32_t>::min(), -5, 0}) {
+    auto bad = good;
+    putInt32(bad, 28, len);
+    EXPECT_LT(dc.decode(bad.data(), 0, static_cast<int>(bad.size())), 0) << len;
+  }
+
+  lcmloc::pose_t p{};
+  p.filter = "ukf";  // length 4 at byte 24, characters 28..31, status 32, dim 36
+  p.dim = 2;
+  p.state = {1.0, 2.0};
+  p.state_names = {"x", "y"};
+  p.covariance = {{1.0, 0.0}, {0.0, 1.0}};
+  const auto pose = encoded(p);
+  lcmloc::pose_t dp;
+  ASSERT_EQ(dp.decode(pose.data(), 0, static_cast<int>(pose.size())), static_cast<int>(pose.size()));
+  EXPECT_EQ(dp.state_names[1], "y");
+  // An absurd count fails before anything is allocated (2^31 - 1 doubles were 16 GB).
+  for (int32_t dim : {std::numeric_limits<int32_t>::max(), 1000, -3}) {
+    auto bad = pose;
+    putInt32(bad, 36, dim);
+    EXPECT_LT(dp.decode(bad.data(), 0, static_cast<int>(bad.size())), 0) << dim;
   }
 }
 

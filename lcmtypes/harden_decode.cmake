@@ -1,0 +1,17 @@
+# Hardens the C++ decoders lcm-gen 1.3.1 writes (run by the lcm-gen command on every generated
+# header; -DHEADERS=a.hpp;b.hpp). Its decoders trust two lengths read from the message:
+#  - a string's length is checked against the bytes left but not for being < 1: a negative
+#    length (one corrupt or hostile UDP packet) makes assign() copy up to 2 GB from past the
+#    buffer, a crash;
+#  - an array's count is used in resize() before the bytes are checked: a count of 2^31 - 1
+#    allocates and zeroes gigabytes before the decode fails.
+# Both become a failed decode (-1), which the transport counts as a decode error. Every array
+# element takes at least one byte, so a count above the bytes left cannot be valid.
+foreach(header ${HEADERS})
+  file(READ ${header} text)
+  string(REGEX REPLACE "if\\((__[A-Za-z0-9_]+) > maxlen - pos\\) return -1;"
+         "if(\\1 > maxlen - pos || \\1 < 1) return -1;" text "${text}")
+  string(REGEX REPLACE "\n( *)(this->[^\n]*)\\.resize\\(this->([A-Za-z0-9_]+)\\);"
+         "\n\\1if(this->\\3 < 0 || this->\\3 > maxlen - pos) return -1;\n\\1\\2.resize(this->\\3);" text "${text}")
+  file(WRITE ${header} "${text}")
+endforeach()
