@@ -18,6 +18,7 @@
 
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/eval/evaluate.hpp"
+#include "lcmloc/eval/report.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/fault_event_t.hpp"
 #include "lcmloc/gate_decision_t.hpp"
@@ -204,6 +205,17 @@ TEST_F(EvalTest, CountsAndMetricsOfEachFilter) {
     EXPECT_FALSE(decisions[i].is_fault);
     EXPECT_LT(decisions[i].decision.mahalanobis, ev.gate_threshold) << i;
   }
+}
+
+TEST_F(EvalTest, ReportWithInvalidUtf8FromTheLogIsWrittenWithReplacements) {
+  // A channel or filter name from a damaged log may hold any bytes.
+  nlohmann::json j;
+  j["filter"] = std::string("ukf\xC1\x80");
+  ASSERT_NO_THROW(eval::writeJson(j, file("r.json")));
+  std::ifstream in(file("r.json"));
+  const auto back = nlohmann::json::parse(in);
+  EXPECT_EQ(back["filter"].get<std::string>(), "ukf\xEF\xBF\xBD\xEF\xBF\xBD");  // U+FFFD twice
+  EXPECT_THROW(eval::writeJson(j, file("no/such/dir/r.json")), std::runtime_error);
 }
 
 TEST_F(EvalTest, FiltersNeedingOtherSensorsAreRefusedNotScoredOnOdometryAlone) {

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lcmloc/eval/gnuplot.hpp"
+#include "lcmloc/eval/report.hpp"
 
 namespace lcmloc::gps_experiment {
 namespace {
@@ -99,7 +100,7 @@ bool writeReport(const Result& r, const Options& opt, const std::string& dir) {
                               {"gps_accepted", s.gps_accepted}, {"gps_rejected", s.gps_rejected},
                               {"lockouts", s.lockouts}};
   }
-  std::ofstream(dir + "/report.json") << std::setw(2) << j << "\n";
+  eval::writeJson(j, dir + "/report.json");
   {
     std::ofstream f(dir + "/truth.dat");
     f << "# t[s] x y\n";

@@ -12,6 +12,7 @@
 
 #include "lcmloc/common/process.hpp"
 #include "lcmloc/import/magnet_grid.hpp"
+#include "lcmloc/eval/report.hpp"
 
 using namespace lcmloc;
 
@@ -86,7 +87,7 @@ int main(int argc, char** argv) {
     }
     if (!import_only) {
       std::filesystem::create_directories(out);
-      std::ofstream(out + "/summary.json") << std::setw(2) << summary << "\n";
+      eval::writeJson(summary, out + "/summary.json");
     }
     return common::kExitOk;
   });

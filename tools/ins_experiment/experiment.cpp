@@ -13,6 +13,7 @@
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/engine.hpp"
 #include "lcmloc/eval/gnuplot.hpp"
+#include "lcmloc/eval/report.hpp"
 
 namespace lcmloc::ins_experiment {
 
@@ -270,7 +271,7 @@ bool writeReport(const std::vector<RunResult>& runs, const models::InsSimConfig&
       q << p.t << ' ' << p.distance << ' ' << p.err_cal << ' ' << p.err_uncal << ' ' << p.err_dr_cal << ' '
         << p.err_dr_uncal << ' ' << p.heading_err_cal << '\n';
   }
-  std::ofstream(dir + "/report.json") << std::setw(2) << j << "\n";
+  eval::writeJson(j, dir + "/report.json");
   std::ofstream gp(dir + "/plot.gp");
   gp << "set terminal pngcairo size 900,600 noenhanced\nset grid\n"
      << "set output 'fig1_scale.png'\nset title 'Fig. 1: odometer scale-error estimate, first 60 s of motion'\n"

@@ -17,6 +17,7 @@
 #include "lcmloc/core/landmark_fix.hpp"
 #include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/models/scenario_config.hpp"
+#include "lcmloc/eval/report.hpp"
 
 namespace lcmloc::landmark_experiment {
 
@@ -423,7 +424,7 @@ bool writeReport(const Result& r, const std::string& dir) {
     cases.push_back(jc);
   }
   j["cases"] = cases;
-  std::ofstream(dir + "/report.json") << std::setw(2) << j << "\n";
+  eval::writeJson(j, dir + "/report.json");
 
   // Data files and one figure per case: position errors with the CRB 95 % ellipse and the
   // paper's +-0.1 m box; histogram of heading errors with the CRB 2 sigma and the paper's 20".

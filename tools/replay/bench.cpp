@@ -22,6 +22,7 @@
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/replay/replay.hpp"
+#include "lcmloc/eval/report.hpp"
 
 namespace lcmloc::replay {
 namespace {
@@ -161,7 +162,7 @@ int runBench(const common::SystemConfig& base, const BenchOptions& opts) {
       "synthetic log: {} events ({} decoded sensor messages), {:.0f} s of message time, {} repetitions\n{}{}",
       events, decoded, opts.duration_s, rate_read.size(), table, verdict);
   const std::string report = (fs::path(opts.dir) / "bench.json").string();
-  std::ofstream(report) << j.dump(2) << "\n";
+  eval::writeJson(j, report);
   std::cout << "report: " << report << "\n";
   fs::remove(out);
   return common::kExitOk;

@@ -125,7 +125,9 @@ json makeReport(const LogData& data, const Evaluation& ev, const ReportMeta& met
 void writeJson(const json& report, const std::string& path) {
   std::ofstream f(path);
   if (!f) throw std::runtime_error("cannot write '" + path + "'");
-  f << report.dump(2) << "\n";
+  // Strings from a log (channel, filter and sensor names) may hold any bytes: invalid UTF-8 is
+  // written as U+FFFD rather than failing the whole report.
+  f << report.dump(2, ' ', false, json::error_handler_t::replace) << "\n";
   if (!f) throw std::runtime_error("error while writing '" + path + "'");
 }
 

@@ -27,6 +27,7 @@
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
 #include "lcmloc/replay/replay.hpp"
+#include "lcmloc/eval/report.hpp"
 
 namespace lcmloc::import {
 namespace fs = std::filesystem;
@@ -348,7 +349,7 @@ MagnetGridReport runMagnetGrid(const MagnetGridOptions& opt, MagnetGridImport* i
                       {"note", "largest 1-sigma of the reed-row position before a detection (the first, the grid anchor, excluded) vs half the magnet spacing"}};
   j["final"] = {{"sigma_xy_m", rep.final_sigma_xy}, {"sigma_theta_rad", rep.final_sigma_theta},
                 {"gap_to_dead_reckoning_m", rep.dr_gap_m}};
-  std::ofstream(fs::path(opt.out_dir) / "report.json") << std::setw(2) << j << "\n";
+  eval::writeJson(j, (fs::path(opt.out_dir) / "report.json").string());
   {
     std::ofstream g(fs::path(opt.out_dir) / "grid.dat");
     for (const auto& m : imp.map) g << m.x << ' ' << m.y << '\n';

@@ -18,6 +18,7 @@
 #include "lcmloc/pose_t.hpp"
 #include "lcmloc/replay/replay.hpp"
 #include "lcmloc/vp/vp.hpp"
+#include "lcmloc/eval/report.hpp"
 
 namespace lcmloc::vp {
 
@@ -145,7 +146,7 @@ ExperimentResult runExperiment(const common::SystemConfig& cfg0, ImportOptions i
                               {"median_m", s.median_m}, {"p95_m", s.p95_m}, {"max_m", s.max_m},
                               {"gps_accepted", s.gps_accepted}, {"gps_rejected", s.gps_rejected},
                               {"lockouts", s.lockouts}};
-  std::ofstream(opt.out_dir + "/report.json") << std::setw(2) << j << "\n";
+  eval::writeJson(j, opt.out_dir + "/report.json");
 
   // figures
   {

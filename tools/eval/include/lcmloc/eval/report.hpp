@@ -18,7 +18,8 @@ struct ReportMeta {
 /// The whole report as JSON (see README, "Report fields").
 nlohmann::json makeReport(const LogData& data, const Evaluation& ev, const ReportMeta& meta);
 
-/// Writes json to path (pretty-printed); throws std::runtime_error on I/O failure.
+/// Writes json to path (pretty-printed; invalid UTF-8 in strings replaced by U+FFFD); throws
+/// std::runtime_error on I/O failure.
 void writeJson(const nlohmann::json& report, const std::string& path);
 
 /// Human summary: one line per filter (and the live run), then the log's health.
