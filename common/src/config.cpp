@@ -234,6 +234,7 @@ void parseFusion(KeyReader& root, FusionConfig& f) {
     checkFilterType(f.shadow[i], root.file(), "fusion.shadow[" + std::to_string(i) + "]");
   r.get("reorder_window", f.reorder_window, 0.0, 10.0);
   r.get("status_period", f.status_period, 0.01, 3600.0);
+  r.get("max_time_jump", f.max_time_jump, 0.0, 1e9);
   r.get("map_file", f.map_file);
   if (!f.map_file.empty() && f.map_file[0] != '/') {
     const auto slash = root.file().rfind('/');

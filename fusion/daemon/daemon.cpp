@@ -40,6 +40,7 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
   ec.reorder_window_us = static_cast<int64_t>(std::llround(cfg.fusion.reorder_window * 1e6));
   ec.output_every = cfg.fusion.output_every;
   ec.landmarks = cfg.fusion.landmarks;
+  ec.max_time_jump_us = static_cast<int64_t>(std::llround(cfg.fusion.max_time_jump * 1e6));
   core::EngineOutputs out;
   out.on_state = [this](const std::string& f, bool active, const core::FilterState& s) { publishState(f, active, s); };
   out.on_decision = [this](const std::string& f, bool, const core::GateDecision& d) {
@@ -55,6 +56,12 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
       if (shouldLog(log_count_, "too_old"))
         spdlog::warn("rejected input: {} (older than the {:.3f} s reorder window)", detail, cfg_.fusion.reorder_window);
       publishStatus("rejected_input", "too old: " + detail, utime);
+      return;
+    }
+    if (event == "too_new") {  // the time-jump guard dropped it (fusion.max_time_jump)
+      ++rejected_;
+      if (shouldLog(log_count_, "too_new")) spdlog::warn("rejected input: {}", detail);
+      publishStatus("rejected_input", "too new: " + detail, last_utime_);
       return;
     }
     spdlog::info("{}: {}", event, detail);
@@ -298,8 +305,9 @@ void FusionDaemon::shutdown() {
   engine_->flush();
   const auto c = engine_->counters();
   std::string detail = fmt::format(
-      "in {}, processed {}, rejected {} (too old {}), gaps {}, gate accepted {}, rejected {}", messages_in_,
-      c.processed, rejected_, c.too_old, gaps_.gaps(), c.accepted, c.rejected);
+      "in {}, processed {}, rejected {} (too old {}{}), gaps {}, gate accepted {}, rejected {}", messages_in_,
+      c.processed, rejected_, c.too_old, c.too_new ? fmt::format(", too new {}", c.too_new) : "", gaps_.gaps(),
+      c.accepted, c.rejected);
   if (covered_ > 0) detail += fmt::format(", covered by the initial state {}", covered_);
   publishStatus("stopped", detail, last_utime_);
   spdlog::info("stopping: {}", detail);

@@ -413,3 +413,79 @@ TEST(Engine, OutputEveryPublishesTheLastStateAtFlushAfterAnInputNoFilterUses) {
   EXPECT_EQ(rec.log, expected);
   EXPECT_EQ(rec.last_state.at("ukf_gated").utime, 150000);
 }
+
+namespace {
+
+/// 100 Hz odometry (1 cm each) from utime t0; `corrupt` replaces input k's utime.
+std::vector<EngineInput> odometryRun(int n, int64_t t0, std::map<int, int64_t> corrupt = {}) {
+  std::vector<EngineInput> v;
+  for (int k = 0; k < n; ++k) {
+    auto in = odoIn(t0 + 10000 * k, k, 0.01);
+    if (corrupt.count(k)) in.utime = std::get<OdometryInput>(in.payload).utime = corrupt[k];
+    v.push_back(in);
+  }
+  return v;
+}
+
+}  // namespace
+
+TEST(Engine, AnInputFarInTheFutureIsDroppedInsteadOfMakingEveryLaterInputTooOld) {
+  const int64_t t0 = 1000000, bad = int64_t{1} << 60;  // a corrupt utime (flipped high bit)
+  Recorder clean, guarded, unguarded;
+  {
+    FusionEngine e(engineConfig("dead_reckoning"), {}, clean.outputs());
+    for (auto& in : odometryRun(200, t0)) e.push(std::move(in));
+    e.flush();
+  }
+  // Two corrupt inputs (the second releases the first from the reorder window).
+  const std::map<int, int64_t> corrupt{{100, bad}, {101, bad + 1000000}};
+  FusionEngine g(engineConfig("dead_reckoning"), {}, guarded.outputs());
+  for (auto& in : odometryRun(200, t0, corrupt)) g.push(std::move(in));
+  g.flush();
+  EXPECT_EQ(g.counters().too_new, 2);
+  EXPECT_EQ(g.counters().too_old, 0);
+  EXPECT_EQ(g.counters().processed, 198);
+  ASSERT_EQ(guarded.count("too_new"), 2);
+  EXPECT_NE(guarded.events[0].detail.find("ODOMETRY seq 100 utime " + std::to_string(bad)), std::string::npos)
+      << guarded.events[0].detail;
+  // Two increments of 1 cm less than the clean run, and nothing else lost.
+  const auto& a = clean.last_state.at("dead_reckoning");
+  const auto& b = guarded.last_state.at("dead_reckoning");
+  EXPECT_EQ(b.utime, a.utime);
+  EXPECT_NEAR(std::hypot(a.x[0] - b.x[0], a.x[1] - b.x[1]), 0.02, 1e-9);
+
+  EngineConfig off = engineConfig("dead_reckoning");
+  off.max_time_jump_us = 0;  // without the guard every later input is too old
+  FusionEngine u(off, {}, unguarded.outputs());
+  for (auto& in : odometryRun(200, t0, corrupt)) u.push(std::move(in));
+  EXPECT_EQ(u.counters().too_old, 98);
+}
+
+TEST(Engine, ANewTimeBaseIsTakenAfterThreeInputsInARowWithNothingLost) {
+  const int64_t t0 = 1000000, later = t0 + 3600 * int64_t{1000000};  // e.g. a restarted source
+  Recorder r;
+  FusionEngine e(engineConfig("dead_reckoning"), {}, r.outputs());
+  for (auto& in : odometryRun(50, t0)) e.push(std::move(in));
+  // Two inputs of the new base and one of the old (held, then taken), then the new base.
+  auto after = odometryRun(50, later);
+  e.push(std::move(after[0]));
+  e.push(std::move(after[1]));
+  EXPECT_EQ(r.count("time_jump"), 0);
+  e.push(std::move(after[2]));
+  EXPECT_EQ(r.count("time_jump"), 1);
+  for (std::size_t k = 3; k < after.size(); ++k) e.push(std::move(after[k]));
+  e.flush();
+  EXPECT_EQ(e.counters().processed, 100);
+  EXPECT_EQ(e.counters().too_new + e.counters().too_old, 0);
+  EXPECT_EQ(r.last_state.at("dead_reckoning").utime, later + 49 * 10000);
+  const auto& x = r.last_state.at("dead_reckoning").x;
+  EXPECT_NEAR(std::hypot(x[0], x[1]), 1.0, 1e-9);  // 100 increments of 1 cm from the origin
+  // Suspects that stay alone are dropped at the end too.
+  Recorder r2;
+  FusionEngine e2(engineConfig("dead_reckoning"), {}, r2.outputs());
+  for (auto& in : odometryRun(10, t0)) e2.push(std::move(in));
+  e2.push(odoIn(later, 10, 0.01));
+  e2.flush();
+  EXPECT_EQ(e2.counters().too_new, 1);
+  EXPECT_EQ(e2.counters().processed, 10);
+}

@@ -1,7 +1,10 @@
 #include "lcmloc/core/engine.hpp"
 
+#include <algorithm>
+#include <climits>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <stdexcept>
 #include <type_traits>
@@ -75,6 +78,21 @@ struct FusionEngine::Impl {
 
   void event(const std::string& name, const std::string& detail, int64_t utime) const {
     if (out.on_event) out.on_event(name, detail, utime);
+  }
+
+  /// Time-jump guard (EngineConfig::max_time_jump_us): newest utime taken, held suspects.
+  int64_t newest_taken = INT64_MIN;
+  std::vector<EngineInput> suspects;
+  void dropSuspects() {
+    for (const auto& s : suspects) {
+      ++counters.too_new;
+      event("too_new",
+            s.channel + " seq " + std::to_string(s.seq) + " utime " + std::to_string(s.utime) + ": " +
+                std::to_string((s.utime - newest_taken) / 1000000) + " s ahead of the newest input (utime " +
+                std::to_string(newest_taken) + "), not followed by its time base",
+            s.utime);
+    }
+    suspects.clear();
   }
 
   /// orderKey() with the channel hash of the previous input reused when the channel is the same.
@@ -350,6 +368,28 @@ FusionEngine::FusionEngine(FusionEngine&&) noexcept = default;
 FusionEngine& FusionEngine::operator=(FusionEngine&&) noexcept = default;
 
 bool FusionEngine::push(EngineInput&& in) {
+  Impl& m = *impl_;
+  const int64_t jump = m.cfg.max_time_jump_us;
+  if (jump > 0 && m.newest_taken != INT64_MIN && in.utime > m.newest_taken + jump) {
+    if (!m.suspects.empty() && std::abs(in.utime - m.suspects.front().utime) > jump) m.dropSuspects();
+    m.suspects.push_back(std::move(in));
+    if (static_cast<int>(m.suspects.size()) < kTimeJumpConfirm) return true;  // held
+    auto confirmed = std::move(m.suspects);
+    m.suspects.clear();
+    m.event("time_jump",
+            confirmed.front().channel + " seq " + std::to_string(confirmed.front().seq) + ": new time base: utime " +
+                std::to_string(confirmed.front().utime) + " after " + std::to_string(m.newest_taken) + ", " +
+                std::to_string(kTimeJumpConfirm) + " inputs in a row",
+            confirmed.front().utime);
+    bool all = true;
+    for (auto& s : confirmed) all = take(std::move(s)) && all;
+    return all;
+  }
+  if (!m.suspects.empty()) m.dropSuspects();  // the old time base goes on: they were outliers
+  return take(std::move(in));
+}
+
+bool FusionEngine::take(EngineInput&& in) {
   const OrderKey key = impl_->orderKey(in);
   if (!impl_->buffer.push(key, std::move(in))) {  // refused: `in` is untouched
     ++impl_->counters.too_old;
@@ -366,11 +406,13 @@ bool FusionEngine::push(EngineInput&& in) {
     impl_->event("too_old", detail, utime);
     return false;
   }
+  impl_->newest_taken = std::max(impl_->newest_taken, key.utime);
   impl_->buffer.releaseReady([this](const OrderKey&, const EngineInput& e) { impl_->process(e); });
   return true;
 }
 
 void FusionEngine::flush() {
+  if (!impl_->suspects.empty()) impl_->dropSuspects();  // never confirmed
   impl_->buffer.flush([this](const OrderKey&, const EngineInput& e) { impl_->process(e); });
   if (impl_->unpublished) impl_->publishAll();  // output_every > 1: the state after the last input
 }

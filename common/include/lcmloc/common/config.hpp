@@ -54,6 +54,8 @@ struct FusionConfig {
   std::vector<std::string> shadow;    ///< extra filter types run side by side (POSE_<TYPE>)
   double reorder_window = 0.05;       ///< canonical-order window of message time [s]
   double status_period = 1.0;         ///< FUSION_STATUS period of message time [s]
+  /// Time-jump guard [s] of message time (0 = off): core::EngineConfig::max_time_jump_us.
+  double max_time_jump = 1.0;
   /// Map CSV (id,x,y; docs/import_formats.md) of markers, landmarks and beacons; a relative path
   /// is relative to the config file's directory. "" = the scenario's markers along the path.
   std::string map_file;

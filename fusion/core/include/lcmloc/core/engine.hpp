@@ -89,7 +89,17 @@ struct EngineConfig {
   /// and no event.
   std::map<int, Vec2> landmarks;
   landmark::FixOptions fix;
+  /// Time-jump guard (fusion.max_time_jump; 0 = off): an input whose utime is more than this
+  /// ahead of the newest input taken so far is held as suspect. kTimeJumpConfirm consecutive
+  /// suspects within this of each other confirm a new time base (event "time_jump"; they are then
+  /// taken in order, nothing lost); an input of the old time base drops the held suspects as
+  /// outliers (event "too_new" each). One message with a corrupt utime far in the future would
+  /// otherwise make every later input "too_old".
+  int64_t max_time_jump_us = 1000000;
 };
+
+/// Consecutive inputs beyond the time-jump guard that confirm a new time base.
+inline constexpr int kTimeJumpConfirm = 3;
 
 class FusionEngine {
  public:
@@ -100,7 +110,8 @@ class FusionEngine {
   FusionEngine& operator=(FusionEngine&&) noexcept;
   /// Queues an input; processes whatever the reorder window releases. Returns false (and emits
   /// "too_old") when the input is older than what was already processed; a refused input is
-  /// left as it was.
+  /// left as it was. An input beyond the time-jump guard is held (true) and taken or dropped
+  /// later (see EngineConfig::max_time_jump_us).
   bool push(EngineInput&& in);
   bool push(const EngineInput& in) { return push(EngineInput(in)); }
   /// Processes everything still queued (end of log / shutdown).
@@ -110,9 +121,11 @@ class FusionEngine {
   void initialize(const FilterState& state);
   std::string activeFilter() const;
   FilterState activeState() const;
-  struct Counters { int64_t processed = 0, too_old = 0, accepted = 0, rejected = 0; };
+  /// too_new: inputs dropped by the time-jump guard (EngineConfig::max_time_jump_us).
+  struct Counters { int64_t processed = 0, too_old = 0, too_new = 0, accepted = 0, rejected = 0; };
   Counters counters() const;
  private:
+  bool take(EngineInput&& in);  ///< past the time-jump guard: into the reorder window
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
