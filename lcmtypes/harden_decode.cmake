@@ -13,5 +13,9 @@ foreach(header ${HEADERS})
          "if(\\1 > maxlen - pos || \\1 < 1) return -1;" text "${text}")
   string(REGEX REPLACE "\n( *)(this->[^\n]*)\\.resize\\(this->([A-Za-z0-9_]+)\\);"
          "\n\\1if(this->\\3 < 0 || this->\\3 > maxlen - pos) return -1;\n\\1\\2.resize(this->\\3);" text "${text}")
+  # A decoder shape this script does not know (another lcm-gen) must not pass unhardened.
+  if(text MATCHES "_len_*[A-Za-z0-9_]* > maxlen - pos\\) return -1;")
+    message(FATAL_ERROR "${header}: a string length check left unhardened (lcm-gen output changed?)")
+  endif()
   file(WRITE ${header} "${text}")
 endforeach()
