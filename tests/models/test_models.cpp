@@ -3,10 +3,12 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <random>
 
 #include "lcmloc/core/ruler_model.hpp"
 #include "lcmloc/core/vehicle_model.hpp"
+#include "lcmloc/models/schedule.hpp"
 #include "lcmloc/models/world.hpp"
 
 using namespace lcmloc;
@@ -102,6 +104,34 @@ TEST(VehicleSim, FollowsPathWithinWeaveAndStops) {
   EXPECT_NEAR(hint, stop_at, 0.01);
   EXPECT_EQ(sim.state().speed, 0.0);
   EXPECT_NEAR(sim.state().distance, stop_at, 0.1);  // weave and corner cutting: a few cm
+}
+
+TEST(Schedule, TicksAfterNowInOneStepAndRestartsWhenTimeGoesBack) {
+  int64_t next = 1000;
+  EXPECT_FALSE(scheduleDue(next, 999, 100));
+  EXPECT_EQ(next, 1000);
+  EXPECT_TRUE(scheduleDue(next, 1000, 100));
+  EXPECT_EQ(next, 1100);
+  EXPECT_TRUE(scheduleDue(next, 1350, 100));  // ticks 1100..1300 passed: the next after now
+  EXPECT_EQ(next, 1400);
+  EXPECT_TRUE(scheduleDue(next, int64_t{1} << 60, 100));  // one step, not 10^16
+  EXPECT_GT(next, int64_t{1} << 60);
+  EXPECT_TRUE(scheduleDue(next, 1500, 100));  // back in time: restarts at now
+  EXPECT_EQ(next, 1600);
+  EXPECT_TRUE(scheduleDue(next, std::numeric_limits<int64_t>::max() - 5, 100));  // no overflow
+  EXPECT_EQ(next, std::numeric_limits<int64_t>::max());
+}
+
+TEST(OdometrySensor, AGroundTruthWithACorruptUtimeNeitherHangsNorSilencesTheSensor) {
+  OdometrySensor odo(OdometrySensorConfig{}, 2.5, 3);  // 100 Hz
+  int emitted_after = 0;
+  for (int k = 0; k < 200; ++k) {
+    TruthState t = straightTruth(1000000 + 10000 * k, 0.01 * k);
+    if (k == 100) t.utime = int64_t{1} << 60;  // a flipped high bit
+    const auto s = odo.sample(t);
+    if (k > 101 && s) ++emitted_after;
+  }
+  EXPECT_EQ(emitted_after, 98);  // every truth sample after the corrupt one and its successor
 }
 
 TEST(OdometrySensor, QuantizationScaleAndBias) {

@@ -8,6 +8,7 @@
 
 #include "lcmloc/core/gnss_model.hpp"
 #include "lcmloc/models/world.hpp"
+#include "lcmloc/models/schedule.hpp"
 
 namespace lcmloc::models {
 namespace {
@@ -67,8 +68,7 @@ std::optional<ImuSample> ImuSensor::sample(const TruthState& truth) {
     mag_dist_ = phi * mag_dist_ +
                 normal3(rng_, cfg_.mag_disturbance_std * std::sqrt(1.0 - phi * phi));
   }
-  if (truth.utime < next_utime_) return std::nullopt;
-  while (next_utime_ <= truth.utime) next_utime_ += period;
+  if (!scheduleDue(next_utime_, truth.utime, period)) return std::nullopt;
   ImuSample s = ideal(cfg_, wheelbase_, a, truth.speed, truth.steering, truth.heading);
   s.utime = truth.utime;
   s.accel = clip(s.accel + accel_bias_ + normal3(rng_, cfg_.accel_std), cfg_.accel_range);
@@ -95,8 +95,7 @@ std::optional<GpsFixSample> GpsSensor::sample(const TruthState& truth) {
     t0_ = truth.utime;
     next_utime_ = truth.utime;
   }
-  if (truth.utime < next_utime_) return std::nullopt;
-  while (next_utime_ <= truth.utime) next_utime_ += period;
+  if (!scheduleDue(next_utime_, truth.utime, period)) return std::nullopt;
   const double t = static_cast<double>(truth.utime - t0_) * 1e-6;
   GpsFixSample f;
   f.utime = truth.utime;

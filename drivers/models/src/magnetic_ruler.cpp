@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "lcmloc/models/world.hpp"
+#include "lcmloc/models/schedule.hpp"
 
 namespace lcmloc::models {
 namespace {
@@ -222,10 +223,7 @@ std::optional<RulerReading> MagneticRuler::sample(const TruthState& truth) {
       st.raw_started = true;
       st.next_raw_utime = truth.utime;
     }
-    if (truth.utime >= st.next_raw_utime) {
-      while (st.next_raw_utime <= truth.utime) st.next_raw_utime += period;
-      if (!out) out = now;
-    }
+    if (scheduleDue(st.next_raw_utime, truth.utime, period) && !out) out = now;
   }
   return out;
 }

@@ -5,6 +5,7 @@
 
 #include "lcmloc/core/vehicle_model.hpp"
 #include "lcmloc/models/world.hpp"
+#include "lcmloc/models/schedule.hpp"
 
 namespace lcmloc::models {
 
@@ -27,8 +28,7 @@ std::optional<OdometrySample> OdometrySensor::sample(const TruthState& truth) {
   last_true_distance_ = truth.distance;
   measured_distance_ += (1.0 + cfg_.scale_error) * ds_true +
                         cfg_.slip_std * std::sqrt(std::abs(ds_true)) * normal(rng_);
-  if (truth.utime < next_utime_) return std::nullopt;
-  while (next_utime_ <= truth.utime) next_utime_ += period_us;
+  if (!scheduleDue(next_utime_, truth.utime, period_us)) return std::nullopt;
 
   // Quantize the accumulated distance, not the increment: the error never accumulates.
   const auto ticks = static_cast<int64_t>(std::floor(measured_distance_ / cfg_.tick_length));

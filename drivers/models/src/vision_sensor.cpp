@@ -8,6 +8,7 @@
 
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/models/world.hpp"
+#include "lcmloc/models/schedule.hpp"
 
 namespace lcmloc::models {
 
@@ -87,8 +88,7 @@ std::optional<VisionSample> VisionSensor::sample(const TruthState& truth) {
     started_ = true;
     next_utime_ = truth.utime;
   }
-  if (truth.utime < next_utime_) return std::nullopt;
-  while (next_utime_ <= truth.utime) next_utime_ += period;
+  if (!scheduleDue(next_utime_, truth.utime, period)) return std::nullopt;
   return observe(truth.x, truth.y, truth.heading, truth.utime);
 }
 
