@@ -126,6 +126,7 @@ int main(int argc, char** argv) {
     logger::LogWriter writer(wo);
     std::map<std::string, ChannelStats> stats;
     common::SeqTracker gaps;  // keyed by channel (HEARTBEAT: by channel and process)
+    common::LogThrottle gap_log;  // every gap is counted; the first 5 per key are logged, then 1 in 1000
     int64_t received = 0;
     bus.subscribeRaw(regex, [&](const std::string& ch, const uint8_t* data, std::size_t size, int64_t recv) {
       ++received;
@@ -141,7 +142,8 @@ int main(int argc, char** argv) {
         }
         if (int64_t missing = gaps.observe(key, seq)) {
           s.gaps += missing;
-          spdlog::warn("{}: {} message(s) missing before seq {} (lost upstream, not by the logger)", key, missing, seq);
+          if (gap_log.allow(key))
+            spdlog::warn("{}: {} message(s) missing before seq {} (lost upstream, not by the logger)", key, missing, seq);
         }
       }
       writer.push({ch, std::vector<uint8_t>(data, data + size), recv});

@@ -16,12 +16,6 @@ namespace lcmloc::fusion {
 
 namespace {
 
-/// Log the first few occurrences of each kind of problem, then one in a thousand.
-bool shouldLog(std::map<std::string, int64_t>& counts, const std::string& key) {
-  const int64_t n = ++counts[key];
-  return n <= 5 || n % 1000 == 0;
-}
-
 std::string upper(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::toupper(c); });
   return s;
@@ -53,14 +47,14 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
     event_seen_ = true;
     if (event == "too_old") {
       ++rejected_;
-      if (shouldLog(log_count_, "too_old"))
+      if (log_throttle_.allow("too_old"))
         spdlog::warn("rejected input: {} (older than the {:.3f} s reorder window)", detail, cfg_.fusion.reorder_window);
       publishStatus("rejected_input", "too old: " + detail, utime);
       return;
     }
     if (event == "too_new") {  // the time-jump guard dropped it (fusion.max_time_jump)
       ++rejected_;
-      if (shouldLog(log_count_, "too_new")) spdlog::warn("rejected input: {}", detail);
+      if (log_throttle_.allow("too_new")) spdlog::warn("rejected input: {}", detail);
       publishStatus("rejected_input", "too new: " + detail, last_utime_);
       return;
     }
@@ -127,7 +121,7 @@ void FusionDaemon::release(const std::optional<core::FilterState>& init, const s
 bool FusionDaemon::received(const std::string& ch, int64_t seq) {
   ++messages_in_;
   if (int64_t missing = gaps_.observe(ch, seq)) {
-    if (shouldLog(log_count_, "gap:" + ch))
+    if (log_throttle_.allow("gap:" + ch))
       spdlog::warn("{}: {} message(s) missing before seq {}", ch, missing, seq);
     publishStatus("drop", ch + ": " + std::to_string(missing) + " message(s) missing before seq " + std::to_string(seq),
                   last_utime_);
@@ -138,14 +132,14 @@ bool FusionDaemon::received(const std::string& ch, int64_t seq) {
 void FusionDaemon::reject(const std::string& ch, int64_t seq, int64_t utime, const std::string& why) {
   ++rejected_;
   const std::string detail = ch + " seq " + std::to_string(seq) + ": " + why;
-  if (shouldLog(log_count_, "reject:" + ch)) spdlog::warn("rejected input: {}", detail);
+  if (log_throttle_.allow("reject:" + ch)) spdlog::warn("rejected input: {}", detail);
   publishStatus("rejected_input", detail, utime > 0 ? utime : last_utime_);
 }
 
 void FusionDaemon::onDecodeError(const std::string& ch, const std::string& why) {
   ++messages_in_;
   ++rejected_;
-  if (shouldLog(log_count_, "decode:" + ch)) spdlog::warn("rejected input: {}: {}", ch, why);
+  if (log_throttle_.allow("decode:" + ch)) spdlog::warn("rejected input: {}: {}", ch, why);
   publishStatus("rejected_input", ch + ": " + why, last_utime_);
 }
 

@@ -89,7 +89,7 @@ class FusionDaemon {
     lcmloc::pose_t msg;
   };
   std::vector<PoseOut> pose_out_;
-  std::map<std::string, int64_t> log_count_;
+  common::LogThrottle log_throttle_;  ///< per kind of problem: first 5, then 1 in 1000
   int64_t messages_in_ = 0, rejected_ = 0, last_utime_ = 0, next_status_utime_ = INT64_MIN;
   core::FilterStatus last_status_ = core::FilterStatus::Uninitialized;
   bool event_seen_ = false;

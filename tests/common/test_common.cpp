@@ -404,6 +404,15 @@ TEST(Transport, CorruptLengthsInAMessageFailTheDecodeInsteadOfCrashing) {
   }
 }
 
+TEST(LogThrottle, FirstFivePerKeyThenOneInAThousand) {
+  common::LogThrottle t;
+  std::vector<int> allowed;
+  for (int i = 1; i <= 3000; ++i)
+    if (t.allow("ODOMETRY")) allowed.push_back(i);
+  EXPECT_EQ(allowed, (std::vector<int>{1, 2, 3, 4, 5, 1000, 2000, 3000}));
+  EXPECT_TRUE(t.allow("GPS"));  // counted per key
+}
+
 TEST(Transport, InvalidChannelRegexThrowsInsteadOfCrashing) {
   common::Bus bus("memq://");
   try {

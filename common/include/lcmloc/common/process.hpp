@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -85,6 +86,19 @@ class Pacer {
   bool started_ = false;
   int64_t t0_ = 0;
   std::chrono::steady_clock::time_point wall0_;
+};
+
+/// Log throttle for problems that can repeat per message (gaps, rejected inputs): allow() is true
+/// for the first 5 occurrences of each key, then for one in a thousand (the counts themselves
+/// are kept elsewhere and reported whole).
+class LogThrottle {
+ public:
+  bool allow(const std::string& key) {
+    const int64_t n = ++counts_[key];
+    return n <= 5 || n % 1000 == 0;
+  }
+ private:
+  std::map<std::string, int64_t> counts_;
 };
 
 /// Per-channel sequence-gap counter: gaps += seq - last - 1 when seq jumps forward.
