@@ -370,7 +370,8 @@ FusionEngine& FusionEngine::operator=(FusionEngine&&) noexcept = default;
 bool FusionEngine::push(EngineInput&& in) {
   Impl& m = *impl_;
   const int64_t jump = m.cfg.max_time_jump_us;
-  if (jump > 0 && m.newest_taken != INT64_MIN && in.utime > m.newest_taken + jump) {
+  if (jump > 0 && m.newest_taken != INT64_MIN && in.utime > m.newest_taken &&
+      in.utime - m.newest_taken > jump) {  // (no overflow near INT64_MAX)
     if (!m.suspects.empty() && std::abs(in.utime - m.suspects.front().utime) > jump) m.dropSuspects();
     m.suspects.push_back(std::move(in));
     if (static_cast<int>(m.suspects.size()) < kTimeJumpConfirm) return true;  // held
