@@ -2,10 +2,13 @@
 // (the "ack" or "refused" event on FUSION_STATUS), waiting a bounded time.
 //
 // The daemon applies commands in message-time order (like every input), so a command carries a
-// utime: by default 1 us after the newest POSE / FUSION_STATUS seen on the bus, i.e. "now" in
-// the daemon's time. The command is recorded by the logger like any message, and an offline
+// utime: by default one reorder window after the newest ODOMETRY / IMU / POSE / FUSION_STATUS
+// seen on the bus, i.e. just ahead of "now" in the daemon's time. (The newest POSE alone can lag
+// the daemon's processing by fusion.output_every - 1 odometry periods: a command at it came too
+// late.) The command is recorded by the logger like any message, and an offline
 // replay of the log performs it at the same point.
 #include <chrono>
+#include <cmath>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -18,6 +21,8 @@
 #include "lcmloc/common/transport.hpp"
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/fusion_status_t.hpp"
+#include "lcmloc/imu_t.hpp"
+#include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
 
 using namespace lcmloc;
@@ -68,7 +73,9 @@ int main(int argc, char** argv) {
   int64_t utime = -1;
   app.add_option("--timeout", timeout, "[s] to wait for the daemon (its time, then its answer)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--utime", utime, "message time of the command [us] (default: just after the newest POSE)");
+  app.add_option("--utime", utime,
+                 "message time of the command [us] (default: one reorder window after the newest ODOMETRY, IMU, "
+                 "POSE or FUSION_STATUS on the bus)");
   app.require_subcommand(1);
 
   std::string filter, params_yaml;
@@ -110,6 +117,12 @@ int main(int argc, char** argv) {
     bus.subscribe<lcmloc::pose_t>(cfg.channels.pose, [&](const std::string&, const lcmloc::pose_t& m, int64_t) {
       newest = std::max(newest, m.utime);
     });
+    // The daemon's high-rate inputs: what it has received, not only what it has published.
+    bus.subscribe<lcmloc::odometry_t>(cfg.channels.odometry, [&](const std::string&, const lcmloc::odometry_t& m,
+                                                                 int64_t) { newest = std::max(newest, m.utime); });
+    bus.subscribe<lcmloc::imu_t>(cfg.channels.imu, [&](const std::string&, const lcmloc::imu_t& m, int64_t) {
+      newest = std::max(newest, m.utime);
+    });
     bus.subscribe<lcmloc::fusion_status_t>(
         cfg.channels.status, [&](const std::string&, const lcmloc::fusion_status_t& m, int64_t) {
           if (!sent) {
@@ -130,7 +143,7 @@ int main(int argc, char** argv) {
                       "(or give --utime)", cfg.channels.pose, cfg.channels.status, timeout);
         return common::kExitRuntimeError;
       }
-      utime = newest + 1;
+      utime = newest + std::max<int64_t>(1, std::llround(cfg.fusion.reorder_window * 1e6));
     }
     cmd.utime = utime;
     cmd.seq = 0;
