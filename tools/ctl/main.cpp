@@ -112,10 +112,12 @@ int main(int argc, char** argv) {
 
     common::Bus bus(opts.lcm_url);
     int64_t newest = -1;
+    bool daemon_seen = false;  // a POSE or FUSION_STATUS: sensors alone do not answer commands
     bool sent = false;
     std::optional<lcmloc::fusion_status_t> answer;
     bus.subscribe<lcmloc::pose_t>(cfg.channels.pose, [&](const std::string&, const lcmloc::pose_t& m, int64_t) {
       newest = std::max(newest, m.utime);
+      daemon_seen = true;
     });
     // The daemon's high-rate inputs: what it has received, not only what it has published.
     bus.subscribe<lcmloc::odometry_t>(cfg.channels.odometry, [&](const std::string&, const lcmloc::odometry_t& m,
@@ -127,6 +129,7 @@ int main(int argc, char** argv) {
         cfg.channels.status, [&](const std::string&, const lcmloc::fusion_status_t& m, int64_t) {
           if (!sent) {
             newest = std::max(newest, m.utime);
+            daemon_seen = true;
             return;
           }
           const bool mine = m.event == "ack" || m.event == "refused" ||
@@ -136,9 +139,9 @@ int main(int argc, char** argv) {
     using Clock = std::chrono::steady_clock;
     const auto deadline = Clock::now() + std::chrono::duration<double>(timeout);
     if (utime < 0) {
-      while (newest < 0 && Clock::now() < deadline && !common::stopRequested()) bus.handle(50);
+      while (!daemon_seen && Clock::now() < deadline && !common::stopRequested()) bus.handle(50);
       while (bus.handle(0) > 0) {}
-      if (newest < 0) {
+      if (!daemon_seen) {
         spdlog::error("no {} or {} on the bus within {:.1f} s: is lcmloc-fusion running and receiving inputs? "
                       "(or give --utime)", cfg.channels.pose, cfg.channels.status, timeout);
         return common::kExitRuntimeError;
