@@ -274,9 +274,12 @@ void FusionDaemon::publishState(const std::string& filter, bool active, const co
   last_utime_ = s.utime;
   last_status_ = s.status;
   const auto period = static_cast<int64_t>(std::llround(cfg_.fusion.status_period * 1e6));
+  // A time base in the past (fusion.max_time_jump): the schedule starts over.
+  int64_t back = 0;
+  if (!__builtin_sub_overflow(next_status_utime_, s.utime, &back) && back > 2 * period) next_status_utime_ = INT64_MIN;
   if (s.utime >= next_status_utime_) {
     if (next_status_utime_ != INT64_MIN) publishStatus("periodic", "", s.utime);
-    next_status_utime_ = s.utime + period;
+    if (__builtin_add_overflow(s.utime, period, &next_status_utime_)) next_status_utime_ = INT64_MAX;
   }
 }
 

@@ -489,3 +489,118 @@ TEST(Engine, ANewTimeBaseIsTakenAfterThreeInputsInARowWithNothingLost) {
   EXPECT_EQ(e2.counters().too_new, 1);
   EXPECT_EQ(e2.counters().processed, 10);
 }
+
+namespace {
+
+/// Odometry at 100 Hz (1 cm each, slight steering) and a ruler reading every 0.5 s, from t0.
+std::vector<EngineInput> drive(int64_t t0, int n) {
+  std::vector<EngineInput> v;
+  for (int k = 0; k < n; ++k) {
+    auto in = odoIn(t0 + 10000 * k, k, 0.01);
+    std::get<OdometryInput>(in.payload).steering = 0.02;
+    v.push_back(in);
+    if (k % 50 == 25) v.push_back(rulerIn(t0 + 10000 * k + 5000, k / 50, 0.01 * (k % 7)));
+  }
+  return v;
+}
+
+/// Every active state the engine published, in order.
+struct StateTrace {
+  std::vector<FilterState> states;
+  std::vector<std::string> events;
+  EngineOutputs outputs() {
+    EngineOutputs o;
+    o.on_state = [this](const std::string&, bool active, const FilterState& s) {
+      if (active) states.push_back(s);
+    };
+    o.on_event = [this](const std::string& e, const std::string& detail, int64_t) {
+      events.push_back(e + ": " + detail);
+    };
+    return o;
+  }
+};
+
+}  // namespace
+
+TEST(Engine, ATimeBaseInThePastRestartsTheFiltersSoARunPlayedAgainGivesTheSameStates) {
+  // A log played again into a running daemon (or a restarted simulator): without the restart
+  // every input of the second run would be refused as too old.
+  for (int every : {1, 10}) {
+    for (const char* type : {"ukf_gated", "tvekf"}) {
+      EngineConfig c = engineConfig(type);
+      c.output_every = every;
+      c.shadow = {"dead_reckoning"};
+      const auto run = drive(5000000, 400);
+      StateTrace once, twice;
+      {
+        FusionEngine e(c, straightMap(3), once.outputs());
+        for (auto in : run) e.push(std::move(in));
+        e.flush();
+      }
+      FusionEngine e(c, straightMap(3), twice.outputs());
+      for (auto in : run) e.push(std::move(in));
+      for (auto in : run) e.push(std::move(in));
+      e.flush();
+      SCOPED_TRACE(std::string(type) + " output_every " + std::to_string(every));
+      EXPECT_EQ(e.counters().processed, 2 * static_cast<int64_t>(run.size()));
+      EXPECT_EQ(e.counters().too_old + e.counters().too_new, 0);
+      // The same events in both runs (gate lock-outs and recoveries), the restart between them.
+      ASSERT_EQ(twice.events.size(), 2 * once.events.size() + 1);
+      const std::string& restart = twice.events[once.events.size()];
+      EXPECT_NE(restart.find("time_jump: ODOMETRY seq 0: time went back 3 s"), std::string::npos) << restart;
+      for (std::size_t k = 0; k < once.events.size(); ++k) {
+        EXPECT_EQ(twice.events[k], once.events[k]);
+        EXPECT_EQ(twice.events[once.events.size() + 1 + k], once.events[k]);
+      }
+      ASSERT_GE(once.states.size(), 40u);
+      ASSERT_EQ(twice.states.size(), 2 * once.states.size());
+      for (std::size_t k = 0; k < once.states.size(); ++k) {
+        const FilterState& a = once.states[k];
+        const FilterState& b = twice.states[once.states.size() + k];
+        ASSERT_EQ(a.utime, b.utime) << k;
+        ASSERT_EQ(a.x, b.x) << k;
+        ASSERT_EQ(a.P, b.P) << k;
+      }
+      // The first run ended away from its start: the second really started afresh.
+      EXPECT_GT(std::hypot(twice.states[once.states.size() - 1].x[0] - twice.states[once.states.size()].x[0],
+                           twice.states[once.states.size() - 1].x[1] - twice.states[once.states.size()].x[1]),
+                3.0);
+    }
+  }
+}
+
+TEST(Engine, InputsFarInThePastAreDroppedAsTooOldUnlessThreeInARowStartANewTimeBase) {
+  const int64_t t0 = 100 * int64_t{1000000};
+  StateTrace clean;
+  {
+    FusionEngine e(engineConfig("dead_reckoning"), {}, clean.outputs());
+    for (auto& in : odometryRun(100, t0)) e.push(std::move(in));
+    e.flush();
+  }
+  // Two stragglers 60 s in the past amid the run: dropped as too old, the rest as the clean run.
+  const std::map<int, int64_t> past{{50, t0 - 60000000}, {51, t0 - 59990000}};
+  Recorder r;
+  FusionEngine e(engineConfig("dead_reckoning"), {}, r.outputs());
+  for (auto& in : odometryRun(100, t0, past)) e.push(std::move(in));
+  e.flush();
+  EXPECT_EQ(e.counters().too_old, 2);
+  EXPECT_EQ(e.counters().processed, 98);
+  EXPECT_EQ(r.count("time_jump"), 0);
+  ASSERT_EQ(r.count("too_old"), 2);
+  EXPECT_NE(r.events[0].detail.find("ODOMETRY seq 50 utime 40000000: 60 s behind the newest input"),
+            std::string::npos)
+      << r.events[0].detail;
+  // A first input with a corrupt utime far in the future: the run that follows restarts the
+  // filters after three inputs and then gives the clean run's states.
+  StateTrace after;
+  FusionEngine f(engineConfig("dead_reckoning"), {}, after.outputs());
+  f.push(odoIn(int64_t{1} << 60, 99, 0.5));
+  for (auto& in : odometryRun(100, t0)) f.push(std::move(in));
+  f.flush();
+  EXPECT_EQ(f.counters().too_old, 0);
+  ASSERT_EQ(after.events.size(), 1u);
+  EXPECT_NE(after.events[0].find("time went back"), std::string::npos) << after.events[0];
+  ASSERT_EQ(after.states.size(), clean.states.size() + 1);  // + the corrupt input's
+  EXPECT_EQ(after.states.back().x, clean.states.back().x);
+  EXPECT_EQ(after.states.back().P, clean.states.back().P);
+}

@@ -84,6 +84,31 @@ class ReplayProcessTest : public ProcessFixture {
     while (!(rc = c.wait(0ms)) && std::chrono::steady_clock::now() < deadline) bus.handle(20);
     return {rc.value_or(-1), c.output()};
   }
+  /// A config with the oval track's marker map, and a synthetic log of `seconds` on it (full.lcmlog).
+  std::pair<std::string, std::string> ovalConfigAndLog(double seconds) {
+    auto cfg = lcmloc::common::loadSystemConfig(LCMLOC_PAPER_YAML);
+    cfg.scenario = lcmloc::replay::ovalScenario(cfg.scenario, lcmloc::replay::OvalTrack{}, seconds);
+    // The daemon and the replay need the oval's marker map: a config file with that path.
+    std::string segs;
+    for (const auto& s : cfg.scenario.path.segments)
+      segs += (segs.empty() ? "" : ", ") + ("{length: " + std::to_string(s.length) + ", curvature: " +
+                                            std::to_string(s.curvature) + "}");
+    const std::string config = writeFile(
+        "oval.yaml", "path: {segments: [" + segs + "]}\nmarkers: {count: " + std::to_string(cfg.scenario.markers.count) +
+                         ", spacing: 2.0, first_at: 2.0}\nfusion: {shadow: []}\n");
+    const auto loaded = lcmloc::common::loadSystemConfig(config);
+    const std::string log = path("full.lcmlog");
+    lcmloc::replay::writeSyntheticLog(loaded.scenario, seconds, log, loaded.channels);
+    return {config, log};
+  }
+  /// Plays log into the bus with lcm-logplayer at `speed`, keeping bus drained meanwhile.
+  void play(Bus& bus, const std::string& log, const std::string& speed) {
+    Child player("/usr/bin/lcm-logplayer", {"--lcm-url=" + url_, "-s", speed, log}, path("player.out"));
+    std::optional<int> prc;
+    const auto deadline = std::chrono::steady_clock::now() + 30s;
+    while (!(prc = player.wait(0ms)) && std::chrono::steady_clock::now() < deadline) bus.handle(20);
+    ASSERT_EQ(prc.value_or(-1), 0) << player.output();
+  }
   /// The daemon's outputs recorded live equal those of the offline replay of the same log.
   void expectLiveEqualsReplay(std::map<std::string, std::vector<std::vector<uint8_t>>>& live,
                               std::map<std::string, std::vector<std::vector<uint8_t>>>& offline) {
@@ -206,19 +231,7 @@ TEST_F(ReplayProcessTest, LiveRunWithOutputEveryEqualsOfflineReplayByteForByte) 
 // nothing is lost; with events removed from the log, the daemon reports the gap on FUSION_STATUS
 // (and still equals the offline replay of the same damaged input).
 TEST_F(ReplayProcessTest, LogplayerIntoDaemonEqualsOfflineReplayAndDropsAreReported) {
-  auto cfg = lcmloc::common::loadSystemConfig(LCMLOC_PAPER_YAML);
-  cfg.scenario = lcmloc::replay::ovalScenario(cfg.scenario, lcmloc::replay::OvalTrack{}, 15.0);
-  // The daemon and the replay need the oval's marker map: a config file with that path.
-  std::string segs;
-  for (const auto& s : cfg.scenario.path.segments)
-    segs += (segs.empty() ? "" : ", ") + ("{length: " + std::to_string(s.length) + ", curvature: " +
-                                          std::to_string(s.curvature) + "}");
-  const std::string config = writeFile(
-      "oval.yaml", "path: {segments: [" + segs + "]}\nmarkers: {count: " + std::to_string(cfg.scenario.markers.count) +
-                       ", spacing: 2.0, first_at: 2.0}\nfusion: {shadow: []}\n");
-  const auto loaded = lcmloc::common::loadSystemConfig(config);
-  const std::string full = path("full.lcmlog");
-  lcmloc::replay::writeSyntheticLog(loaded.scenario, 15.0, full, loaded.channels);
+  const auto [config, full] = ovalConfigAndLog(15.0);
   // The same log with ODOMETRY seq 500..504 removed.
   const std::string gapped = path("gapped.lcmlog");
   {
@@ -239,11 +252,8 @@ TEST_F(ReplayProcessTest, LogplayerIntoDaemonEqualsOfflineReplayAndDropsAreRepor
     Watch w(bus);
     Child daemon(LCMLOC_FUSION, {"--lcm-url", url_, "--config", config}, path("fusion.out"));
     ASSERT_TRUE(waitFor(bus, [&] { return w.alive.count(daemon.pid()) > 0; }, 10s)) << daemon.output();
-    Child player("/usr/bin/lcm-logplayer", {"--lcm-url=" + url_, "-s", "5", log}, path("player.out"));
-    std::optional<int> prc;
-    const auto deadline = std::chrono::steady_clock::now() + 30s;
-    while (!(prc = player.wait(0ms)) && std::chrono::steady_clock::now() < deadline) bus.handle(20);
-    ASSERT_EQ(prc.value_or(-1), 0) << player.output();
+    play(bus, log, "5");
+    if (HasFatalFailure()) return;
     daemon.signal(SIGTERM);
     ASSERT_TRUE(waitFor(bus, [&] { return !w.status.empty() && w.status.back().event == "stopped"; }, 10s))
         << daemon.output();
@@ -265,6 +275,66 @@ TEST_F(ReplayProcessTest, LogplayerIntoDaemonEqualsOfflineReplayAndDropsAreRepor
       EXPECT_NE(daemon.output().find("ODOMETRY: 5 message(s) missing before seq 505"), std::string::npos);
     }
     EXPECT_EQ(offline_last.sequence_gaps, w.status.back().sequence_gaps);
+  }
+}
+
+// The same log played twice into one running daemon (as a restarted simulator would be): the
+// second playing starts a time base in the past, the daemon restarts its filter and gives the
+// first playing's estimates again instead of refusing every input as too old; offline replay of
+// the two runs in one log gives the live outputs byte for byte.
+TEST_F(ReplayProcessTest, ALogPlayedTwiceIntoARunningDaemonGivesTheSameEstimatesTwice) {
+  const auto [config, full] = ovalConfigAndLog(10.0);
+  const std::string twice = path("twice.lcmlog");
+  {
+    lcm::LogFile out(twice, "w");
+    const auto events = readLog(full);
+    for (int copy = 0; copy < 2; ++copy)
+      for (const auto& e : events) {
+        lcm::LogEvent ev{0, e.timestamp + copy * 20000000, e.channel, static_cast<int32_t>(e.data.size()),
+                         const_cast<uint8_t*>(e.data.data())};
+        out.writeEvent(&ev);
+      }
+  }
+  Bus bus(url_);
+  Watch w(bus);
+  Child daemon(LCMLOC_FUSION, {"--lcm-url", url_, "--config", config}, path("fusion.out"));
+  ASSERT_TRUE(waitFor(bus, [&] { return w.alive.count(daemon.pid()) > 0; }, 10s)) << daemon.output();
+  play(bus, full, "5");
+  if (HasFatalFailure()) return;
+  play(bus, full, "5");
+  if (HasFatalFailure()) return;
+  daemon.signal(SIGTERM);
+  ASSERT_TRUE(waitFor(bus, [&] { return !w.status.empty() && w.status.back().event == "stopped"; }, 10s))
+      << daemon.output();
+  EXPECT_EQ(daemon.wait(10s).value_or(-1), 0) << daemon.output();
+
+  EXPECT_TRUE(w.has("time_jump", "time went back")) << daemon.output();
+  int periodic[2] = {0, 0}, half = 0;  // periodic status reports before and after the restart
+  for (const auto& st : w.status) {
+    half += st.event == "time_jump";
+    if (st.event == "periodic") ++periodic[std::min(half, 1)];
+  }
+  EXPECT_GT(periodic[0], 0);
+  EXPECT_EQ(periodic[1], periodic[0]);
+  EXPECT_FALSE(w.has("rejected_input", "")) << daemon.output();
+  EXPECT_EQ(w.status.back().messages_rejected, 0);
+  ASSERT_GT(w.poses.size(), 100u);
+  ASSERT_EQ(w.poses.size() % 2, 0u);
+  const std::size_t n = w.poses.size() / 2;
+  for (std::size_t k = 0; k < n; ++k) {  // the same estimates (the output seq goes on)
+    auto a = w.poses[k], b = w.poses[n + k];
+    ASSERT_EQ(b.seq, a.seq + static_cast<int64_t>(n));
+    a.seq = b.seq = 0;
+    std::vector<uint8_t> ea(a.getEncodedSize()), eb(b.getEncodedSize());
+    a.encode(ea.data(), 0, static_cast<int>(ea.size()));
+    b.encode(eb.data(), 0, static_cast<int>(eb.size()));
+    ASSERT_EQ(ea, eb) << "pose " << k << " of " << n;
+  }
+  auto offline = byChannel(replay(twice, config, "offline.lcmlog"));
+  for (const char* ch : {"POSE", "GATE"}) {
+    ASSERT_FALSE(offline[ch].empty());
+    EXPECT_EQ(firstDifference(w.payloads[ch], offline[ch]), -1)
+        << ch << ": live " << w.payloads[ch].size() << " vs replay " << offline[ch].size();
   }
 }
 

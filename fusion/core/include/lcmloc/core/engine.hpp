@@ -61,7 +61,7 @@ struct EngineOutputs {
   std::function<void(const std::string& filter, bool is_active, const FilterState&)> on_state;
   std::function<void(const std::string& filter, bool is_active, const GateDecision&)> on_decision;
   /// Events worth a human's attention: ("ack"|"refused"|"lockout"|"recovered"|"too_old"|
-  /// "bad_input", detail). "bad_input": an odometry increment, IMU sample or GPS fix (with a fix) with a NaN/Inf field
+  /// "too_new"|"time_jump"|"fix"|"imu_saturated"|"bad_input", detail). "bad_input": an odometry increment, IMU sample or GPS fix (with a fix) with a NaN/Inf field
   /// (skipped).
   std::function<void(const std::string& event, const std::string& detail, int64_t utime)> on_event;
 };
@@ -90,11 +90,14 @@ struct EngineConfig {
   std::map<int, Vec2> landmarks;
   landmark::FixOptions fix;
   /// Time-jump guard (fusion.max_time_jump; 0 = off): an input whose utime is more than this
-  /// ahead of the newest input taken so far is held as suspect. kTimeJumpConfirm consecutive
-  /// suspects within this of each other confirm a new time base (event "time_jump"; they are then
-  /// taken in order, nothing lost); an input of the old time base drops the held suspects as
-  /// outliers (event "too_new" each). One message with a corrupt utime far in the future would
-  /// otherwise make every later input "too_old".
+  /// ahead of, or behind, the newest input taken so far is held as suspect. kTimeJumpConfirm
+  /// consecutive suspects on the same side within this of each other confirm a new time base
+  /// (event "time_jump"): ahead, they are taken in order and nothing is lost (one message with a
+  /// corrupt utime in the future would otherwise make every later input "too_old"); behind, the
+  /// sources started over (a restarted simulator, a log played again into a running daemon): what
+  /// is queued is processed, the filters start afresh from their configuration (the active type
+  /// kept), as in a newly started daemon, and the suspects are taken. An input of the old time base
+  /// drops the held suspects as outliers (event "too_new" or "too_old" each).
   int64_t max_time_jump_us = 1000000;
 };
 
