@@ -57,6 +57,30 @@ long firstDifference(const std::vector<std::vector<uint8_t>>& a, const std::vect
   return a.size() == b.size() ? -1 : static_cast<long>(std::min(a.size(), b.size()));
 }
 
+/// A test-side daemon watcher: heartbeats, POSE/GATE payloads and FUSION_STATUS messages.
+struct Watch {
+  explicit Watch(Bus& bus) {
+    bus.subscribe<lcmloc::heartbeat_t>("HEARTBEAT", [this](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
+      if (m.process == "lcmloc-fusion") alive[m.pid] = m.state;
+    });
+    bus.subscribe<lcmloc::fusion_status_t>(
+        "FUSION_STATUS", [this](const std::string&, const lcmloc::fusion_status_t& m, int64_t) { status.push_back(m); });
+    bus.subscribeRaw("(POSE|GATE)", [this](const std::string& ch, const uint8_t* d, std::size_t n, int64_t) {
+      payloads[ch].emplace_back(d, d + n);
+      if (ch == "POSE") poses.push_back(decode<lcmloc::pose_t>(payloads[ch].back()));
+    });
+  }
+  bool has(const std::string& event, const std::string& what) const {
+    for (const auto& s : status)
+      if (s.event == event && s.detail.find(what) != std::string::npos) return true;
+    return false;
+  }
+  std::map<int, std::string> alive;
+  std::vector<lcmloc::fusion_status_t> status;
+  std::map<std::string, std::vector<std::vector<uint8_t>>> payloads;
+  std::vector<lcmloc::pose_t> poses;
+};
+
 class ReplayProcessTest : public ProcessFixture {
  protected:
   /// Runs lcmloc-replay and returns its output log's events.
@@ -101,14 +125,33 @@ class ReplayProcessTest : public ProcessFixture {
     lcmloc::replay::writeSyntheticLog(loaded.scenario, seconds, log, loaded.channels);
     return {config, log};
   }
-  /// Plays log into the bus with lcm-logplayer at `speed`, keeping bus drained meanwhile.
-  void play(Bus& bus, const std::string& log, const std::string& speed) {
-    Child player("/usr/bin/lcm-logplayer", {"--lcm-url=" + url_, "-s", speed, log}, path("player.out"));
-    std::optional<int> prc;
-    const auto deadline = std::chrono::steady_clock::now() + 30s;
-    while (!(prc = player.wait(0ms)) && std::chrono::steady_clock::now() < deadline) bus.handle(20);
-    ASSERT_EQ(prc.value_or(-1), 0) << player.output();
+  /// Writes events to a log file (in order; the timestamps as given).
+  static void writeLog(const std::string& file, const std::vector<Event>& events) {
+    lcm::LogFile out(file, "w");
+    for (const auto& e : events) {
+      lcm::LogEvent ev{0, e.timestamp, e.channel, static_cast<int32_t>(e.data.size()), const_cast<uint8_t*>(e.data.data())};
+      out.writeEvent(&ev);
+    }
   }
+  /// Starts lcmloc-fusion with config, plays each log into it with lcm-logplayer -s 5 (one
+  /// after the other), stops it with SIGTERM; w sees what it published.
+  void playIntoDaemon(Bus& bus, const Watch& w, const std::string& config, const std::vector<std::string>& logs) {
+    Child daemon(LCMLOC_FUSION, {"--lcm-url", url_, "--config", config}, path("fusion.out"));
+    ASSERT_TRUE(waitFor(bus, [&] { return w.alive.count(daemon.pid()) > 0; }, 10s)) << daemon.output();
+    for (const auto& log : logs) {
+      Child player("/usr/bin/lcm-logplayer", {"--lcm-url=" + url_, "-s", "5", log}, path("player.out"));
+      std::optional<int> prc;
+      const auto deadline = std::chrono::steady_clock::now() + 30s;
+      while (!(prc = player.wait(0ms)) && std::chrono::steady_clock::now() < deadline) bus.handle(20);
+      ASSERT_EQ(prc.value_or(-1), 0) << player.output();
+    }
+    daemon.signal(SIGTERM);
+    ASSERT_TRUE(waitFor(bus, [&] { return !w.status.empty() && w.status.back().event == "stopped"; }, 10s))
+        << daemon.output();
+    EXPECT_EQ(daemon.wait(10s).value_or(-1), 0) << daemon.output();
+    daemon_output_ = daemon.output();
+  }
+  std::string daemon_output_;  ///< of the last playIntoDaemon
   /// The daemon's outputs recorded live equal those of the offline replay of the same log.
   void expectLiveEqualsReplay(std::map<std::string, std::vector<std::vector<uint8_t>>>& live,
                               std::map<std::string, std::vector<std::vector<uint8_t>>>& offline) {
@@ -118,30 +161,6 @@ class ReplayProcessTest : public ProcessFixture {
           << ch << ": live " << live[ch].size() << " vs replay " << offline[ch].size() << " messages";
     }
   }
-};
-
-/// A test-side daemon watcher: heartbeats, POSE/GATE payloads and FUSION_STATUS messages.
-struct Watch {
-  explicit Watch(Bus& bus) {
-    bus.subscribe<lcmloc::heartbeat_t>("HEARTBEAT", [this](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
-      if (m.process == "lcmloc-fusion") alive[m.pid] = m.state;
-    });
-    bus.subscribe<lcmloc::fusion_status_t>(
-        "FUSION_STATUS", [this](const std::string&, const lcmloc::fusion_status_t& m, int64_t) { status.push_back(m); });
-    bus.subscribeRaw("(POSE|GATE)", [this](const std::string& ch, const uint8_t* d, std::size_t n, int64_t) {
-      payloads[ch].emplace_back(d, d + n);
-      if (ch == "POSE") poses.push_back(decode<lcmloc::pose_t>(payloads[ch].back()));
-    });
-  }
-  bool has(const std::string& event, const std::string& what) const {
-    for (const auto& s : status)
-      if (s.event == event && s.detail.find(what) != std::string::npos) return true;
-    return false;
-  }
-  std::map<int, std::string> alive;
-  std::vector<lcmloc::fusion_status_t> status;
-  std::map<std::string, std::vector<std::vector<uint8_t>>> payloads;
-  std::vector<lcmloc::pose_t> poses;
 };
 
 lcmloc::odometry_t odo(int64_t seq, int64_t utime) {
@@ -234,30 +253,19 @@ TEST_F(ReplayProcessTest, LogplayerIntoDaemonEqualsOfflineReplayAndDropsAreRepor
   const auto [config, full] = ovalConfigAndLog(15.0);
   // The same log with ODOMETRY seq 500..504 removed.
   const std::string gapped = path("gapped.lcmlog");
-  {
-    lcm::LogFile out(gapped, "w");
-    for (const auto& e : readLog(full)) {
-      if (e.channel == "ODOMETRY") {
-        const auto m = decode<lcmloc::odometry_t>(e.data);
-        if (m.seq >= 500 && m.seq < 505) continue;
-      }
-      lcm::LogEvent ev{0, e.timestamp, e.channel, static_cast<int32_t>(e.data.size()), const_cast<uint8_t*>(e.data.data())};
-      out.writeEvent(&ev);
-    }
-  }
+  std::vector<Event> kept;
+  for (auto& e : readLog(full))
+    if (e.channel != "ODOMETRY" || decode<lcmloc::odometry_t>(e.data).seq < 500 ||
+        decode<lcmloc::odometry_t>(e.data).seq >= 505)
+      kept.push_back(std::move(e));
+  writeLog(gapped, kept);
 
   for (const std::string& log : {full, gapped}) {
     SCOPED_TRACE(log);
     Bus bus(url_);
     Watch w(bus);
-    Child daemon(LCMLOC_FUSION, {"--lcm-url", url_, "--config", config}, path("fusion.out"));
-    ASSERT_TRUE(waitFor(bus, [&] { return w.alive.count(daemon.pid()) > 0; }, 10s)) << daemon.output();
-    play(bus, log, "5");
+    playIntoDaemon(bus, w, config, {log});
     if (HasFatalFailure()) return;
-    daemon.signal(SIGTERM);
-    ASSERT_TRUE(waitFor(bus, [&] { return !w.status.empty() && w.status.back().event == "stopped"; }, 10s))
-        << daemon.output();
-    EXPECT_EQ(daemon.wait(10s).value_or(-1), 0) << daemon.output();
 
     auto offline = byChannel(replay(log, config, "offline.lcmlog"));
     for (const char* ch : {"POSE", "GATE"}) {
@@ -271,8 +279,8 @@ TEST_F(ReplayProcessTest, LogplayerIntoDaemonEqualsOfflineReplayAndDropsAreRepor
       EXPECT_FALSE(w.has("drop", ""));
     } else {
       EXPECT_EQ(w.status.back().sequence_gaps, 5);
-      EXPECT_TRUE(w.has("drop", "ODOMETRY: 5 message(s) missing before seq 505")) << daemon.output();
-      EXPECT_NE(daemon.output().find("ODOMETRY: 5 message(s) missing before seq 505"), std::string::npos);
+      EXPECT_TRUE(w.has("drop", "ODOMETRY: 5 message(s) missing before seq 505")) << daemon_output_;
+      EXPECT_NE(daemon_output_.find("ODOMETRY: 5 message(s) missing before seq 505"), std::string::npos);
     }
     EXPECT_EQ(offline_last.sequence_gaps, w.status.back().sequence_gaps);
   }
@@ -285,30 +293,20 @@ TEST_F(ReplayProcessTest, LogplayerIntoDaemonEqualsOfflineReplayAndDropsAreRepor
 TEST_F(ReplayProcessTest, ALogPlayedTwiceIntoARunningDaemonGivesTheSameEstimatesTwice) {
   const auto [config, full] = ovalConfigAndLog(10.0);
   const std::string twice = path("twice.lcmlog");
-  {
-    lcm::LogFile out(twice, "w");
-    const auto events = readLog(full);
-    for (int copy = 0; copy < 2; ++copy)
-      for (const auto& e : events) {
-        lcm::LogEvent ev{0, e.timestamp + copy * 20000000, e.channel, static_cast<int32_t>(e.data.size()),
-                         const_cast<uint8_t*>(e.data.data())};
-        out.writeEvent(&ev);
-      }
+  std::vector<Event> events = readLog(full);
+  const std::size_t n_events = events.size();
+  for (std::size_t k = 0; k < n_events; ++k) {
+    Event e = events[k];
+    e.timestamp += 20000000;
+    events.push_back(std::move(e));
   }
+  writeLog(twice, events);
   Bus bus(url_);
   Watch w(bus);
-  Child daemon(LCMLOC_FUSION, {"--lcm-url", url_, "--config", config}, path("fusion.out"));
-  ASSERT_TRUE(waitFor(bus, [&] { return w.alive.count(daemon.pid()) > 0; }, 10s)) << daemon.output();
-  play(bus, full, "5");
+  playIntoDaemon(bus, w, config, {full, full});
   if (HasFatalFailure()) return;
-  play(bus, full, "5");
-  if (HasFatalFailure()) return;
-  daemon.signal(SIGTERM);
-  ASSERT_TRUE(waitFor(bus, [&] { return !w.status.empty() && w.status.back().event == "stopped"; }, 10s))
-      << daemon.output();
-  EXPECT_EQ(daemon.wait(10s).value_or(-1), 0) << daemon.output();
 
-  EXPECT_TRUE(w.has("time_jump", "time went back")) << daemon.output();
+  EXPECT_TRUE(w.has("time_jump", "time went back")) << daemon_output_;
   int periodic[2] = {0, 0}, half = 0;  // periodic status reports before and after the restart
   for (const auto& st : w.status) {
     half += st.event == "time_jump";
@@ -316,7 +314,7 @@ TEST_F(ReplayProcessTest, ALogPlayedTwiceIntoARunningDaemonGivesTheSameEstimates
   }
   EXPECT_GT(periodic[0], 0);
   EXPECT_EQ(periodic[1], periodic[0]);
-  EXPECT_FALSE(w.has("rejected_input", "")) << daemon.output();
+  EXPECT_FALSE(w.has("rejected_input", "")) << daemon_output_;
   EXPECT_EQ(w.status.back().messages_rejected, 0);
   ASSERT_GT(w.poses.size(), 100u);
   ASSERT_EQ(w.poses.size() % 2, 0u);
