@@ -174,8 +174,9 @@ int64_t SeqTracker::observe(const std::string& key, int64_t seq) {
   }
   last_ = static_cast<std::size_t>(it - entries_.begin());
   Entry& e = it->second;
-  int64_t missing = 0;
-  if (seq > e.last + 1) missing = seq - e.last - 1;
+  // A jump beyond kMaxSeqGap is a counter that started over (or a corrupt seq), not lost messages.
+  int64_t missing = 0, step = 0;
+  if (!__builtin_sub_overflow(seq, e.last, &step) && step > 1 && step - 1 <= kMaxSeqGap) missing = step - 1;
   e.gaps += missing;
   total_ += missing;
   e.last = seq;

@@ -443,6 +443,17 @@ TEST(Process, SeqTrackerCountsGapsPerKey) {
   EXPECT_EQ(t.gaps("A"), 2);
   EXPECT_EQ(t.gaps("B"), 1);
   EXPECT_EQ(t.gaps(), 3);
+  // A corrupt seq far ahead (or at the end of the range) is not 2^31 or more lost messages, and
+  // the counting goes on after it.
+  EXPECT_EQ(t.observe("B", 3 + common::SeqTracker::kMaxSeqGap), common::SeqTracker::kMaxSeqGap);  // the bound
+  EXPECT_EQ(t.observe("B", 5 + 2 * common::SeqTracker::kMaxSeqGap), 0);  // one more: beyond it
+  EXPECT_EQ(t.observe("B", 10), 0);
+  EXPECT_EQ(t.observe("B", 12), 1);
+  EXPECT_EQ(t.observe("C", -5), 0);
+  EXPECT_EQ(t.observe("C", INT64_MAX), 0);  // no overflow
+  EXPECT_EQ(t.observe("C", -4), 0);
+  EXPECT_EQ(t.observe("C", -2), 1);
+  EXPECT_EQ(t.gaps(), 3 + common::SeqTracker::kMaxSeqGap + 2);
 }
 
 TEST(Process, PacerFollowsTheRealtimeFactor) {

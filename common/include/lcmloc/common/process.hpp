@@ -104,8 +104,10 @@ class LogThrottle {
 /// Per-channel sequence-gap counter: gaps += seq - last - 1 when seq jumps forward.
 class SeqTracker {
  public:
+  static constexpr int64_t kMaxSeqGap = int64_t{1} << 31;
   /// Returns the number of messages missing before this one (0 in order; duplicates and
-  /// restarts (seq <= last) count nothing).
+  /// restarts (seq <= last) count nothing, and so does a jump of more than kMaxSeqGap: a
+  /// sender whose counter started over, or a corrupt seq, not 2^31 lost messages).
   int64_t observe(const std::string& key, int64_t seq);
   int64_t gaps() const { return total_; }
   int64_t gaps(const std::string& key) const;
