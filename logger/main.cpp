@@ -140,10 +140,9 @@ int main(int argc, char** argv) {
           lcmloc::heartbeat_t hb;
           if (hb.decode(data, 0, static_cast<int>(size)) >= 0) key = ch + "[" + hb.process + "]";
         }
-        if (int64_t missing = gaps.observe(key, seq)) {
-          s.gaps += missing;
-          if (gap_log.allow(key))
-            spdlog::warn("{}: {} message(s) missing before seq {} (lost upstream, not by the logger)", key, missing, seq);
+        if (const auto gap = gaps.observe(key, seq)) {
+          s.gaps += gap.missing;
+          if (gap_log.allow(key)) spdlog::warn("{} (lost upstream, not by the logger)", gap.describe(key));
         }
       }
       writer.push({ch, std::vector<uint8_t>(data, data + size), recv});

@@ -162,25 +162,32 @@ bool Pacer::waitUntil(int64_t sim_utime, const std::function<void()>& idle) {
 
 // ---------------------------------------------------------------------------------------------
 
-int64_t SeqTracker::observe(const std::string& key, int64_t seq) {
+SeqGap SeqTracker::observe(const std::string& key, int64_t seq) {
   // Most messages come on the channel of the message before: try that entry first.
   auto it = last_ < entries_.size() && core::sameText(entries_[last_].first, key)
                 ? entries_.begin() + static_cast<std::ptrdiff_t>(last_)
                 : std::find_if(entries_.begin(), entries_.end(), [&](const auto& e) { return e.first == key; });
   if (it == entries_.end()) {
-    entries_.push_back({key, Entry{seq, 0}});
+    entries_.push_back({key, Entry{seq}});
     last_ = entries_.size() - 1;
-    return 0;
+    return {};
   }
   last_ = static_cast<std::size_t>(it - entries_.begin());
   Entry& e = it->second;
   // A jump beyond kMaxSeqGap is a counter that started over (or a corrupt seq), not lost messages.
-  int64_t missing = 0, step = 0;
-  if (!__builtin_sub_overflow(seq, e.last, &step) && step > 1 && step - 1 <= kMaxSeqGap) missing = step - 1;
-  e.gaps += missing;
-  total_ += missing;
+  int64_t step = 0;
+  SeqGap gap;
+  if (!__builtin_sub_overflow(seq, e.last, &step) && step > 1 && step - 1 <= kMaxSeqGap) {
+    gap = {step - 1, seq};
+    e.gaps += gap.missing;
+    total_ += gap.missing;
+  }
   e.last = seq;
-  return missing;
+  return gap;
+}
+
+std::string SeqGap::describe(const std::string& key) const {
+  return key + ": " + std::to_string(missing) + " message(s) missing before seq " + std::to_string(before_seq);
 }
 
 int64_t SeqTracker::gaps(const std::string& key) const {

@@ -26,8 +26,7 @@ int main(int argc, char** argv) {
     bus.subscribe<lcmloc::ground_truth_t>(
         ch.ground_truth, [&](const std::string& in, const lcmloc::ground_truth_t& m, int64_t) {
           ++received;
-          if (int64_t missing = gaps.observe(in, m.seq))
-            spdlog::warn("{}: {} message(s) missing before seq {}", in, missing, m.seq);
+          if (const auto gap = gaps.observe(in, m.seq)) spdlog::warn("{}", gap.describe(in));
           auto f = injector.sample(common::toCore(m));
           if (!f) return;
           const int64_t measurement_seq = seq++;

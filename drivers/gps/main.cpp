@@ -25,8 +25,8 @@ int runSim(const common::SystemConfig& cfg, common::Bus& bus) {
   bus.subscribe<lcmloc::ground_truth_t>(
       cfg.channels.ground_truth, [&](const std::string& ch, const lcmloc::ground_truth_t& m, int64_t) {
         ++received;
-        if (int64_t missing = gaps.observe(ch, m.seq))
-          spdlog::warn("{}: {} message(s) missing before seq {}", ch, missing, m.seq);
+        if (const auto gap = gaps.observe(ch, m.seq))
+          spdlog::warn("{}", gap.describe(ch));
         if (auto f = sensor.sample(common::toCore(m))) {
           if (!f->has_fix && no_fix++ == 0) spdlog::info("outage: no fix from utime {}", f->utime);
           bus.publish(cfg.channels.gps, common::toLcm(*f, frame, seq++));

@@ -31,8 +31,8 @@ int main(int argc, char** argv) {
     bus.subscribe<lcmloc::ground_truth_t>(
         cfg.channels.ground_truth, [&](const std::string& ch, const lcmloc::ground_truth_t& m, int64_t) {
           ++received;
-          if (int64_t missing = gaps.observe(ch, m.seq))
-            spdlog::warn("{}: {} message(s) missing before seq {}", ch, missing, m.seq);
+          if (const auto gap = gaps.observe(ch, m.seq))
+            spdlog::warn("{}", gap.describe(ch));
           if (auto s = sensor.sample(common::toCore(m))) {
             if (range > 0 && s->accel.cwiseAbs().maxCoeff() >= range && saturated++ < 5)
               spdlog::warn("accelerometer saturated at utime {} (range {} m/s^2)", s->utime, range);

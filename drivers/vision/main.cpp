@@ -35,8 +35,8 @@ int main(int argc, char** argv) {
     bus.subscribe<lcmloc::ground_truth_t>(
         cfg.channels.ground_truth, [&](const std::string& ch, const lcmloc::ground_truth_t& m, int64_t) {
           ++received;
-          if (int64_t missing = gaps.observe(ch, m.seq))
-            spdlog::warn("{}: {} message(s) missing before seq {}", ch, missing, m.seq);
+          if (const auto gap = gaps.observe(ch, m.seq))
+            spdlog::warn("{}", gap.describe(ch));
           if (!std::isfinite(m.x) || !std::isfinite(m.y) || !std::isfinite(m.heading)) {
             if (bad++ < 5) spdlog::warn("{}: non-finite pose at utime {}: no observation", ch, m.utime);
             return;

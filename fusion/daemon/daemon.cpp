@@ -120,11 +120,10 @@ void FusionDaemon::release(const std::optional<core::FilterState>& init, const s
 
 bool FusionDaemon::received(const std::string& ch, int64_t seq) {
   ++messages_in_;
-  if (int64_t missing = gaps_.observe(ch, seq)) {
-    if (log_throttle_.allow("gap:" + ch))
-      spdlog::warn("{}: {} message(s) missing before seq {}", ch, missing, seq);
-    publishStatus("drop", ch + ": " + std::to_string(missing) + " message(s) missing before seq " + std::to_string(seq),
-                  last_utime_);
+  if (const auto gap = gaps_.observe(ch, seq)) {
+    const std::string what = gap.describe(ch);
+    if (log_throttle_.allow("gap:" + ch)) spdlog::warn("{}", what);
+    publishStatus("drop", what, last_utime_);
   }
   return true;
 }

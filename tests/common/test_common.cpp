@@ -434,26 +434,31 @@ TEST(Transport, InvalidChannelRegexThrowsInsteadOfCrashing) {
 
 TEST(Process, SeqTrackerCountsGapsPerKey) {
   common::SeqTracker t;
-  EXPECT_EQ(t.observe("A", 5), 0);  // first message: no gap whatever its seq
-  EXPECT_EQ(t.observe("A", 6), 0);
-  EXPECT_EQ(t.observe("A", 9), 2);
-  EXPECT_EQ(t.observe("B", 0), 0);
-  EXPECT_EQ(t.observe("B", 2), 1);
-  EXPECT_EQ(t.observe("A", 9), 0);  // duplicate
+  auto missing = [&](const char* key, int64_t seq) { return t.observe(key, seq).missing; };
+  EXPECT_EQ(missing("A", 5), 0);  // first message: no gap whatever its seq
+  EXPECT_EQ(missing("A", 6), 0);
+  const common::SeqGap g = t.observe("A", 9);
+  EXPECT_EQ(g.missing, 2);
+  EXPECT_EQ(g.before_seq, 9);
+  EXPECT_EQ(g.describe("A"), "A: 2 message(s) missing before seq 9");
+  EXPECT_EQ(missing("B", 0), 0);
+  EXPECT_EQ(missing("B", 2), 1);
+  EXPECT_EQ(missing("A", 9), 0);  // duplicate
   EXPECT_EQ(t.gaps("A"), 2);
   EXPECT_EQ(t.gaps("B"), 1);
   EXPECT_EQ(t.gaps(), 3);
   // A corrupt seq far ahead (or at the end of the range) is not 2^31 or more lost messages, and
   // the counting goes on after it.
-  EXPECT_EQ(t.observe("B", 3 + common::SeqTracker::kMaxSeqGap), common::SeqTracker::kMaxSeqGap);  // the bound
-  EXPECT_EQ(t.observe("B", 5 + 2 * common::SeqTracker::kMaxSeqGap), 0);  // one more: beyond it
-  EXPECT_EQ(t.observe("B", 10), 0);
-  EXPECT_EQ(t.observe("B", 12), 1);
-  EXPECT_EQ(t.observe("C", -5), 0);
-  EXPECT_EQ(t.observe("C", INT64_MAX), 0);  // no overflow
-  EXPECT_EQ(t.observe("C", -4), 0);
-  EXPECT_EQ(t.observe("C", -2), 1);
-  EXPECT_EQ(t.gaps(), 3 + common::SeqTracker::kMaxSeqGap + 2);
+  const int64_t k = common::SeqTracker::kMaxSeqGap;
+  EXPECT_EQ(missing("B", 3 + k), k);  // the bound
+  EXPECT_EQ(missing("B", 5 + 2 * k), 0);  // one more: beyond it
+  EXPECT_EQ(missing("B", 10), 0);
+  EXPECT_EQ(missing("B", 12), 1);
+  EXPECT_EQ(missing("C", -5), 0);
+  EXPECT_EQ(missing("C", INT64_MAX), 0);  // no overflow
+  EXPECT_EQ(missing("C", -4), 0);
+  EXPECT_EQ(missing("C", -2), 1);
+  EXPECT_EQ(t.gaps(), 3 + k + 2);
 }
 
 TEST(Process, PacerFollowsTheRealtimeFactor) {

@@ -120,7 +120,7 @@ int info(const std::string& path) {
       for (const auto& f : fields)
         if (f.name == "process") key += "[" + f.value + "]";
     int64_t seq = 0;
-    if (logger::readSeq(ev.data, static_cast<std::size_t>(ev.size), &seq)) c.gaps += seqs.observe(key, seq);
+    if (logger::readSeq(ev.data, static_cast<std::size_t>(ev.size), &seq)) c.gaps += seqs.observe(key, seq).missing;
   });
   std::cout << "log:        " << path << " (" << s.file_size << " bytes)\n";
   std::cout << "events:     " << s.events_read << " on " << channels.size() << " channels"

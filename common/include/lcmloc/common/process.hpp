@@ -101,14 +101,23 @@ class LogThrottle {
   std::map<std::string, int64_t> counts_;
 };
 
-/// Per-channel sequence-gap counter: gaps += seq - last - 1 when seq jumps forward.
+/// Messages missing on a channel: `missing` messages before the one with seq `before_seq`.
+struct SeqGap {
+  int64_t missing = 0;
+  int64_t before_seq = 0;
+  explicit operator bool() const { return missing > 0; }
+  /// "KEY: N message(s) missing before seq S"
+  std::string describe(const std::string& key) const;
+};
+
+/// Per-channel sequence-gap counter: missing = seq - last - 1 when seq jumps forward.
 class SeqTracker {
  public:
   static constexpr int64_t kMaxSeqGap = int64_t{1} << 31;
-  /// Returns the number of messages missing before this one (0 in order; duplicates and
-  /// restarts (seq <= last) count nothing, and so does a jump of more than kMaxSeqGap: a
-  /// sender whose counter started over, or a corrupt seq, not 2^31 lost messages).
-  int64_t observe(const std::string& key, int64_t seq);
+  /// The messages missing before this one (missing = 0 in order). Duplicates and restarts
+  /// (seq <= last) count nothing, and so does a jump of more than kMaxSeqGap: a sender whose
+  /// counter started over, or a corrupt seq, not 2^31 lost messages.
+  SeqGap observe(const std::string& key, int64_t seq);
   int64_t gaps() const { return total_; }
   int64_t gaps(const std::string& key) const;
  private:
