@@ -5,6 +5,7 @@
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/convert.hpp"
 #include "lcmloc/common/process.hpp"
+#include "lcmloc/common/truth_driver.hpp"
 #include "lcmloc/models/world.hpp"
 
 using namespace lcmloc;
@@ -21,40 +22,27 @@ int main(int argc, char** argv) {
     models::FaultInjector injector(sc.faults, sc.magruler, models::componentSeed(sc.seed, "faults"));
 
     common::Bus bus(opts.lcm_url);
-    common::SeqTracker gaps;
-    int64_t received = 0, seq = 0, event_seq = 0;
-    bus.subscribe<lcmloc::ground_truth_t>(
-        ch.ground_truth, [&](const std::string& in, const lcmloc::ground_truth_t& m, int64_t) {
-          ++received;
-          if (const auto gap = gaps.observe(in, m.seq)) spdlog::warn("{}", gap.describe(in));
-          auto f = injector.sample(common::toCore(m));
-          if (!f) return;
-          const int64_t measurement_seq = seq++;
-          bus.publish(ch.magruler_fault, common::toLcm(f->reading, measurement_seq));
-          lcmloc::fault_event_t ev;
-          ev.utime = f->reading.utime;
-          ev.seq = event_seq++;
-          ev.kind = f->fault.kind;
-          ev.channel = ch.magruler_fault;
-          ev.measurement_seq = measurement_seq;
-          ev.x = f->truth.x;
-          ev.y = f->truth.y;
-          ev.lateral_offset = f->reading.lateral_offset;
-          bus.publish(ch.fault_events, ev);
-          spdlog::info("injected {} at {:.2f} m travelled ({:.3f}, {:.3f}): d_m = {:.3f} m on {} seq {}",
-                       ev.kind, f->truth.distance, ev.x, ev.y, ev.lateral_offset, ev.channel, measurement_seq);
-        });
-    common::Heartbeat hb(bus, ch.heartbeat, "lcmloc-fault-injector", [&] {
-      return common::Heartbeat::Counters{{"received", received}, {"injected", seq}, {"gaps", gaps.gaps()}};
+    int64_t event_seq = 0;
+    common::TruthDriver driver(bus, cfg, "lcmloc-fault-injector", [&](const std::string&, const ground_truth_t& m) {
+      auto f = injector.sample(common::toCore(m));
+      if (!f) return;
+      const int64_t measurement_seq = driver.nextSeq();
+      bus.publish(ch.magruler_fault, common::toLcm(f->reading, measurement_seq));
+      lcmloc::fault_event_t ev;
+      ev.utime = f->reading.utime;
+      ev.seq = event_seq++;
+      ev.kind = f->fault.kind;
+      ev.channel = ch.magruler_fault;
+      ev.measurement_seq = measurement_seq;
+      ev.x = f->truth.x;
+      ev.y = f->truth.y;
+      ev.lateral_offset = f->reading.lateral_offset;
+      bus.publish(ch.fault_events, ev);
+      spdlog::info("injected {} at {:.2f} m travelled ({:.3f}, {:.3f}): d_m = {:.3f} m on {} seq {}",
+                   ev.kind, f->truth.distance, ev.x, ev.y, ev.lateral_offset, ev.channel, measurement_seq);
     });
     spdlog::info("{} fault(s) configured, publishing on {} and {}", sc.faults.size(), ch.magruler_fault,
                  ch.fault_events);
-    while (!common::stopRequested()) {
-      hb.tick();
-      bus.handle(100);
-    }
-    spdlog::info("stopping: {} ground-truth samples in, {} faults injected", received, seq);
-    hb.publish("stopping");
-    return common::kExitOk;
+    return driver.run([&] { return fmt::format("{} faults injected", driver.published()); });
   });
 }

@@ -9,6 +9,7 @@
 #include "lcmloc/common/convert.hpp"
 #include "lcmloc/common/geodesy.hpp"
 #include "lcmloc/common/process.hpp"
+#include "lcmloc/common/truth_driver.hpp"
 #include "lcmloc/models/gnss_sensors.hpp"
 #include "lcmloc/models/world.hpp"
 
@@ -20,32 +21,20 @@ int runSim(const common::SystemConfig& cfg, common::Bus& bus) {
   const auto& sc = cfg.scenario;
   models::GpsSensor sensor(sc.gps, models::componentSeed(sc.seed, "gps"));
   const common::LocalFrame frame(cfg.datum);
-  common::SeqTracker gaps;
-  int64_t received = 0, seq = 0, no_fix = 0;
-  bus.subscribe<lcmloc::ground_truth_t>(
-      cfg.channels.ground_truth, [&](const std::string& ch, const lcmloc::ground_truth_t& m, int64_t) {
-        ++received;
-        if (const auto gap = gaps.observe(ch, m.seq))
-          spdlog::warn("{}", gap.describe(ch));
+  int64_t no_fix = 0;
+  common::TruthDriver driver(
+      bus, cfg, "lcmloc-gps",
+      [&](const std::string&, const lcmloc::ground_truth_t& m) {
         if (auto f = sensor.sample(common::toCore(m))) {
           if (!f->has_fix && no_fix++ == 0) spdlog::info("outage: no fix from utime {}", f->utime);
-          bus.publish(cfg.channels.gps, common::toLcm(*f, frame, seq++));
+          bus.publish(cfg.channels.gps, common::toLcm(*f, frame, driver.nextSeq()));
         }
-      });
-  common::Heartbeat hb(bus, cfg.channels.heartbeat, "lcmloc-gps", [&] {
-    return common::Heartbeat::Counters{{"received", received}, {"published", seq}, {"no_fix", no_fix},
-                                       {"gaps", gaps.gaps()}};
-  });
+      },
+      [&] { return common::Heartbeat::Counters{{"no_fix", no_fix}}; });
   spdlog::info("simulated receiver: {} -> {} at {} Hz, {} error {} m, {} outage(s), {} jump(s), datum ({}, {})",
                cfg.channels.ground_truth, cfg.channels.gps, sc.gps.rate_hz, sc.gps.error_model, sc.gps.error,
                sc.gps.outages.size(), sc.gps.jumps.size(), cfg.datum.latitude, cfg.datum.longitude);
-  while (!common::stopRequested()) {
-    hb.tick();
-    bus.handle(100);
-  }
-  spdlog::info("stopping: {} ground-truth samples in, {} fixes out ({} without a fix)", received, seq, no_fix);
-  hb.publish("stopping");
-  return common::kExitOk;
+  return driver.run([&] { return fmt::format("{} fixes out ({} without a fix)", driver.published(), no_fix); });
 }
 
 int runGpsd(const common::SystemConfig& cfg, common::Bus& bus) {

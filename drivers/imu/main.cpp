@@ -6,6 +6,7 @@
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/convert.hpp"
 #include "lcmloc/common/process.hpp"
+#include "lcmloc/common/truth_driver.hpp"
 #include "lcmloc/models/gnss_sensors.hpp"
 #include "lcmloc/models/world.hpp"
 
@@ -25,33 +26,20 @@ int main(int argc, char** argv) {
     models::ImuSensor sensor(sc.imu, sc.vehicle.wheelbase, models::componentSeed(sc.seed, "imu"));
 
     common::Bus bus(opts.lcm_url);
-    common::SeqTracker gaps;
-    int64_t received = 0, seq = 0, saturated = 0;
+    int64_t saturated = 0;
     const double range = sc.imu.accel_range;
-    bus.subscribe<lcmloc::ground_truth_t>(
-        cfg.channels.ground_truth, [&](const std::string& ch, const lcmloc::ground_truth_t& m, int64_t) {
-          ++received;
-          if (const auto gap = gaps.observe(ch, m.seq))
-            spdlog::warn("{}", gap.describe(ch));
+    common::TruthDriver driver(
+        bus, cfg, "lcmloc-imu",
+        [&](const std::string&, const lcmloc::ground_truth_t& m) {
           if (auto s = sensor.sample(common::toCore(m))) {
             if (range > 0 && s->accel.cwiseAbs().maxCoeff() >= range && saturated++ < 5)
               spdlog::warn("accelerometer saturated at utime {} (range {} m/s^2)", s->utime, range);
-            bus.publish(cfg.channels.imu, common::toLcm(*s, seq++));
+            bus.publish(cfg.channels.imu, common::toLcm(*s, driver.nextSeq()));
           }
-        });
-    common::Heartbeat hb(bus, cfg.channels.heartbeat, "lcmloc-imu", [&] {
-      return common::Heartbeat::Counters{{"received", received}, {"published", seq},
-                                         {"saturated", saturated}, {"gaps", gaps.gaps()}};
-    });
+        },
+        [&] { return common::Heartbeat::Counters{{"saturated", saturated}}; });
     spdlog::info("{} -> {} at {} Hz, declination {} rad, accel range {} m/s^2", cfg.channels.ground_truth,
                  cfg.channels.imu, sc.imu.rate_hz, sc.imu.declination, range);
-    while (!common::stopRequested()) {
-      hb.tick();
-      bus.handle(100);
-    }
-    spdlog::info("stopping: {} ground-truth samples in, {} IMU samples out ({} saturated), {} gaps",
-                 received, seq, saturated, gaps.gaps());
-    hb.publish("stopping");
-    return common::kExitOk;
+    return driver.run([&] { return fmt::format("{} IMU samples out ({} saturated)", driver.published(), saturated); });
   });
 }

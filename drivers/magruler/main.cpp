@@ -5,6 +5,7 @@
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/convert.hpp"
 #include "lcmloc/common/process.hpp"
+#include "lcmloc/common/truth_driver.hpp"
 #include "lcmloc/models/world.hpp"
 
 using namespace lcmloc;
@@ -22,34 +23,21 @@ int main(int argc, char** argv) {
     models::MagneticRuler ruler(sc.magruler, map, models::componentSeed(sc.seed, "magruler"));
 
     common::Bus bus(opts.lcm_url);
-    common::SeqTracker gaps;
-    int64_t received = 0, seq = 0, detections = 0;
-    bus.subscribe<lcmloc::ground_truth_t>(
-        cfg.channels.ground_truth, [&](const std::string& ch, const lcmloc::ground_truth_t& m, int64_t) {
-          ++received;
-          if (const auto gap = gaps.observe(ch, m.seq))
-            spdlog::warn("{}", gap.describe(ch));
+    int64_t detections = 0;
+    common::TruthDriver driver(
+        bus, cfg, "lcmloc-magruler",
+        [&](const std::string&, const lcmloc::ground_truth_t& m) {
           if (auto r = ruler.sample(common::toCore(m))) {
             if (r->detected) {
               ++detections;
               spdlog::debug("marker detected at utime {}: d_m = {:.4f} m", r->utime, r->lateral_offset);
             }
-            bus.publish(out, common::toLcm(*r, seq++));
+            bus.publish(out, common::toLcm(*r, driver.nextSeq()));
           }
-        });
-    common::Heartbeat hb(bus, cfg.channels.heartbeat, "lcmloc-magruler", [&] {
-      return common::Heartbeat::Counters{{"received", received}, {"published", seq},
-                                         {"detections", detections}, {"gaps", gaps.gaps()}};
-    });
+        },
+        [&] { return common::Heartbeat::Counters{{"detections", detections}}; });
     spdlog::info("{} -> {}: {} markers in the map, {} sensors", cfg.channels.ground_truth, out, map.size(),
                  sc.magruler.num_sensors);
-    while (!common::stopRequested()) {
-      hb.tick();
-      bus.handle(100);
-    }
-    spdlog::info("stopping: {} ground-truth samples in, {} readings out ({} detections), {} gaps", received,
-                 seq, detections, gaps.gaps());
-    hb.publish("stopping");
-    return common::kExitOk;
+    return driver.run([&] { return fmt::format("{} readings out ({} detections)", driver.published(), detections); });
   });
 }

@@ -8,6 +8,7 @@
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/convert.hpp"
 #include "lcmloc/common/process.hpp"
+#include "lcmloc/common/truth_driver.hpp"
 #include "lcmloc/models/vision_sensor.hpp"
 #include "lcmloc/models/world.hpp"
 
@@ -30,13 +31,10 @@ int main(int argc, char** argv) {
     models::VisionSensor sensor(sc.vision, sc.landmarks, seed);
 
     common::Bus bus(opts.lcm_url);
-    common::SeqTracker gaps;
-    int64_t received = 0, seq = 0, empty = 0, bad = 0;
-    bus.subscribe<lcmloc::ground_truth_t>(
-        cfg.channels.ground_truth, [&](const std::string& ch, const lcmloc::ground_truth_t& m, int64_t) {
-          ++received;
-          if (const auto gap = gaps.observe(ch, m.seq))
-            spdlog::warn("{}", gap.describe(ch));
+    int64_t empty = 0, bad = 0;
+    common::TruthDriver driver(
+        bus, cfg, "lcmloc-vision",
+        [&](const std::string& ch, const lcmloc::ground_truth_t& m) {
           if (!std::isfinite(m.x) || !std::isfinite(m.y) || !std::isfinite(m.heading)) {
             if (bad++ < 5) spdlog::warn("{}: non-finite pose at utime {}: no observation", ch, m.utime);
             return;
@@ -44,24 +42,17 @@ int main(int argc, char** argv) {
           if (auto s = sensor.sample(common::toCore(m))) {
             if (s->ids.empty() && empty++ == 0)
               spdlog::info("no landmark within {} m at utime {}", sc.vision.max_range, s->utime);
-            bus.publish(cfg.channels.vision, common::toLcm(*s, seq++));
+            bus.publish(cfg.channels.vision, common::toLcm(*s, driver.nextSeq()));
           }
-        });
-    common::Heartbeat hb(bus, cfg.channels.heartbeat, "lcmloc-vision", [&] {
-      return common::Heartbeat::Counters{{"received", received}, {"published", seq}, {"empty", empty},
-                                         {"bad_truth", bad}, {"gaps", gaps.gaps()}, {"decode_errors", bus.decodeErrors()}};
-    });
+        },
+        [&] { return common::Heartbeat::Counters{{"empty", empty}, {"bad_truth", bad}}; });
     spdlog::info("{} -> {} at {} Hz, {} landmark(s), noise {:.1f}\" (1 sigma), resolution {:.1f}\", max range {} m",
                  cfg.channels.ground_truth, cfg.channels.vision, sc.vision.rate_hz, sc.landmarks.size(),
                  sc.vision.bearing_std / models::kArcSec, sc.vision.resolution / models::kArcSec,
                  sc.vision.max_range);
-    while (!common::stopRequested()) {
-      hb.tick();
-      bus.handle(100);
-    }
-    spdlog::info("stopping: {} ground-truth samples in ({} non-finite), {} observations out ({} with no landmark), {} gaps",
-                 received, bad, seq, empty, gaps.gaps());
-    hb.publish("stopping");
-    return common::kExitOk;
+    return driver.run([&] {
+      return fmt::format("{} observations out ({} with no landmark; {} non-finite samples in)", driver.published(),
+                         empty, bad);
+    });
   });
 }

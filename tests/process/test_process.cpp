@@ -15,6 +15,7 @@
 #include "lcmloc/common/transport.hpp"
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/fusion_status_t.hpp"
+#include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
@@ -237,6 +238,54 @@ TEST_F(ProcessTest, LoggerFlushesOnSigtermAndReportsGaps) {
   EXPECT_NE(out.find("TEST_ODOMETRY: 2 message(s) missing before seq 5"), std::string::npos) << out;
   EXPECT_NE(out.find("recorded 4 of 4 messages on 1 channels"), std::string::npos) << out;
   EXPECT_NE(out.find("2 sequence gaps"), std::string::npos) << out;
+}
+
+// A sensor driver (every one shares common::TruthDriver) counts every GROUND_TRUTH message
+// missing, warns about the first five gaps only, and numbers its own output without gaps.
+TEST_F(ProcessTest, DriverCountsEveryTruthGapWarnsAboutTheFirstFiveAndNumbersItsOutput) {
+  Child driver(LCMLOC_ODOMETRY, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML}, path("odometry.out"));
+  lcmloc::common::Bus bus(url_);
+  std::map<std::string, int64_t> counters;
+  std::string state;
+  bus.subscribe<lcmloc::heartbeat_t>("HEARTBEAT", [&](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
+    if (m.pid != driver.pid()) return;
+    state = m.state;
+    for (int i = 0; i < m.num_counters; ++i) counters[m.counter_names[i]] = m.counters[i];
+  });
+  std::vector<int64_t> out_seqs;
+  bus.subscribe<lcmloc::odometry_t>("ODOMETRY", [&](const std::string&, const lcmloc::odometry_t& m, int64_t) {
+    out_seqs.push_back(m.seq);
+  });
+  ASSERT_TRUE(waitFor(bus, [&] { return !state.empty(); }, 10s)) << driver.output();
+  // 100 Hz truth along x at 1 m/s, every other message missing (seq 0, 2, 4, ...): 49 gaps of 1.
+  for (int k = 0; k < 50; ++k) {
+    lcmloc::ground_truth_t t{};
+    t.seq = 2 * k;
+    t.utime = 1000000 + 20000 * k;
+    t.x = t.distance = 0.02 * k;
+    t.speed = 1.0;
+    bus.publish("GROUND_TRUTH", t);
+    bus.handle(2);
+  }
+  ASSERT_TRUE(waitFor(bus, [&] { return counters["received"] == 50 && !out_seqs.empty(); }, 10s))
+      << driver.output();
+  driver.signal(SIGTERM);
+  ASSERT_TRUE(waitFor(bus, [&] { return state == "stopping"; }, 10s)) << driver.output();
+  EXPECT_EQ(driver.wait(10s).value_or(-1), 0) << driver.output();
+  EXPECT_EQ(counters["gaps"], 49);
+  EXPECT_EQ(counters["published"], static_cast<int64_t>(out_seqs.size()));
+  for (std::size_t i = 0; i < out_seqs.size(); ++i) ASSERT_EQ(out_seqs[i], static_cast<int64_t>(i));
+  const std::string out = driver.output();
+  int warnings = 0;
+  for (auto at = out.find("message(s) missing before seq"); at != std::string::npos;
+       at = out.find("message(s) missing before seq", at + 1))
+    ++warnings;
+  EXPECT_EQ(warnings, 5) << out;
+  EXPECT_NE(out.find("GROUND_TRUTH: 1 message(s) missing before seq 2"), std::string::npos) << out;
+  EXPECT_NE(out.find("stopping: 50 ground-truth samples in, " + std::to_string(out_seqs.size()) +
+                     " odometry out, 49 gaps"),
+            std::string::npos)
+      << out;
 }
 
 TEST_F(ProcessTest, BadConfigExitsNonZeroNamingFileAndKey) {
