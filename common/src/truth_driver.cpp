@@ -1,16 +1,22 @@
 #include "lcmloc/common/truth_driver.hpp"
 
+#include <cmath>
+
 #include <spdlog/spdlog.h>
 
 namespace lcmloc::common {
 
 TruthDriver::TruthDriver(Bus& bus, const SystemConfig& cfg, std::string process, OnTruth on_truth,
-                         std::function<Heartbeat::Counters()> extra)
+                         std::function<void()> restart, std::function<Heartbeat::Counters()> extra)
     : bus_(bus),
+      on_truth_(std::move(on_truth)),
+      restart_(std::move(restart)),
+      guard_(static_cast<int64_t>(std::llround(cfg.fusion.max_time_jump * 1e6))),
       heartbeat_(bus, cfg.channels.heartbeat, std::move(process), [this, extra = std::move(extra)] {
         Heartbeat::Counters c{{"received", received_},
                               {"published", published_},
                               {"gaps", gaps_.gaps()},
+                              {"dropped", dropped_},
                               {"decode_errors", bus_.decodeErrors()}};
         if (extra)
           for (auto& kv : extra()) c.push_back(std::move(kv));
@@ -18,11 +24,36 @@ TruthDriver::TruthDriver(Bus& bus, const SystemConfig& cfg, std::string process,
       }) {
   bus.subscribe<lcmloc::ground_truth_t>(
       cfg.channels.ground_truth,
-      [this, on_truth = std::move(on_truth)](const std::string& ch, const lcmloc::ground_truth_t& m, int64_t) {
-        ++received_;
-        if (const auto gap = gaps_.observe(ch, m.seq))
-          if (throttle_.allow(ch)) spdlog::warn("{}", gap.describe(ch));
-        on_truth(ch, m);
+      [this](const std::string& ch, const lcmloc::ground_truth_t& m, int64_t) { onMessage(ch, m); });
+}
+
+void TruthDriver::onMessage(const std::string& ch, const lcmloc::ground_truth_t& m) {
+  ++received_;
+  if (const auto gap = gaps_.observe(ch, m.seq))
+    if (throttle_.allow(ch)) spdlog::warn("{}", gap.describe(ch));
+  guard_.offer(
+      lcmloc::ground_truth_t(m), m.utime,
+      [&](lcmloc::ground_truth_t&& t) {
+        guard_.took(t.utime);
+        on_truth_(ch, t);
+        return true;
+      },
+      [&](const lcmloc::ground_truth_t& t, int side, int64_t newest) {
+        ++dropped_;
+        if (throttle_.allow(ch + ":dropped"))
+          spdlog::warn("{} seq {} utime {}: {} s {} the newest sample (utime {}), not followed by its time base: dropped",
+                       ch, t.seq, t.utime, side > 0 ? core::secondsApart(t.utime, newest) : core::secondsApart(newest, t.utime),
+                       side > 0 ? "ahead of" : "behind", newest);
+      },
+      [&](int side, const lcmloc::ground_truth_t& first, int64_t newest) {
+        if (side > 0) {
+          spdlog::info("{} seq {}: new time base: utime {} after {}", ch, first.seq, first.utime, newest);
+          return;
+        }
+        spdlog::info("{} seq {}: time went back {} s (utime {} after {}): the simulator started over; so does the "
+                     "sensor model",
+                     ch, first.seq, core::secondsApart(newest, first.utime), first.utime, newest);
+        restart_();
       });
 }
 
@@ -31,7 +62,9 @@ int TruthDriver::run(const std::function<std::string()>& out) {
     heartbeat_.tick();
     bus_.handle(100);
   }
-  spdlog::info("stopping: {} ground-truth samples in, {}, {} gaps", received_, out(), gaps_.gaps());
+  guard_.flush([&](const lcmloc::ground_truth_t&, int, int64_t) { ++dropped_; });
+  spdlog::info("stopping: {} ground-truth samples in, {}, {} gaps{}", received_, out(), gaps_.gaps(),
+               dropped_ ? ", " + std::to_string(dropped_) + " dropped (time far from the others)" : "");
   heartbeat_.publish("stopping");
   return kExitOk;
 }

@@ -2,6 +2,8 @@
 // (as the ruler driver would) and announces each one on FAULT_EVENTS.
 #include <spdlog/spdlog.h>
 
+#include <optional>
+
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/convert.hpp"
 #include "lcmloc/common/process.hpp"
@@ -19,28 +21,33 @@ int main(int argc, char** argv) {
     const auto cfg = common::loadSystemConfig(opts.config);
     const auto& sc = cfg.scenario;
     const auto& ch = cfg.channels;
-    models::FaultInjector injector(sc.faults, sc.magruler, models::componentSeed(sc.seed, "faults"));
+    std::optional<models::FaultInjector> injector;
+    auto start = [&] { injector.emplace(sc.faults, sc.magruler, models::componentSeed(sc.seed, "faults")); };
+    start();
 
     common::Bus bus(opts.lcm_url);
     int64_t event_seq = 0;
-    common::TruthDriver driver(bus, cfg, "lcmloc-fault-injector", [&](const std::string&, const ground_truth_t& m) {
-      auto f = injector.sample(common::toCore(m));
-      if (!f) return;
-      const int64_t measurement_seq = driver.nextSeq();
-      bus.publish(ch.magruler_fault, common::toLcm(f->reading, measurement_seq));
-      lcmloc::fault_event_t ev;
-      ev.utime = f->reading.utime;
-      ev.seq = event_seq++;
-      ev.kind = f->fault.kind;
-      ev.channel = ch.magruler_fault;
-      ev.measurement_seq = measurement_seq;
-      ev.x = f->truth.x;
-      ev.y = f->truth.y;
-      ev.lateral_offset = f->reading.lateral_offset;
-      bus.publish(ch.fault_events, ev);
-      spdlog::info("injected {} at {:.2f} m travelled ({:.3f}, {:.3f}): d_m = {:.3f} m on {} seq {}",
-                   ev.kind, f->truth.distance, ev.x, ev.y, ev.lateral_offset, ev.channel, measurement_seq);
-    });
+    common::TruthDriver driver(
+        bus, cfg, "lcmloc-fault-injector",
+        [&](const std::string&, const lcmloc::ground_truth_t& m) {
+          auto f = injector->sample(common::toCore(m));
+          if (!f) return;
+          const int64_t measurement_seq = driver.nextSeq();
+          bus.publish(ch.magruler_fault, common::toLcm(f->reading, measurement_seq));
+          lcmloc::fault_event_t ev;
+          ev.utime = f->reading.utime;
+          ev.seq = event_seq++;
+          ev.kind = f->fault.kind;
+          ev.channel = ch.magruler_fault;
+          ev.measurement_seq = measurement_seq;
+          ev.x = f->truth.x;
+          ev.y = f->truth.y;
+          ev.lateral_offset = f->reading.lateral_offset;
+          bus.publish(ch.fault_events, ev);
+          spdlog::info("injected {} at {:.2f} m travelled ({:.3f}, {:.3f}): d_m = {:.3f} m on {} seq {}",
+                       ev.kind, f->truth.distance, ev.x, ev.y, ev.lateral_offset, ev.channel, measurement_seq);
+        },
+        start);
     spdlog::info("{} fault(s) configured, publishing on {} and {}", sc.faults.size(), ch.magruler_fault,
                  ch.fault_events);
     return driver.run([&] { return fmt::format("{} faults injected", driver.published()); });

@@ -4,6 +4,8 @@
 //   gpsd  a real receiver (or gpsfake) through libgps -> GPS
 #include <spdlog/spdlog.h>
 
+#include <optional>
+
 #include "gpsd_source.hpp"
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/convert.hpp"
@@ -19,18 +21,20 @@ namespace {
 
 int runSim(const common::SystemConfig& cfg, common::Bus& bus) {
   const auto& sc = cfg.scenario;
-  models::GpsSensor sensor(sc.gps, models::componentSeed(sc.seed, "gps"));
+  std::optional<models::GpsSensor> sensor;
+  auto start = [&] { sensor.emplace(sc.gps, models::componentSeed(sc.seed, "gps")); };
+  start();
   const common::LocalFrame frame(cfg.datum);
   int64_t no_fix = 0;
   common::TruthDriver driver(
       bus, cfg, "lcmloc-gps",
       [&](const std::string&, const lcmloc::ground_truth_t& m) {
-        if (auto f = sensor.sample(common::toCore(m))) {
+        if (auto f = sensor->sample(common::toCore(m))) {
           if (!f->has_fix && no_fix++ == 0) spdlog::info("outage: no fix from utime {}", f->utime);
           bus.publish(cfg.channels.gps, common::toLcm(*f, frame, driver.nextSeq()));
         }
       },
-      [&] { return common::Heartbeat::Counters{{"no_fix", no_fix}}; });
+      start, [&] { return common::Heartbeat::Counters{{"no_fix", no_fix}}; });
   spdlog::info("simulated receiver: {} -> {} at {} Hz, {} error {} m, {} outage(s), {} jump(s), datum ({}, {})",
                cfg.channels.ground_truth, cfg.channels.gps, sc.gps.rate_hz, sc.gps.error_model, sc.gps.error,
                sc.gps.outages.size(), sc.gps.jumps.size(), cfg.datum.latitude, cfg.datum.longitude);

@@ -3,6 +3,8 @@
 // saturation; drivers/models) -> IMU.
 #include <spdlog/spdlog.h>
 
+#include <optional>
+
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/convert.hpp"
 #include "lcmloc/common/process.hpp"
@@ -23,7 +25,9 @@ int main(int argc, char** argv) {
     auto cfg = common::loadSystemConfig(opts.config);
     auto& sc = cfg.scenario;
     if (rate > 0) sc.imu.rate_hz = rate;
-    models::ImuSensor sensor(sc.imu, sc.vehicle.wheelbase, models::componentSeed(sc.seed, "imu"));
+    std::optional<models::ImuSensor> sensor;
+    auto start = [&] { sensor.emplace(sc.imu, sc.vehicle.wheelbase, models::componentSeed(sc.seed, "imu")); };
+    start();
 
     common::Bus bus(opts.lcm_url);
     int64_t saturated = 0;
@@ -31,13 +35,13 @@ int main(int argc, char** argv) {
     common::TruthDriver driver(
         bus, cfg, "lcmloc-imu",
         [&](const std::string&, const lcmloc::ground_truth_t& m) {
-          if (auto s = sensor.sample(common::toCore(m))) {
+          if (auto s = sensor->sample(common::toCore(m))) {
             if (range > 0 && s->accel.cwiseAbs().maxCoeff() >= range && saturated++ < 5)
               spdlog::warn("accelerometer saturated at utime {} (range {} m/s^2)", s->utime, range);
             bus.publish(cfg.channels.imu, common::toLcm(*s, driver.nextSeq()));
           }
         },
-        [&] { return common::Heartbeat::Counters{{"saturated", saturated}}; });
+        start, [&] { return common::Heartbeat::Counters{{"saturated", saturated}}; });
     spdlog::info("{} -> {} at {} Hz, declination {} rad, accel range {} m/s^2", cfg.channels.ground_truth,
                  cfg.channels.imu, sc.imu.rate_hz, sc.imu.declination, range);
     return driver.run([&] { return fmt::format("{} IMU samples out ({} saturated)", driver.published(), saturated); });

@@ -2,6 +2,8 @@
 // GROUND_TRUTH -> MagneticRuler -> MAGRULER (a detection as the ruler passes a marker).
 #include <spdlog/spdlog.h>
 
+#include <optional>
+
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/convert.hpp"
 #include "lcmloc/common/process.hpp"
@@ -20,14 +22,16 @@ int main(int argc, char** argv) {
     const auto& sc = cfg.scenario;
     const std::string out = cfg.channels.magruler.empty() ? "MAGRULER" : cfg.channels.magruler.front();
     const auto map = models::makeMarkerMap(models::Path(sc.path), sc.markers);
-    models::MagneticRuler ruler(sc.magruler, map, models::componentSeed(sc.seed, "magruler"));
+    std::optional<models::MagneticRuler> ruler;
+    auto start = [&] { ruler.emplace(sc.magruler, map, models::componentSeed(sc.seed, "magruler")); };
+    start();
 
     common::Bus bus(opts.lcm_url);
     int64_t detections = 0;
     common::TruthDriver driver(
         bus, cfg, "lcmloc-magruler",
         [&](const std::string&, const lcmloc::ground_truth_t& m) {
-          if (auto r = ruler.sample(common::toCore(m))) {
+          if (auto r = ruler->sample(common::toCore(m))) {
             if (r->detected) {
               ++detections;
               spdlog::debug("marker detected at utime {}: d_m = {:.4f} m", r->utime, r->lateral_offset);
@@ -35,7 +39,7 @@ int main(int argc, char** argv) {
             bus.publish(out, common::toLcm(*r, driver.nextSeq()));
           }
         },
-        [&] { return common::Heartbeat::Counters{{"detections", detections}}; });
+        start, [&] { return common::Heartbeat::Counters{{"detections", detections}}; });
     spdlog::info("{} -> {}: {} markers in the map, {} sensors", cfg.channels.ground_truth, out, map.size(),
                  sc.magruler.num_sensors);
     return driver.run([&] { return fmt::format("{} readings out ({} detections)", driver.published(), detections); });

@@ -1,6 +1,8 @@
 // lcmloc-odometry: drive and steering encoders. GROUND_TRUTH -> OdometrySensor -> ODOMETRY.
 #include <spdlog/spdlog.h>
 
+#include <optional>
+
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/convert.hpp"
 #include "lcmloc/common/process.hpp"
@@ -17,14 +19,18 @@ int main(int argc, char** argv) {
   return common::runProcess(app, argc, argv, opts, "lcmloc-odometry", [&] {
     const auto cfg = common::loadSystemConfig(opts.config);
     const auto& sc = cfg.scenario;
-    models::OdometrySensor sensor(sc.odometry, sc.vehicle.wheelbase,
-                                  models::componentSeed(sc.seed, "odometry"));
+    std::optional<models::OdometrySensor> sensor;
+    auto start = [&] { sensor.emplace(sc.odometry, sc.vehicle.wheelbase, models::componentSeed(sc.seed, "odometry")); };
+    start();
 
     common::Bus bus(opts.lcm_url);
-    common::TruthDriver driver(bus, cfg, "lcmloc-odometry", [&](const std::string&, const lcmloc::ground_truth_t& m) {
-      if (auto s = sensor.sample(common::toCore(m)))
-        bus.publish(cfg.channels.odometry, common::toLcm(*s, driver.nextSeq()));
-    });
+    common::TruthDriver driver(
+        bus, cfg, "lcmloc-odometry",
+        [&](const std::string&, const lcmloc::ground_truth_t& m) {
+          if (auto s = sensor->sample(common::toCore(m)))
+            bus.publish(cfg.channels.odometry, common::toLcm(*s, driver.nextSeq()));
+        },
+        start);
     spdlog::info("{} -> {} at {} Hz, scale error {}, steering bias {} rad", cfg.channels.ground_truth,
                  cfg.channels.odometry, sc.odometry.rate_hz, sc.odometry.scale_error, sc.odometry.steering_bias);
     return driver.run([&] { return fmt::format("{} odometry out", driver.published()); });

@@ -3,6 +3,8 @@
 // -> VISION (landmark_bearings_t).
 #include <spdlog/spdlog.h>
 
+#include <optional>
+
 #include <cmath>
 
 #include "lcmloc/common/config.hpp"
@@ -28,7 +30,9 @@ int main(int argc, char** argv) {
     if (sc.landmarks.empty())
       throw common::ConfigError(cfg.file, "landmarks", "the vision driver needs a landmark map (list of {id, x, y})");
     const uint64_t seed = sc.vision.seed ? sc.vision.seed : models::componentSeed(sc.seed, "vision");
-    models::VisionSensor sensor(sc.vision, sc.landmarks, seed);
+    std::optional<models::VisionSensor> sensor;
+    auto start = [&] { sensor.emplace(sc.vision, sc.landmarks, seed); };
+    start();
 
     common::Bus bus(opts.lcm_url);
     int64_t empty = 0, bad = 0;
@@ -39,13 +43,13 @@ int main(int argc, char** argv) {
             if (bad++ < 5) spdlog::warn("{}: non-finite pose at utime {}: no observation", ch, m.utime);
             return;
           }
-          if (auto s = sensor.sample(common::toCore(m))) {
+          if (auto s = sensor->sample(common::toCore(m))) {
             if (s->ids.empty() && empty++ == 0)
               spdlog::info("no landmark within {} m at utime {}", sc.vision.max_range, s->utime);
             bus.publish(cfg.channels.vision, common::toLcm(*s, driver.nextSeq()));
           }
         },
-        [&] { return common::Heartbeat::Counters{{"empty", empty}, {"bad_truth", bad}}; });
+        start, [&] { return common::Heartbeat::Counters{{"empty", empty}, {"bad_truth", bad}}; });
     spdlog::info("{} -> {} at {} Hz, {} landmark(s), noise {:.1f}\" (1 sigma), resolution {:.1f}\", max range {} m",
                  cfg.channels.ground_truth, cfg.channels.vision, sc.vision.rate_hz, sc.landmarks.size(),
                  sc.vision.bearing_std / models::kArcSec, sc.vision.resolution / models::kArcSec,

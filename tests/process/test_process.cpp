@@ -7,6 +7,7 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <memory>
 #include <set>
 
 #include <lcm/lcm-cpp.hpp>
@@ -107,6 +108,61 @@ TEST_F(ProcessTest, LauncherRunsTheSystemAndTheLogHasEveryChannelWithoutGaps) {
   EXPECT_EQ(status.back().sequence_gaps, 0);
   EXPECT_EQ(status.back().messages_rejected, 0);
   EXPECT_EQ(status.back().messages_used, count["POSE"]);
+}
+
+// The simulator restarted while the drivers, the fault injector and the daemon keep running: the
+// drivers' models start over with it (truth time went back), the daemon restarts its filter,
+// and the second run's estimates and gate decisions equal the first run's.
+TEST_F(ProcessTest, ARestartedSimulatorGivesTheSameEstimatesAgainWithoutRestartingTheRest) {
+  const std::string scenario =
+      writeFile("scenario.yaml", "scenario: {realtime_factor: 10}\nfusion: {reorder_window: 0.5}\n");
+  lcmloc::common::Bus bus(url_);
+  std::map<std::string, std::set<int>> alive;  // process -> pids seen
+  std::vector<lcmloc::pose_t> poses;
+  std::vector<lcmloc::fusion_status_t> status;
+  bus.subscribe<lcmloc::heartbeat_t>("HEARTBEAT", [&](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
+    alive[m.process].insert(m.pid);
+  });
+  bus.subscribe<lcmloc::pose_t>("POSE", [&](const std::string&, const lcmloc::pose_t& m, int64_t) { poses.push_back(m); });
+  bus.subscribe<lcmloc::fusion_status_t>(
+      "FUSION_STATUS", [&](const std::string&, const lcmloc::fusion_status_t& m, int64_t) { status.push_back(m); });
+  std::vector<std::unique_ptr<Child>> rest;
+  for (const char* exe : {LCMLOC_FUSION, LCMLOC_ODOMETRY, LCMLOC_MAGRULER, LCMLOC_FAULT_INJECTOR})
+    rest.push_back(std::make_unique<Child>(exe, std::vector<std::string>{"--lcm-url", url_, "--config", scenario},
+                                           path(fs::path(exe).filename().string() + ".out")));
+  ASSERT_TRUE(waitFor(bus, [&] { return alive.size() == 4; }, 10s));
+  for (int run = 0; run < 2; ++run) {
+    Child sim(LCMLOC_SIM, {"--lcm-url", url_, "--config", scenario}, path("sim.out"));
+    std::optional<int> rc;
+    const auto deadline = std::chrono::steady_clock::now() + 60s;
+    while (!(rc = sim.wait(0ms)) && std::chrono::steady_clock::now() < deadline) bus.handle(20);
+    ASSERT_EQ(rc.value_or(-1), 0) << sim.output();
+  }
+  for (auto& c : rest) c->signal(SIGTERM);
+  ASSERT_TRUE(waitFor(bus, [&] { return !status.empty() && status.back().event == "stopped"; }, 10s))
+      << rest[0]->output();
+  for (auto& c : rest) EXPECT_EQ(c->wait(10s).value_or(-1), 0) << c->output();
+  for (std::size_t i = 1; i < rest.size(); ++i)
+    EXPECT_NE(rest[i]->output().find("the simulator started over; so does the sensor model"), std::string::npos)
+        << rest[i]->output();
+  int restarts = 0;
+  for (const auto& st : status) restarts += st.event == "time_jump" && st.detail.find("time went back") != std::string::npos;
+  EXPECT_EQ(restarts, 1);
+  EXPECT_EQ(status.back().messages_rejected, 0);
+  EXPECT_EQ(status.back().sequence_gaps, 0);
+  EXPECT_EQ(status.back().messages_used, static_cast<int64_t>(poses.size()));
+  ASSERT_GT(poses.size(), 5000u);
+  ASSERT_EQ(poses.size() % 2, 0u);
+  const std::size_t n = poses.size() / 2;
+  for (std::size_t k = 0; k < n; ++k) {  // the same estimates (the output seq goes on)
+    const auto& a = poses[k];
+    const auto& b = poses[n + k];
+    ASSERT_EQ(a.utime, b.utime) << k;
+    ASSERT_EQ(a.status, b.status) << k;
+    for (int i = 0; i < a.dim; ++i) ASSERT_EQ(a.state[i], b.state[i]) << k;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) ASSERT_EQ(a.covariance[i][j], b.covariance[i][j]) << k;
+  }
 }
 
 TEST_F(ProcessTest, DaemonSurvivesBadInputAndReportsEachOnStatus) {

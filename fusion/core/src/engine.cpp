@@ -51,19 +51,6 @@ bool isFinite(const LandmarkObservation& m) {
 }
 bool isFinite(const BeaconRange& m) { return std::isfinite(m.range) && std::isfinite(m.range_std); }
 
-/// a - b > limit (limit >= 0), also where a - b does not fit in 64 bits (corrupt utimes).
-bool apartBy(int64_t a, int64_t b, int64_t limit) {
-  int64_t d;
-  if (__builtin_sub_overflow(a, b, &d)) return a > b;
-  return d > limit;
-}
-
-/// Whole seconds from b to a (a >= b), saturated where the difference does not fit.
-int64_t secondsApart(int64_t a, int64_t b) {
-  int64_t d;
-  return __builtin_sub_overflow(a, b, &d) ? INT64_MAX / 1000000 : d / 1000000;
-}
-
 }  // namespace
 
 struct FusionEngine::Impl {
@@ -93,30 +80,33 @@ struct FusionEngine::Impl {
     if (out.on_event) out.on_event(name, detail, utime);
   }
 
-  /// Time-jump guard (EngineConfig::max_time_jump_us): newest utime taken, held suspects (all
-  /// ahead of it, suspect_dir = +1, or all behind it, -1).
-  int64_t newest_taken = INT64_MIN;
-  std::vector<EngineInput> suspects;
-  int suspect_dir = 0;
-  void dropSuspects() {
-    for (const auto& s : suspects) {
-      const bool ahead = suspect_dir > 0;
-      ++(ahead ? counters.too_new : counters.too_old);
-      const int64_t seconds = ahead ? secondsApart(s.utime, newest_taken) : secondsApart(newest_taken, s.utime);
-      event(ahead ? "too_new" : "too_old",
-            s.channel + " seq " + std::to_string(s.seq) + " utime " + std::to_string(s.utime) + ": " +
-                std::to_string(seconds) + (ahead ? " s ahead of" : " s behind") + " the newest input (utime " +
-                std::to_string(newest_taken) + "), not followed by its time base",
-            s.utime);
-    }
-    suspects.clear();
+  TimeBaseGuard<EngineInput> guard{cfg.max_time_jump_us};  ///< EngineConfig::max_time_jump_us
+
+  /// A held input the old time base went on after: an outlier.
+  void dropHeld(const EngineInput& s, int side, int64_t newest) {
+    const bool ahead = side > 0;
+    ++(ahead ? counters.too_new : counters.too_old);
+    event(ahead ? "too_new" : "too_old",
+          s.channel + " seq " + std::to_string(s.seq) + " utime " + std::to_string(s.utime) + ": " +
+              std::to_string(ahead ? secondsApart(s.utime, newest) : secondsApart(newest, s.utime)) +
+              (ahead ? " s ahead of" : " s behind") + " the newest input (utime " + std::to_string(newest) +
+              "), not followed by its time base",
+          s.utime);
   }
 
-  /// A time base confirmed in the past: the sources started over (a restarted simulator, a log
-  /// played again). What is queued of the old base is processed, then the filters start afresh
-  /// as in a newly started daemon (the active filter type kept), so the second run gives what
-  /// the first gave.
-  void restartTimeBase(const EngineInput& first) {
+  /// A new time base. Ahead: its inputs are taken in order. Behind: the sources started over (a
+  /// restarted simulator, a log played again): what is queued of the old base is processed, then
+  /// the filters start afresh as in a newly started daemon (the active filter type kept), so the
+  /// second run gives what the first gave.
+  void newTimeBase(int side, const EngineInput& first, int64_t newest) {
+    const std::string at = first.channel + " seq " + std::to_string(first.seq) + ": ";
+    const std::string n = std::to_string(kTimeJumpConfirm) + " inputs in a row";
+    if (side > 0) {
+      event("time_jump",
+            at + "new time base: utime " + std::to_string(first.utime) + " after " + std::to_string(newest) + ", " + n,
+            first.utime);
+      return;
+    }
     buffer.flush([this](const OrderKey&, const EngineInput& e) { process(e); });
     if (unpublished) publishAll();
     active = makeFilter(active_cfg, map);
@@ -131,13 +121,10 @@ struct FusionEngine::Impl {
     accumulated = unpublished = imu_saturating = false;
     imu_saturated = 0;
     event("time_jump",
-          first.channel + " seq " + std::to_string(first.seq) + ": time went back " +
-              std::to_string(secondsApart(newest_taken, first.utime)) + " s (utime " + std::to_string(first.utime) +
-              " after " + std::to_string(newest_taken) + ", " + std::to_string(kTimeJumpConfirm) +
-              " inputs in a row): the sources started over; " + active->name() +
-              " restarted from the configured initial state",
+          at + "time went back " + std::to_string(secondsApart(newest, first.utime)) + " s (utime " +
+              std::to_string(first.utime) + " after " + std::to_string(newest) + ", " + n +
+              "): the sources started over; " + active->name() + " restarted from the configured initial state",
           first.utime);
-    newest_taken = INT64_MIN;
   }
 
   /// orderKey() with the channel hash of the previous input reused when the channel is the same.
@@ -414,35 +401,11 @@ FusionEngine& FusionEngine::operator=(FusionEngine&&) noexcept = default;
 
 bool FusionEngine::push(EngineInput&& in) {
   Impl& m = *impl_;
-  const int64_t jump = m.cfg.max_time_jump_us;
-  int dir = 0;  // +1: beyond the guard ahead of the newest input taken, -1: behind it
-  if (jump > 0 && m.newest_taken != INT64_MIN)
-    dir = apartBy(in.utime, m.newest_taken, jump) ? 1 : apartBy(m.newest_taken, in.utime, jump) ? -1 : 0;
-  if (dir == 0) {
-    if (!m.suspects.empty()) m.dropSuspects();  // the old time base goes on: they were outliers
-    return take(std::move(in));
-  }
-  if (!m.suspects.empty()) {
-    const int64_t first = m.suspects.front().utime;
-    if (dir != m.suspect_dir || apartBy(in.utime, first, jump) || apartBy(first, in.utime, jump)) m.dropSuspects();
-  }
-  m.suspect_dir = dir;
-  m.suspects.push_back(std::move(in));
-  if (static_cast<int>(m.suspects.size()) < kTimeJumpConfirm) return true;  // held
-  auto confirmed = std::move(m.suspects);
-  m.suspects.clear();
-  if (dir < 0) {
-    m.restartTimeBase(confirmed.front());
-  } else {
-    m.event("time_jump",
-            confirmed.front().channel + " seq " + std::to_string(confirmed.front().seq) + ": new time base: utime " +
-                std::to_string(confirmed.front().utime) + " after " + std::to_string(m.newest_taken) + ", " +
-                std::to_string(kTimeJumpConfirm) + " inputs in a row",
-            confirmed.front().utime);
-  }
-  bool all = true;
-  for (auto& s : confirmed) all = take(std::move(s)) && all;
-  return all;
+  const int64_t utime = in.utime;
+  return m.guard.offer(
+      std::move(in), utime, [this](EngineInput&& e) { return take(std::move(e)); },
+      [&m](const EngineInput& s, int side, int64_t newest) { m.dropHeld(s, side, newest); },
+      [&m](int side, const EngineInput& first, int64_t newest) { m.newTimeBase(side, first, newest); });
 }
 
 bool FusionEngine::take(EngineInput&& in) {
@@ -462,13 +425,15 @@ bool FusionEngine::take(EngineInput&& in) {
     impl_->event("too_old", detail, utime);
     return false;
   }
-  impl_->newest_taken = std::max(impl_->newest_taken, key.utime);
+  impl_->guard.took(key.utime);
   impl_->buffer.releaseReady([this](const OrderKey&, const EngineInput& e) { impl_->process(e); });
   return true;
 }
 
 void FusionEngine::flush() {
-  if (!impl_->suspects.empty()) impl_->dropSuspects();  // never confirmed
+  impl_->guard.flush([this](const EngineInput& s, int side, int64_t newest) {  // never confirmed
+    impl_->dropHeld(s, side, newest);
+  });
   impl_->buffer.flush([this](const OrderKey&, const EngineInput& e) { impl_->process(e); });
   if (impl_->unpublished) impl_->publishAll();  // output_every > 1: the state after the last input
 }

@@ -1,15 +1,20 @@
 #pragma once
 // The frame every simulated sensor driver shares (lcmloc-odometry, -magruler, -imu, -gps in sim
 // mode, -vision, -fault-injector): GROUND_TRUTH in, counted, with its sequence gaps counted and
-// warned about (first 5, then 1 in 1000); a heartbeat with "received", "published", "gaps",
-// "decode_errors" and the driver's own counters; the loop until SIGINT/SIGTERM; a last line and
-// the "stopping" heartbeat. The driver's model and what it publishes stay in its main.
+// warned about (first 5, then 1 in 1000) and its message time guarded (core::TimeBaseGuard with
+// fusion.max_time_jump: a truth sample far from the others is dropped unless three in a row
+// confirm a new time base; one in the past is a simulator that started over, and the driver's
+// model starts over with it, so the second run gives what the first gave); a heartbeat with
+// "received", "published", "gaps", "dropped", "decode_errors" and the driver's own counters; the
+// loop until SIGINT/SIGTERM; a last line and the "stopping" heartbeat. The driver's model and
+// what it publishes stay in its main.
 #include <cstdint>
 #include <functional>
 #include <string>
 
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/process.hpp"
+#include "lcmloc/core/time_guard.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 
 namespace lcmloc::common {
@@ -17,10 +22,11 @@ namespace lcmloc::common {
 class TruthDriver {
  public:
   using OnTruth = std::function<void(const std::string& channel, const lcmloc::ground_truth_t&)>;
-  /// Subscribes to cfg.channels.ground_truth; on_truth sees every decoded message, after the
-  /// gap check. extra: the driver's own heartbeat counters (after the common ones).
+  /// Subscribes to cfg.channels.ground_truth; on_truth sees every decoded message the time guard
+  /// takes, in order. restart: makes the driver's model anew (truth time went back: the simulator
+  /// started over). extra: the driver's own heartbeat counters (after the common ones).
   TruthDriver(Bus& bus, const SystemConfig& cfg, std::string process, OnTruth on_truth,
-              std::function<Heartbeat::Counters()> extra = nullptr);
+              std::function<void()> restart, std::function<Heartbeat::Counters()> extra = nullptr);
   /// The seq of the next message the driver publishes (and one more "published").
   int64_t nextSeq() { return published_++; }
   int64_t received() const { return received_; }
@@ -31,10 +37,15 @@ class TruthDriver {
   int run(const std::function<std::string()>& out);
 
  private:
+  void onMessage(const std::string& channel, const lcmloc::ground_truth_t& m);
+
   Bus& bus_;
+  OnTruth on_truth_;
+  std::function<void()> restart_;
   SeqTracker gaps_;
   LogThrottle throttle_;
-  int64_t received_ = 0, published_ = 0;
+  core::TimeBaseGuard<lcmloc::ground_truth_t> guard_;
+  int64_t received_ = 0, published_ = 0, dropped_ = 0;
   Heartbeat heartbeat_;
 };
 

@@ -12,6 +12,7 @@
 #include "lcmloc/core/filter.hpp"
 #include "lcmloc/core/landmark_fix.hpp"
 #include "lcmloc/core/reorder.hpp"
+#include "lcmloc/core/time_guard.hpp"
 
 namespace lcmloc::core {
 
@@ -101,8 +102,6 @@ struct EngineConfig {
   int64_t max_time_jump_us = 1000000;
 };
 
-/// Consecutive inputs beyond the time-jump guard that confirm a new time base.
-inline constexpr int kTimeJumpConfirm = 3;
 
 class FusionEngine {
  public:
