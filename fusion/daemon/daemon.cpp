@@ -142,14 +142,31 @@ void FusionDaemon::onDecodeError(const std::string& ch, const std::string& why) 
   publishStatus("rejected_input", ch + ": " + why, last_utime_);
 }
 
+void FusionDaemon::checkResumeGap(const core::EngineInput& in) {
+  resumed_ = true;
+  // A hand-over from a running daemon goes on with the next message (10 ms at 100 Hz); a daemon
+  // started again from its checkpoint after a crash has not seen what came in meanwhile.
+  if (in.utime <= *init_utime_ || !core::apartBy(in.utime, *init_utime_, kResumeGapUs)) return;
+  const std::string detail = fmt::format(
+      "{} seq {}: the first input comes {:.3f} s of message time after the state this daemon started from (utime {}): "
+      "the motion in between is not in the estimate",
+      in.channel, in.seq, (static_cast<double>(in.utime) - static_cast<double>(*init_utime_)) * 1e-6, *init_utime_);
+  spdlog::warn("{}", detail);
+  publishStatus("resume_gap", detail, in.utime);
+}
+
 void FusionDaemon::push(core::EngineInput&& in) {
   if (hold_) {
     held_.push_back(std::move(in));
     return;
   }
-  if (init_utime_ && in.utime <= *init_utime_) {  // already in the state handed over
-    ++covered_;
-    return;
+  if (init_utime_) {
+    const int64_t max_jump = static_cast<int64_t>(std::llround(cfg_.fusion.max_time_jump * 1e6));
+    if (in.utime <= *init_utime_ && !(max_jump > 0 && core::apartBy(*init_utime_, in.utime, max_jump))) {
+      ++covered_;  // already in the state handed over (far older: another time base, taken)
+      return;
+    }
+    if (!resumed_) checkResumeGap(in);
   }
   event_seen_ = false;
   if (!engine_->push(std::move(in)) && !event_seen_)  // refused inputs are left as they were;

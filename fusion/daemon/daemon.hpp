@@ -69,6 +69,10 @@ class FusionDaemon {
 
   bool received(const std::string& ch, int64_t seq);     ///< counts and checks the seq gap
   void push(core::EngineInput&& in);
+  /// First input after an init state (hand-over, checkpoint): more than kResumeGapUs after it
+  /// is reported (status event resume_gap): the motion in between is lost.
+  void checkResumeGap(const core::EngineInput& in);
+  static constexpr int64_t kResumeGapUs = 100000;
   void reject(const std::string& ch, int64_t seq, int64_t utime, const std::string& why);
   void publishState(const std::string& filter, bool active, const core::FilterState& s);
   void publishStatus(const std::string& event, const std::string& detail, int64_t utime);
@@ -96,7 +100,9 @@ class FusionDaemon {
   bool hold_ = false;
   common::LocalFrame frame_;  ///< lat/lon of GPS fixes -> local metric frame (cfg.datum)
   std::vector<core::EngineInput> held_;
-  std::optional<int64_t> init_utime_;  ///< inputs at or before this were covered by the init state
+  /// Inputs at or before this (and within fusion.max_time_jump of it) were covered by the init state.
+  std::optional<int64_t> init_utime_;
+  bool resumed_ = false;  ///< the first input after the init state was seen (resume_gap checked)
   int64_t covered_ = 0;
 };
 

@@ -413,6 +413,30 @@ TEST_F(ReplayProcessTest, HandOverFromTheBusAndFromACheckpoint) {
           path("d.out"));
   EXPECT_EQ(d.wait(10s).value_or(-1), 2) << d.output();
   EXPECT_NE(d.output().find("--checkpoint: cannot create"), std::string::npos) << d.output();
+
+  // The hand-overs above went on with the next message: no resume gap was reported.
+  for (const auto& st : w.status) EXPECT_NE(st.event, "resume_gap") << st.detail;
+
+  // A checkpoint of another time base (written at utime ~4.2 s; the source then started over at
+  // 1 s): the new inputs are taken, not counted as already in the checkpoint.
+  const std::string ck2 = path("ck2");
+  {
+    Child e(LCMLOC_FUSION, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML, "--checkpoint", ck2}, path("e.out"));
+    ASSERT_TRUE(waitFor(bus, [&] { return w.alive.count(e.pid()) > 0; }, 10s)) << e.output();
+    seq = 300;
+    publish(20);
+    ASSERT_TRUE(waitFor(bus, [&] { return w.poses.back().utime >= t0 + 310 * dt; }, 10s)) << e.output();
+    e.signal(SIGTERM);
+    ASSERT_EQ(e.wait(10s).value_or(-1), 0) << e.output();
+  }
+  Child f(LCMLOC_FUSION, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML, "--checkpoint", ck2}, path("f.out"));
+  ASSERT_TRUE(waitFor(bus, [&] { return w.alive.count(f.pid()) > 0; }, 10s)) << f.output();
+  const std::size_t e_count = w.poses.size();
+  seq = 0;
+  publish(20);  // utime 1.0 .. 1.19 s
+  ASSERT_TRUE(waitFor(bus, [&] { return w.poses.size() > e_count && w.poses.back().utime >= t0 + 10 * dt; }, 10s))
+      << f.output();
+  EXPECT_EQ(w.poses[e_count].utime, t0);
 }
 
 TEST_F(ReplayProcessTest, HelpAndCtlWithoutDaemonOrWithBadArguments) {
