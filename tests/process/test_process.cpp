@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -399,6 +400,65 @@ TEST_F(ProcessTest, LauncherRefusesTwoProcessesOfTheSameName) {
                                    "' is also the name of processes[0]"),
             std::string::npos)
       << launcher.output();
+}
+
+// A process with `restart` is started again when it crashes, while the others keep running: the
+// fusion daemon, killed mid-run, comes back from its checkpoint and the run ends well.
+TEST_F(ProcessTest, LauncherStartsACrashedProcessAgainAndTheDaemonGoesOnFromItsCheckpoint) {
+  const std::string ck = path("fusion.ck");
+  const std::string scenario =
+      writeFile("scenario.yaml", "scenario: {realtime_factor: 5}\nfusion: {reorder_window: 0.5}\n");
+  const std::string system = writeFile(
+      "system.yaml", std::string("scenario: scenario.yaml\nrestart_delay: 0.2\nprocesses:\n") +
+                         "  - {name: fusion, executable: " + LCMLOC_FUSION + ", args: [--checkpoint, " + ck +
+                         ", --checkpoint-period, 0.1], restart: 1}\n" +
+                         "  - {name: odometry, executable: " + LCMLOC_ODOMETRY + "}\n" +
+                         "  - {name: sim, executable: " + LCMLOC_SIM + ", until_exit: true}\n");
+  lcmloc::common::Bus bus(url_);
+  std::set<int> fusion_pids;
+  std::vector<lcmloc::pose_t> poses;
+  std::vector<lcmloc::fusion_status_t> status;
+  bus.subscribe<lcmloc::heartbeat_t>("HEARTBEAT", [&](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
+    if (m.process == "lcmloc-fusion" && m.state == "running") fusion_pids.insert(m.pid);
+  });
+  bus.subscribe<lcmloc::pose_t>("POSE", [&](const std::string&, const lcmloc::pose_t& m, int64_t) { poses.push_back(m); });
+  bus.subscribe<lcmloc::fusion_status_t>(
+      "FUSION_STATUS", [&](const std::string&, const lcmloc::fusion_status_t& m, int64_t) { status.push_back(m); });
+  Child launcher(LCMLOC_LAUNCHER, {"--system", system, "--lcm-url", url_}, path("launcher.out"));
+  // Once the first daemon has published for a while (and written its checkpoint), kill it.
+  ASSERT_TRUE(waitFor(bus, [&] { return fusion_pids.size() == 1 && poses.size() > 1500 && fs::exists(ck); }, 30s))
+      << launcher.output();
+  const int first = *fusion_pids.begin();
+  ASSERT_EQ(::kill(first, SIGKILL), 0);
+  const std::size_t before = poses.size();
+  const lcmloc::pose_t last = poses.back();
+  ASSERT_TRUE(waitFor(bus, [&] { return fusion_pids.size() == 2 && poses.size() > before + 100; }, 30s))
+      << launcher.output();
+  std::optional<int> rc;
+  const auto deadline = std::chrono::steady_clock::now() + 60s;
+  while (!(rc = launcher.wait(0ms)) && std::chrono::steady_clock::now() < deadline) bus.handle(20);
+  ASSERT_EQ(rc.value_or(-1), 0) << launcher.output();
+  const std::string out = launcher.output();
+  EXPECT_NE(out.find("fusion ended unexpectedly (killed by Killed); starting it again in 0.2 s (1 of 1)"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("started fusion again"), std::string::npos) << out;
+  EXPECT_NE(out.find("(started again 1 time(s))"), std::string::npos) << out;
+  bool from_checkpoint = false;
+  for (const auto& st : status)
+    from_checkpoint |= st.event == "started" && st.detail.find("initialized from checkpoint") != std::string::npos;
+  EXPECT_TRUE(from_checkpoint);
+  bool gap_reported = false;  // the motion the daemon missed while down is reported as lost
+  for (const auto& st : status)
+    gap_reported |= st.event == "resume_gap" && st.detail.find("the motion in between is not in the estimate") !=
+                                                   std::string::npos;
+  EXPECT_TRUE(gap_reported);
+  // The second daemon went on from where the first was (the motion of its down time is lost:
+  // at five times real time and 3 m/s, well under 10 m), not from the start of the path.
+  const lcmloc::pose_t& resumed = poses[before];
+  EXPECT_GT(resumed.utime, last.utime);
+  EXPECT_LT(std::hypot(resumed.state[0] - last.state[0], resumed.state[1] - last.state[1]), 10.0);
+  EXPECT_GT(std::hypot(resumed.state[0] - poses.front().state[0], resumed.state[1] - poses.front().state[1]), 10.0);
 }
 
 TEST_F(ProcessTest, LauncherFailsWhenAChildFailsAndStopsTheOthers) {

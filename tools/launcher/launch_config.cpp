@@ -24,9 +24,10 @@ LaunchConfig loadLaunchConfig(const std::string& path) {
   r.get("drain_time", cfg.drain_time, 0.0, 3600.0);
   r.get("stop_timeout", cfg.stop_timeout, 0.1, 3600.0);
   r.get("ready_timeout", cfg.ready_timeout, 0.0, 3600.0);
+  r.get("restart_delay", cfg.restart_delay, 0.0, 3600.0);
   YAML::Node procs = r.child("processes");
   if (!procs || !procs.IsSequence() || procs.size() == 0)
-    throw ConfigError(path, "processes", "expected a non-empty list of {name, executable, args, until_exit}");
+    throw ConfigError(path, "processes", "expected a non-empty list of {name, executable, args, until_exit, restart}");
   for (std::size_t i = 0; i < procs.size(); ++i) {
     const std::string kp = "processes[" + std::to_string(i) + "]";
     ProcessSpec p;
@@ -35,6 +36,7 @@ LaunchConfig loadLaunchConfig(const std::string& path) {
     pr.get("executable", p.executable);
     pr.getStrings("args", p.args);
     pr.get("until_exit", p.until_exit);
+    pr.get("restart", p.restart, 0, 1000000);
     pr.finish();
     if (p.executable.empty()) throw ConfigError(path, kp + ".executable", "missing");
     if (p.name.empty()) p.name = p.executable;

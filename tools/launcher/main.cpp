@@ -1,7 +1,8 @@
 // lcmloc-launcher: starts the processes of a system file as children (in list order, each once
-// its heartbeat shows it running), watches them, and stops them in reverse order when the
-// until_exit process (the simulator) has finished, when a child fails, or on Ctrl-C.
-// Exits non-zero if any child failed.
+// its heartbeat shows it running), watches them, starts a child that ended unexpectedly again
+// when its `restart` allows, and stops them in reverse order when the until_exit process (the
+// simulator) has finished, when a child fails for good, or on Ctrl-C. Exits non-zero if any
+// child failed (in its last run).
 #include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -34,6 +35,8 @@ struct Child {
   bool killed = false;       ///< needed SIGKILL
   Clock::time_point started;
   double runtime = 0.0;
+  int restarts = 0;                         ///< times started again (ProcessSpec::restart)
+  std::optional<Clock::time_point> restart_at;  ///< ended unexpectedly: to be started again then
 };
 
 std::string resolveExecutable(const std::string& exe) {
@@ -100,12 +103,18 @@ class Launcher {
     while (ok && !common::stopRequested()) {
       bus.handle(100);
       for (auto& c : children_) {
+        if (c.restart_at && Clock::now() >= *c.restart_at && !drain_until) restart(c);
         if (!reap(c, false)) continue;
         if (c.spec.until_exit && !failed(c)) {
           spdlog::info("{} finished; stopping the others in {:.1f} s", c.spec.name, cfg_.drain_time);
           drain_until = Clock::now() + secs(cfg_.drain_time);
+        } else if (c.restarts < c.spec.restart && !drain_until) {
+          spdlog::warn("{} ended unexpectedly ({}); starting it again in {:.1f} s ({} of {})", c.spec.name,
+                       describeStatus(c), cfg_.restart_delay, c.restarts + 1, c.spec.restart);
+          c.restart_at = Clock::now() + secs(cfg_.restart_delay);
         } else {
-          spdlog::error("{} ended unexpectedly ({})", c.spec.name, describeStatus(c));
+          spdlog::error("{} ended unexpectedly ({}){}", c.spec.name, describeStatus(c),
+                        c.spec.restart ? fmt::format(", restarted {} time(s) already", c.restarts) : "");
           ok = false;
         }
       }
@@ -140,6 +149,18 @@ class Launcher {
         spdlog::warn("{}: no heartbeat within {:.1f} s; continuing", c.spec.name, cfg_.ready_timeout);
     }
     return true;
+  }
+
+  /// Starts a child that ended unexpectedly again (its first heartbeat is not waited for: the
+  /// others keep running meanwhile).
+  void restart(Child& c) {
+    c.restart_at.reset();
+    ++c.restarts;
+    c.pid = spawn(c, scenario_, url_);
+    c.running = true;
+    c.killed = false;
+    c.started = Clock::now();
+    spdlog::info("started {} again (pid {}, {} of {})", c.spec.name, c.pid, c.restarts, c.spec.restart);
   }
 
   /// Collects the child's exit status if it has ended (blocking=false: just look).
@@ -181,8 +202,8 @@ class Launcher {
       }
       const bool bad = failed(c);
       any_failed |= bad;
-      spdlog::info("  {:<16} pid {:<7} {:>7.2f} s  {}  {}", c.spec.name, c.pid, c.runtime, describeStatus(c),
-                   bad ? "FAILED" : "ok");
+      spdlog::info("  {:<16} pid {:<7} {:>7.2f} s  {}  {}{}", c.spec.name, c.pid, c.runtime, describeStatus(c),
+                   bad ? "FAILED" : "ok", c.restarts ? fmt::format("  (started again {} time(s))", c.restarts) : "");
     }
     for (const auto& c : children_) any_failed |= (c.pid < 0);
     return any_failed ? common::kExitRuntimeError : common::kExitOk;
