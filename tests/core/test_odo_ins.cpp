@@ -105,7 +105,8 @@ TEST(OdoInsFilter, RegisteredAndReportsPoseAndScale) {
 // Hand-over while moving (a daemon taking over from the last POSE or a checkpoint, a hot swap
 // between odo_ins filters): the state carries the INS velocity and the bias estimates, so the new
 // filter drives on with the vehicle. From x, y, theta and the scale alone (what a state from
-// another filter carries) it restarts at rest, and the odometer pulls it up to speed only slowly.
+// dead_reckoning or a UKF carries) the velocity is unknown and the first odometer update sets
+// it; from a forward "speed" (tvekf, ukf_gps) it starts at that speed along theta.
 TEST(OdoInsFilter, HandOverWhileMovingKeepsVelocityAndBiases) {
   const double theta = 0.4;
   int64_t t = 1000000;
@@ -145,13 +146,31 @@ TEST(OdoInsFilter, HandOverWhileMovingKeepsVelocityAndBiases) {
   pose_only.names.resize(4);
   auto c = makeFilter(insConfig(theta), {});
   c->initialize(pose_only);
+  EXPECT_GT(c->state().P(4, 4), 100.0) << "velocity unknown";
 
-  for (int k = 0; k < 2000; ++k) step({a.get(), b.get(), c.get()}, v, 0.0);  // 20 s on
-  const FilterState sa = a->state(), sb = b->state(), sc = c->state();
+  FilterState with_speed = pose_only;  // names and order as tvekf's
+  with_speed.names = {"x", "y", "theta", "speed", "distance"};
+  with_speed.x.conservativeResize(5);
+  with_speed.x[3] = 10.0;
+  with_speed.x[4] = 300.0;
+  with_speed.P = Eigen::MatrixXd::Identity(5, 5) * 1e-4;
+  with_speed.P.topLeftCorner<3, 3>() = pose_only.P.topLeftCorner<3, 3>();
+  auto d = makeFilter(insConfig(theta), {});
+  d->initialize(with_speed);
+  EXPECT_NEAR(d->state().x[4], 10.0 * std::cos(with_speed.x[2]), 1e-9);
+  EXPECT_NEAR(d->state().x[5], 10.0 * std::sin(with_speed.x[2]), 1e-9);
+
+  for (int k = 0; k < 2000; ++k) step({a.get(), b.get(), c.get(), d.get()}, v, 0.0);  // 20 s on
+  const FilterState sa = a->state(), sb = b->state(), sc = c->state(), sd = d->state();
   // b: within the 0.1 m it lags by starting at the next IMU sample (10 ms at 10 m/s).
   EXPECT_LT(std::hypot(sb.x[0] - sa.x[0], sb.x[1] - sa.x[1]), 0.3);
   EXPECT_NEAR(std::hypot(sb.x[4], sb.x[5]), 10.0, 0.05);
-  EXPECT_GT(std::hypot(sc.x[0] - sa.x[0], sc.x[1] - sa.x[1]), 10.0) << "without the velocity: should lag far behind";
+  // c and d drive on with the vehicle (before they kept the INS's 0 m/s, 0.01 m/s sure, and
+  // fell more than 10 m behind in these 20 s).
+  for (const FilterState* s : {&sc, &sd}) {
+    EXPECT_LT(std::hypot(s->x[0] - sa.x[0], s->x[1] - sa.x[1]), 0.5);
+    EXPECT_NEAR(std::hypot(s->x[4], s->x[5]), 10.0, 0.05);
+  }
 }
 
 TEST(OdoInsFilter, StandingStaysPutThroughTheEngine) {

@@ -92,3 +92,63 @@ TEST(InsReplay, OdoInsAndLandmarkFixFromALog) {
   EXPECT_NEAR(first_after_fix.state[2], 2.3, 1e-6);
   fs::remove_all(dir);
 }
+
+
+// A hot swap from dead_reckoning to odo_ins at 12 m/s on the §II route (a control message
+// through the engine, as lcmloc-ctl sends it): the new filter drives on from the handed-over
+// pose. Before odo_ins took an unknown velocity as 0 m/s (0.01 m/s sure) and ran up to 230 m off
+// within 40 s of the switch.
+TEST(InsReplay, SwitchFromDeadReckoningToOdoInsAtSpeedDrivesOn) {
+  models::InsSimConfig sc;
+  sc.duration = 120.0;
+  models::InsSim sim(sc, 1000000);
+  core::EngineConfig ec;
+  ec.filter.type = "dead_reckoning";
+  ec.filter.ins.latitude = sc.latitude;
+  ec.filter.ins.longitude = sc.longitude;
+  ec.filter.initial_pose = core::Vec3(0, 0, sc.heading);
+  ec.reorder_window_us = 0;
+  core::FilterState last;
+  std::string active;
+  core::EngineOutputs out;
+  out.on_state = [&](const std::string& f, bool is_active, const core::FilterState& s) {
+    if (!is_active) return;
+    last = s;
+    active = f;
+  };
+  core::FusionEngine engine(ec, {}, out);
+  int64_t seq = 0;
+  double at_switch = -1, worst = 0, speed = 0, truth_speed = 0;
+  while (!sim.finished()) {
+    const auto st = sim.step();
+    const double t = (st.truth.utime - 1000000) * 1e-6;
+    truth_speed = st.truth.speed;
+    if (at_switch < 0 && t >= 60.0) {
+      core::SwitchFilter sw{ec.filter};
+      sw.config.type = "odo_ins";
+      engine.push(core::EngineInput{"FUSION_CONTROL", seq++, st.truth.utime, core::ControlCommand(sw)});
+    }
+    if (st.odometry) engine.push(core::EngineInput{"ODOMETRY", seq++, st.odometry->input.utime, st.odometry->input});
+    if (st.imu) {
+      core::ImuInput m;
+      m.utime = st.imu->utime;
+      m.accel = st.imu->accel;
+      m.gyro = st.imu->gyro;
+      m.mag = st.imu->mag;
+      engine.push(core::EngineInput{"IMU", seq++, m.utime, m});
+    }
+    engine.flush();
+    const double err = std::hypot(last.x[0] - st.truth.x, last.x[1] - st.truth.y);
+    if (at_switch < 0 && active == "odo_ins") {
+      at_switch = err;
+      speed = st.truth.speed;
+    } else if (at_switch >= 0) {
+      worst = std::max(worst, std::abs(err - at_switch));
+    }
+  }
+  ASSERT_EQ(active, "odo_ins");
+  EXPECT_GT(speed, 10.0);
+  EXPECT_GT(at_switch, 1.0);  // dead reckoning's error, carried over
+  EXPECT_LT(worst, 2.0) << "error at the switch " << at_switch << " m";
+  EXPECT_NEAR(std::hypot(last.x[4], last.x[5]), truth_speed, 0.1);
+}

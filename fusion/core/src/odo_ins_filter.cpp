@@ -114,8 +114,9 @@ class OdoInsAdapter : public Filter {
     for (int a = 0; a < kExtra; ++a)
       for (int b = 0; b < kExtra; ++b)
         if (src[a] >= 0 && src[b] >= 0) P(kExtraStates[a].index, kExtraStates[b].index) = from.P(src[a], src[b]);
+    if (src[0] < 0 && src[1] < 0) startVelocity(from);
     kf_.setBiases(gb, ab);
-    if (src[0] >= 0 || src[1] >= 0) placeAt(from.x.head<2>(), from.utime);  // with the new velocity
+    placeAt(from.x.head<2>(), from.utime);  // with the new velocity
     utime_ = std::max(utime_, from.utime);
   }
 
@@ -236,6 +237,30 @@ class OdoInsAdapter : public Filter {
 
   double theta() const { return wrapAngle(M_PI / 2 - ins::headingOf(kf_.state().cbn())); }
   int64_t gapUs() const { return static_cast<int64_t>(std::llround(cfg_.ins.max_imu_gap * 1e6)); }
+
+  /// The velocity from a state without v_east / v_north (a hand-over from dead_reckoning, a UKF,
+  /// tvekf): its forward "speed" along theta where it has one, else unknown (0 with a standard
+  /// deviation of kUnknownSpeedStd, which the first odometer update replaces with the measured
+  /// speed). Keeping the INS's own velocity instead (0 m/s, 0.01 m/s sure, for a filter made at
+  /// a standstill) ran a vehicle at 12 m/s up to 230 m off within 40 s of a switch.
+  void startVelocity(const FilterState& from) {
+    static constexpr double kUnknownSpeedStd = 50.0;  // [m/s]
+    double speed = 0.0, var = kUnknownSpeedStd * kUnknownSpeedStd;
+    for (std::size_t i = 3; i < from.names.size() && static_cast<Eigen::Index>(i) < from.x.size(); ++i)
+      if (from.names[i] == "speed" && std::isfinite(from.x[i])) {
+        speed = from.x[i];
+        var = std::max(from.P(i, i), cfg_.ins.meas_vel_std * cfg_.ins.meas_vel_std);
+      }
+    ins::InsState& s = kf_.mutableState();
+    s.v.x() = speed * std::cos(from.x[2]);
+    s.v.y() = speed * std::sin(from.x[2]);
+    StateMat& P = kf_.mutableCovariance();
+    for (int i : {ins::kDvE, ins::kDvN}) {
+      P.row(i).setZero();
+      P.col(i).setZero();
+      P(i, i) = var;
+    }
+  }
 
   /// Re-initializes position and heading (covariance: the given 3x3 over x, y, theta, cross terms
   /// to the other error states zeroed). The body-frame velocity is kept (rotated with the heading).
