@@ -34,7 +34,7 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
   ec.reorder_window_us = static_cast<int64_t>(std::llround(cfg.fusion.reorder_window * 1e6));
   ec.output_every = cfg.fusion.output_every;
   ec.landmarks = cfg.fusion.landmarks;
-  ec.max_time_jump_us = static_cast<int64_t>(std::llround(cfg.fusion.max_time_jump * 1e6));
+  ec.max_time_jump_us = max_jump_us_ = static_cast<int64_t>(std::llround(cfg.fusion.max_time_jump * 1e6));
   core::EngineOutputs out;
   out.on_state = [this](const std::string& f, bool active, const core::FilterState& s) { publishState(f, active, s); };
   out.on_decision = [this](const std::string& f, bool, const core::GateDecision& d) {
@@ -146,7 +146,7 @@ void FusionDaemon::checkResumeGap(const core::EngineInput& in) {
   resumed_ = true;
   // A hand-over from a running daemon goes on with the next message (10 ms at 100 Hz); a daemon
   // started again from its checkpoint after a crash has not seen what came in meanwhile.
-  if (in.utime <= *init_utime_ || !core::apartBy(in.utime, *init_utime_, kResumeGapUs)) return;
+  if (!core::apartBy(in.utime, *init_utime_, kResumeGapUs)) return;
   const std::string detail = fmt::format(
       "{} seq {}: the first input comes {:.3f} s of message time after the state this daemon started from (utime {}): "
       "the motion in between is not in the estimate",
@@ -161,8 +161,7 @@ void FusionDaemon::push(core::EngineInput&& in) {
     return;
   }
   if (init_utime_) {
-    const int64_t max_jump = static_cast<int64_t>(std::llround(cfg_.fusion.max_time_jump * 1e6));
-    if (in.utime <= *init_utime_ && !(max_jump > 0 && core::apartBy(*init_utime_, in.utime, max_jump))) {
+    if (in.utime <= *init_utime_ && !(max_jump_us_ > 0 && core::apartBy(*init_utime_, in.utime, max_jump_us_))) {
       ++covered_;  // already in the state handed over (far older: another time base, taken)
       return;
     }
@@ -291,8 +290,8 @@ void FusionDaemon::publishState(const std::string& filter, bool active, const co
   last_status_ = s.status;
   const auto period = static_cast<int64_t>(std::llround(cfg_.fusion.status_period * 1e6));
   // A time base in the past (fusion.max_time_jump): the schedule starts over.
-  int64_t back = 0;
-  if (!__builtin_sub_overflow(next_status_utime_, s.utime, &back) && back > 2 * period) next_status_utime_ = INT64_MIN;
+  if (next_status_utime_ != INT64_MIN && core::apartBy(next_status_utime_, s.utime, 2 * period))
+    next_status_utime_ = INT64_MIN;
   if (s.utime >= next_status_utime_) {
     if (next_status_utime_ != INT64_MIN) publishStatus("periodic", "", s.utime);
     if (__builtin_add_overflow(s.utime, period, &next_status_utime_)) next_status_utime_ = INT64_MAX;

@@ -103,6 +103,7 @@ class FusionDaemon {
   /// Inputs at or before this (and within fusion.max_time_jump of it) were covered by the init state.
   std::optional<int64_t> init_utime_;
   bool resumed_ = false;  ///< the first input after the init state was seen (resume_gap checked)
+  int64_t max_jump_us_ = 0;  ///< fusion.max_time_jump
   int64_t covered_ = 0;
 };
 
