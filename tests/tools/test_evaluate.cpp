@@ -146,6 +146,26 @@ TEST_F(EvaluateTest, ConstantOffsetGivesExactErrors) {
   EXPECT_EQ(s.drift[1].segments, 0);           // the run is 20 m long
 }
 
+TEST_F(EvaluateTest, ALogOfTwoRunsSaysSoAsAWholeLogIssue) {
+  // A restarted simulator: the same run twice in one log, truth utimes repeated.
+  {
+    LogWriter w(file("twice.lcmlog"));
+    for (int run = 0; run < 2; ++run)
+      for (int i = 0; i < 100; ++i) w.add("GROUND_TRUTH", truthMsg(kT0 + i * 10000, 0.01 * i, 0.0, 0.0), kT0 + i * 10000);
+  }
+  const auto log = eval::readTrajectoryLog(file("twice.lcmlog"), {});
+  ASSERT_EQ(log.issues.size(), 1u);
+  const std::string d = log.issues[0].describe();
+  EXPECT_EQ(d.rfind("whole log: truth channel GROUND_TRUTH: 100 samples with a duplicate utime", 0), 0u) << d;
+  EXPECT_NE(d.find("lcmloc-log cut"), std::string::npos) << d;
+  EXPECT_EQ((eval::LogIssue{7, 1234, "x"}.describe()), "event 7 at byte 1234: x");
+  std::ostringstream os;
+  std::vector<eval::LogIssue> many(12, eval::LogIssue{1, 2, "bad"});
+  eval::printIssues(os, many);
+  EXPECT_EQ(os.str().find("  event 1 at byte 2: bad\n"), 0u) << os.str();
+  EXPECT_NE(os.str().find("  ... and 2 more (see report.json)\n"), std::string::npos) << os.str();
+}
+
 TEST_F(EvaluateTest, ErrorStatisticsOfKnownSamples) {
   const auto s = eval::errorStats({1, 2, 3, 4, -5, 6, 7, 8, 9, 10});
   EXPECT_EQ(s.n, 10);

@@ -126,7 +126,7 @@ int main(int argc, char** argv) {
       return kExitNothingUsable;
     }
     for (const auto& i : log.issues)
-      spdlog::warn("{}: event {} at byte {}: {}", log_path, i.event_index, i.byte_offset, i.what);
+      spdlog::warn("{}: {}", log_path, i.describe());
     if (log.damaged)
       spdlog::warn("{}: damaged log: {} of {} bytes unreadable; evaluating the {} intact events", log_path,
                    log.bytes_unreadable, log.file_size, log.events_read);

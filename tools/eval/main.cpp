@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
       return kExitNothingUsable;
     }
     for (const auto& i : data.issues)
-      spdlog::warn("{}: event {} at byte {}: {}", log_path, i.event_index, i.byte_offset, i.what);
+      spdlog::warn("{}: {}", log_path, i.describe());
     if (data.interrupted) spdlog::warn("interrupted: evaluating the {} events read so far", data.events_read);
     if (!data.usable()) {
       spdlog::error("{}: no usable odometry or ruler measurement in {} events ({} bytes)", log_path,

@@ -299,4 +299,14 @@ void refuseOutputOverInput(const std::string& input, const std::string& output) 
     throw std::runtime_error("output '" + output + "' is the input log '" + input + "': choose another output file");
 }
 
+std::string LogIssue::describe() const {
+  if (event_index < 0) return "whole log: " + what;
+  return "event " + std::to_string(event_index) + " at byte " + std::to_string(byte_offset) + ": " + what;
+}
+
+void printIssues(std::ostream& os, const std::vector<LogIssue>& issues, std::size_t shown) {
+  for (std::size_t k = 0; k < issues.size() && k < shown; ++k) os << "  " << issues[k].describe() << "\n";
+  if (issues.size() > shown) os << "  ... and " << issues.size() - shown << " more (see report.json)\n";
+}
+
 }  // namespace lcmloc::eval

@@ -149,13 +149,7 @@ void printSummary(std::ostream& os, const LogData& data, const Evaluation& ev) {
   os << "log: " << data.events_read << " events, " << data.file_size << " bytes";
   if (data.damaged) os << ", DAMAGED (" << data.bytes_unreadable << " bytes unreadable)";
   os << ", " << data.issues.size() << " issue(s)\n";
-  constexpr std::size_t kShown = 10;
-  for (std::size_t k = 0; k < data.issues.size() && k < kShown; ++k) {
-    const auto& i = data.issues[k];
-    os << "  event " << i.event_index << " @ byte " << i.byte_offset << ": " << i.what << "\n";
-  }
-  if (data.issues.size() > kShown)
-    os << "  ... and " << data.issues.size() - kShown << " more (see report.json)\n";
+  printIssues(os, data.issues);
 }
 
 }  // namespace lcmloc::eval

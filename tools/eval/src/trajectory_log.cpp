@@ -49,7 +49,9 @@ class TrajectoryDecoder {
     }
     if (unique.size() != tr.size())
       issue("truth channel " + opt_.truth_channel + ": " + std::to_string(tr.size() - unique.size()) +
-            " samples with a duplicate utime (the last of each kept)", -1, -1);
+            " samples with a duplicate utime (the last of each kept; a log of a restarted simulator holds its runs "
+            "one after the other: `lcmloc-log cut` by log time gives each its own log)",
+            -1, -1);
     tr = std::move(unique);
   }
 

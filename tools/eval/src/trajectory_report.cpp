@@ -223,11 +223,7 @@ void printTrajectorySummary(std::ostream& os, const TrajectoryLog& log, const st
   os << "log: " << log.events_read << " events, " << log.file_size << " bytes";
   if (log.damaged) os << ", DAMAGED (" << log.bytes_unreadable << " bytes unreadable)";
   os << ", " << log.issues.size() << " issue(s)\n";
-  constexpr std::size_t kShown = 10;
-  for (std::size_t k = 0; k < log.issues.size() && k < kShown; ++k)
-    os << "  event " << log.issues[k].event_index << " @ byte " << log.issues[k].byte_offset << ": "
-       << log.issues[k].what << "\n";
-  if (log.issues.size() > kShown) os << "  ... and " << log.issues.size() - kShown << " more (see report.json)\n";
+  printIssues(os, log.issues);
 }
 
 PlotResult writeTrajectoryPlots(const TrajectoryLog& log, const std::vector<TrackScore>& scores,

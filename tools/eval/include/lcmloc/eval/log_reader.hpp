@@ -9,6 +9,7 @@
 #include <functional>
 #include <memory>
 #include <map>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -52,10 +53,15 @@ struct LiveDecision {
 
 /// A problem found while reading: damage of the file or a message that could not be used.
 struct LogIssue {
-  int64_t event_index = 0;   ///< index of the event (0-based, counting events read so far)
-  int64_t byte_offset = 0;   ///< where in the file
+  int64_t event_index = 0;   ///< index of the event (0-based, counting events read so far); -1: the log as a whole
+  int64_t byte_offset = 0;   ///< where in the file (-1 with event_index -1)
   std::string what;
+  /// "event N at byte B: what", or "whole log: what".
+  std::string describe() const;
 };
+
+/// The first `shown` issues, one indented line each, then how many more (in report.json).
+void printIssues(std::ostream& os, const std::vector<LogIssue>& issues, std::size_t shown = 10);
 
 struct LogData {
   std::string path;
