@@ -8,6 +8,7 @@
 // velocity over the same interval. See docs/ins_experiment.md.
 #include <cmath>
 #include <deque>
+#include <optional>
 #include <stdexcept>
 
 #include "filter_internal.hpp"
@@ -163,6 +164,12 @@ class OdoInsAdapter : public Filter {
     const ins::Vec3 f(-m.accel.y(), m.accel.x(), m.accel.z());
     if (!have_imu_) {
       have_imu_ = true;
+      if (placed_utime_ && m.utime > *placed_utime_) {  // a pose handed over before: carried to now
+        ins::InsState& s = kf_.mutableState();
+        const double dt = (m.utime - *placed_utime_) * 1e-6;
+        s.lat += s.v.y() * dt / sy_;
+        s.lon += s.v.x() * dt / sx_;
+      }
       ins_utime_ = last_imu_utime_ = m.utime;
       last_odo_utime_ = std::max(last_odo_utime_, m.utime);
       while (!pending_.empty() && pending_.front().utime <= m.utime) pending_.pop_front();
@@ -269,6 +276,7 @@ class OdoInsAdapter : public Filter {
 
   /// Sets the INS position to xy (valid at utime t) carried back to ins_utime_ with the velocity.
   void placeAt(const Vec2& xy, int64_t t) {
+    if (!have_imu_) placed_utime_ = t;  // the INS starts at the next IMU sample (update)
     ins::InsState& s = kf_.mutableState();
     const double lead = leadS(t);
     s.lat = lat0_ + (xy[1] - s.v.y() * lead) / sy_;
@@ -332,6 +340,7 @@ class OdoInsAdapter : public Filter {
   std::string name_;
   ins::OdoInsFilter kf_;
   bool estimate_scale_ = cfg_.type == "odo_ins";
+  std::optional<int64_t> placed_utime_;  ///< time of a pose placed before the INS started
   double lat0_ = 0, lon0_ = 0, sx_ = 1, sy_ = 1;
   std::vector<std::string> names_;
   int64_t utime_ = 0, ins_utime_ = 0, last_imu_utime_ = 0, last_odo_utime_ = INT64_MIN, coast_started_ = 0;
