@@ -1,5 +1,6 @@
 #include "lcmloc/logger/log_writer.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdint>
 #include <cstring>
@@ -10,7 +11,7 @@
 
 namespace lcmloc::logger {
 
-std::string fileName(const std::string& pattern, int index, std::time_t t) {
+std::string fileName(const std::string& pattern, int index, std::time_t t, bool overwrite) {
   char idx[16];
   std::snprintf(idx, sizeof idx, "%03d", index);
   std::string p = pattern;
@@ -24,12 +25,12 @@ std::string fileName(const std::string& pattern, int index, std::time_t t) {
   std::vector<char> buf(p.size() * 4 + 256);
   const std::size_t n = std::strftime(buf.data(), buf.size(), p.c_str(), &tm);
   std::string name = (n == 0 && !p.empty()) ? p : std::string(buf.data(), n);
-  if (has_index || index == 0 || !std::filesystem::exists(name)) return name;
+  if (overwrite || !std::filesystem::exists(name)) return name;
   // Taken: insert -NNN before the extension (of the file name, not of a directory).
   const std::filesystem::path path(name);
   const std::string stem = (path.parent_path() / path.stem()).string();
   const std::string ext = path.extension().string();
-  for (int i = index;; ++i) {
+  for (int i = has_index ? 1 : std::max(index, 1);; ++i) {
     std::snprintf(idx, sizeof idx, "-%03d", i);
     std::string candidate = stem + idx + ext;
     if (!std::filesystem::exists(candidate)) return candidate;
@@ -95,7 +96,10 @@ void LogWriter::openNext() {
     std::lock_guard<std::mutex> lock(mu_);
     index = static_cast<int>(paths_.size());
   }
-  const std::string name = fileName(opts_.pattern, index, std::time(nullptr));
+  const std::time_t now = std::time(nullptr);
+  const std::string name = fileName(opts_.pattern, index, now, opts_.overwrite);
+  if (const std::string wanted = fileName(opts_.pattern, index, now, true); wanted != name)
+    spdlog::warn("{} exists (an earlier recording): writing {} instead (--overwrite replaces it)", wanted, name);
   try {
     file_ = std::make_unique<EventFile>(name);
   } catch (const std::exception& e) {

@@ -100,6 +100,9 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--flush-period", flush_period, "fsync period in seconds (overrides logger.flush_period)")
       ->check(CLI::PositiveNumber);
+  bool overwrite = false;
+  app.add_flag("--overwrite", overwrite,
+               "replace an existing log file (default: keep it and write NAME-001.lcmlog, the first free name)");
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-logger", [&] {
     const auto cfg = common::loadSystemConfig(opts.config);
@@ -116,6 +119,7 @@ int main(int argc, char** argv) {
     wo.max_file_bytes = max_mb >= 0 ? static_cast<int64_t>(max_mb * 1e6) : cfg.logger.max_file_bytes;
     wo.max_file_seconds = max_seconds >= 0 ? max_seconds : cfg.logger.max_file_seconds;
     wo.flush_period = flush_period > 0 ? flush_period : cfg.logger.flush_period;
+    wo.overwrite = overwrite;
     const std::string regex = channelRegex(channels.empty() ? cfg.logger.channels : channels);
     const std::string hb_channel = cfg.channels.heartbeat;
     const std::string status_channel = cfg.logger.status_channel;

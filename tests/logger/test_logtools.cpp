@@ -350,10 +350,17 @@ TEST(FileName, ExpandsStrftimeAndIndexAndNeverReusesATakenName) {
   const std::string pattern = (dir / "run.lcmlog").string();
   EXPECT_EQ(fileName(pattern, 1, t), pattern) << "free: no suffix";
   std::ofstream((dir / "run.lcmlog").string()) << "x";
-  EXPECT_EQ(fileName(pattern, 0, t), pattern) << "file 0 may overwrite";
+  // An earlier recording is kept: file 0 of a new run takes the next free name too.
+  EXPECT_EQ(fileName(pattern, 0, t), (dir / "run-001.lcmlog").string());
+  EXPECT_EQ(fileName(pattern, 0, t, true), pattern) << "--overwrite";
   EXPECT_EQ(fileName(pattern, 1, t), (dir / "run-001.lcmlog").string());
   std::ofstream((dir / "run-001.lcmlog").string()) << "x";
   EXPECT_EQ(fileName(pattern, 1, t), (dir / "run-002.lcmlog").string());
+  EXPECT_EQ(fileName(pattern, 0, t), (dir / "run-002.lcmlog").string());
+  const std::string indexed = (dir / "log-{index}.lcmlog").string();
+  std::ofstream((dir / "log-000.lcmlog").string()) << "x";
+  EXPECT_EQ(fileName(indexed, 0, t), (dir / "log-000-001.lcmlog").string()) << "an earlier run's file 0";
+  EXPECT_EQ(fileName(indexed, 1, t), (dir / "log-001.lcmlog").string());
   fs::remove_all(dir);
 }
 

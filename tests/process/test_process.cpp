@@ -345,6 +345,45 @@ TEST_F(ProcessTest, DriverCountsEveryTruthGapWarnsAboutTheFirstFiveAndNumbersIts
       << out;
 }
 
+// A second recording into the same name (a logger run again, or started again by the launcher
+// after a crash) keeps the first: it writes NAME-001 and says so; --overwrite replaces it.
+TEST_F(ProcessTest, LoggerKeepsAnEarlierRecordingUnlessToldToOverwrite) {
+  const std::string log = path("keep.lcmlog");
+  lcmloc::common::Bus bus(url_);
+  auto record = [&](const std::vector<std::string>& extra, int64_t seq, const std::string& name) {
+    std::vector<std::string> args{"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML, "--output", log, "--channel", "TEST_.*"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    Child logger(LCMLOC_LOGGER, args, path(name));
+    int64_t received = -1;
+    lcmloc::common::Bus watch(url_);
+    watch.subscribe<lcmloc::heartbeat_t>("HEARTBEAT", [&](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
+      if (m.pid != logger.pid()) return;
+      for (int i = 0; i < m.num_counters; ++i)
+        if (m.counter_names[i] == "received") received = m.counters[i];
+    });
+    EXPECT_TRUE(waitFor(watch, [&] { return received >= 0; }, 10s)) << logger.output();
+    lcmloc::odometry_t m{};
+    m.seq = seq;
+    bus.publish("TEST_ODOMETRY", m);
+    EXPECT_TRUE(waitFor(watch, [&] { return received >= 1; }, 10s)) << logger.output();
+    logger.signal(SIGTERM);
+    EXPECT_EQ(logger.wait(10s).value_or(-1), 0) << logger.output();
+    return logger.output();
+  };
+  record({}, 1, "first.out");
+  const std::string second = record({}, 2, "second.out");
+  const std::string kept = path("keep-001.lcmlog");
+  EXPECT_NE(second.find(log + " exists (an earlier recording): writing " + kept + " instead"), std::string::npos)
+      << second;
+  ASSERT_EQ(readLog(log).size(), 1u);
+  EXPECT_EQ(seqOf(readLog(log)[0].data), 1) << "the first recording is kept";
+  ASSERT_EQ(readLog(kept).size(), 1u);
+  EXPECT_EQ(seqOf(readLog(kept)[0].data), 2);
+  record({"--overwrite"}, 3, "third.out");
+  ASSERT_EQ(readLog(log).size(), 1u);
+  EXPECT_EQ(seqOf(readLog(log)[0].data), 3) << "--overwrite replaces it";
+}
+
 TEST_F(ProcessTest, BadConfigExitsNonZeroNamingFileAndKey) {
   const std::string bad = writeFile("bad.yaml", "fusion:\n  filter:\n    bogus_key: 1\n");
   const std::string missing = path("does_not_exist.yaml");

@@ -34,6 +34,7 @@ struct WriterOptions {
   int64_t max_file_bytes = 0;              ///< 0 = no size rotation
   double max_file_seconds = 0;             ///< 0 = no time rotation
   double flush_period = 0.2;               ///< fsync period [s]
+  bool overwrite = false;                  ///< replace an existing file instead of picking a free name
 };
 
 struct WriterStats {
@@ -50,9 +51,10 @@ struct WriterStats {
 };
 
 /// Name of file number index (0-based) from pattern at time t (local time): strftime codes are
-/// expanded and "{index}" becomes the index with 3 digits. Without "{index}", a name that is
-/// already taken gets "-NNN" before its extension (file 0 may overwrite an existing file).
-std::string fileName(const std::string& pattern, int index, std::time_t t);
+/// expanded and "{index}" becomes the index with 3 digits. A name that is already taken (by an
+/// earlier run, or an earlier file of this one) gets "-NNN" before its extension, the first
+/// free one from -001 (or from -index without "{index}"), unless overwrite.
+std::string fileName(const std::string& pattern, int index, std::time_t t, bool overwrite = false);
 
 class LogWriter {
  public:
