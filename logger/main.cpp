@@ -144,7 +144,9 @@ int main(int argc, char** argv) {
           lcmloc::heartbeat_t hb;
           if (hb.decode(data, 0, static_cast<int>(size)) >= 0) key = ch + "[" + hb.process + "]";
         }
-        if (const auto gap = gaps.observe(key, seq)) {
+        const auto gap = gaps.observe(key, seq);
+        if (gap.restarted && gap_log.allow(key + ":restart")) spdlog::warn("{}", gap.describeRestart(key));
+        if (gap) {
           s.gaps += gap.missing;
           if (gap_log.allow(key)) spdlog::warn("{} (lost upstream, not by the logger)", gap.describe(key));
         }

@@ -178,12 +178,20 @@ SeqGap SeqTracker::observe(const std::string& key, int64_t seq) {
   int64_t step = 0;
   SeqGap gap;
   if (!__builtin_sub_overflow(seq, e.last, &step) && step > 1 && step - 1 <= kMaxSeqGap) {
-    gap = {step - 1, seq};
+    gap.missing = step - 1;
     e.gaps += gap.missing;
     total_ += gap.missing;
   }
+  gap.before_seq = seq;
+  gap.last_seq = e.last;
+  gap.restarted = seq < e.last;
   e.last = seq;
   return gap;
+}
+
+std::string SeqGap::describeRestart(const std::string& key) const {
+  return key + ": seq went back from " + std::to_string(last_seq) + " to " + std::to_string(before_seq) +
+         " (the sender started over?): messages it did not send meanwhile are not counted";
 }
 
 std::string SeqGap::describe(const std::string& key) const {

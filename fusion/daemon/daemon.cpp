@@ -120,10 +120,15 @@ void FusionDaemon::release(const std::optional<core::FilterState>& init, const s
 
 bool FusionDaemon::received(const std::string& ch, int64_t seq) {
   ++messages_in_;
-  if (const auto gap = gaps_.observe(ch, seq)) {
+  const auto gap = gaps_.observe(ch, seq);
+  if (gap) {
     const std::string what = gap.describe(ch);
     if (log_throttle_.allow("gap:" + ch)) spdlog::warn("{}", what);
     publishStatus("drop", what, last_utime_);
+  } else if (gap.restarted) {
+    const std::string what = gap.describeRestart(ch);
+    if (log_throttle_.allow("restart:" + ch)) spdlog::warn("{}", what);
+    publishStatus("source_restart", what, last_utime_);
   }
   return true;
 }

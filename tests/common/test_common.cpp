@@ -444,6 +444,14 @@ TEST(Process, SeqTrackerCountsGapsPerKey) {
   EXPECT_EQ(missing("B", 0), 0);
   EXPECT_EQ(missing("B", 2), 1);
   EXPECT_EQ(missing("A", 9), 0);  // duplicate
+  EXPECT_FALSE(t.observe("A", 10).restarted);
+  const common::SeqGap back = t.observe("A", 0);  // the sender started over
+  EXPECT_TRUE(back.restarted);
+  EXPECT_EQ(back.missing, 0);
+  EXPECT_EQ(back.describeRestart("A"),
+            "A: seq went back from 10 to 0 (the sender started over?): messages it did not send meanwhile are not "
+            "counted");
+  EXPECT_EQ(missing("A", 1), 0);
   EXPECT_EQ(t.gaps("A"), 2);
   EXPECT_EQ(t.gaps("B"), 1);
   EXPECT_EQ(t.gaps(), 3);

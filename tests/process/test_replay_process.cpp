@@ -307,6 +307,7 @@ TEST_F(ReplayProcessTest, ALogPlayedTwiceIntoARunningDaemonGivesTheSameEstimates
   if (HasFatalFailure()) return;
 
   EXPECT_TRUE(w.has("time_jump", "time went back")) << daemon_output_;
+  EXPECT_TRUE(w.has("source_restart", "ODOMETRY: seq went back from")) << daemon_output_;
   int periodic[2] = {0, 0}, half = 0;  // periodic status reports before and after the restart
   for (const auto& st : w.status) {
     half += st.event == "time_jump";

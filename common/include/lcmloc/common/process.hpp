@@ -105,9 +105,15 @@ class LogThrottle {
 struct SeqGap {
   int64_t missing = 0;
   int64_t before_seq = 0;
+  /// seq went back (from last_seq to before_seq): the sender started over (or a message came
+  /// out of order); what it did not send meanwhile cannot be counted.
+  bool restarted = false;
+  int64_t last_seq = 0;
   explicit operator bool() const { return missing > 0; }
   /// "KEY: N message(s) missing before seq S"
   std::string describe(const std::string& key) const;
+  /// "KEY: seq went back from L to S (the sender started over?): ..."
+  std::string describeRestart(const std::string& key) const;
 };
 
 /// Per-channel sequence-gap counter: missing = seq - last - 1 when seq jumps forward.
