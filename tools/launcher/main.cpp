@@ -218,7 +218,8 @@ class Launcher {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"lcmloc-launcher: starts, watches and stops the processes of a system file"};
+  CLI::App app{"lcmloc-launcher: starts, watches (starting again those with `restart: N` that crash) and stops the "
+               "processes of a system file"};
   common::CommonOptions opts;
   opts.config = "-";  // placeholder: the system file names the scenario unless --config is given
   common::addCommonOptions(app, opts);
