@@ -97,8 +97,10 @@ class OdoInsAdapter : public Filter {
     // filter (their variances and the covariances among them; cross terms to the rest zeroed).
     int src[kExtra];
     for (int k = 0; k < kExtra; ++k) src[k] = -1;
+    int speed = -1;  // a forward speed (tvekf, ukf_gps): the velocity when there is no v_east / v_north
     for (std::size_t i = 3; i < from.names.size() && static_cast<Eigen::Index>(i) < from.x.size(); ++i) {
       if (from.names[i] == "odo_scale_error" && estimate_scale_) kf_.setScaleEstimate(from.x[i]);
+      if (from.names[i] == "speed" && std::isfinite(from.x[i])) speed = static_cast<int>(i);
       for (int k = 0; k < kExtra; ++k)
         if (from.names[i] == kExtraStates[k].name) src[k] = static_cast<int>(i);
     }
@@ -115,7 +117,7 @@ class OdoInsAdapter : public Filter {
     for (int a = 0; a < kExtra; ++a)
       for (int b = 0; b < kExtra; ++b)
         if (src[a] >= 0 && src[b] >= 0) P(kExtraStates[a].index, kExtraStates[b].index) = from.P(src[a], src[b]);
-    if (src[0] < 0 && src[1] < 0) startVelocity(from);
+    if (src[0] < 0 && src[1] < 0) startVelocity(from, speed);
     kf_.setBiases(gb, ab);
     placeAt(from.x.head<2>(), from.utime);  // with the new velocity
     utime_ = std::max(utime_, from.utime);
@@ -250,14 +252,14 @@ class OdoInsAdapter : public Filter {
   /// deviation of kUnknownSpeedStd, which the first odometer update replaces with the measured
   /// speed). Keeping the INS's own velocity instead (0 m/s, 0.01 m/s sure, for a filter made at
   /// a standstill) ran a vehicle at 12 m/s up to 230 m off within 40 s of a switch.
-  void startVelocity(const FilterState& from) {
+  /// speed_index: of the forward speed in from (-1: none).
+  void startVelocity(const FilterState& from, int speed_index) {
     static constexpr double kUnknownSpeedStd = 50.0;  // [m/s]
     double speed = 0.0, var = kUnknownSpeedStd * kUnknownSpeedStd;
-    for (std::size_t i = 3; i < from.names.size() && static_cast<Eigen::Index>(i) < from.x.size(); ++i)
-      if (from.names[i] == "speed" && std::isfinite(from.x[i])) {
-        speed = from.x[i];
-        var = std::max(from.P(i, i), cfg_.ins.meas_vel_std * cfg_.ins.meas_vel_std);
-      }
+    if (speed_index >= 0) {
+      speed = from.x[speed_index];
+      var = std::max(from.P(speed_index, speed_index), cfg_.ins.meas_vel_std * cfg_.ins.meas_vel_std);
+    }
     ins::InsState& s = kf_.mutableState();
     s.v.x() = speed * std::cos(from.x[2]);
     s.v.y() = speed * std::sin(from.x[2]);
