@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "filter_internal.hpp"
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/text.hpp"
 
@@ -326,11 +327,8 @@ struct FusionEngine::Impl {
 };
 
 void FusionEngine::Impl::landmarkFix(const EngineInput& in, const BearingsInput& b) {
-  GateDecision d;
-  d.utime = in.utime;
-  d.sensor = b.sensor.empty() ? in.channel : b.sensor;
-  d.measurement_seq = in.seq;
-  d.gate = std::numeric_limits<double>::infinity();
+  GateDecision d = detail::decision(in.utime, b.sensor.empty() ? in.channel : b.sensor, in.seq,
+                                    std::numeric_limits<double>::infinity());
   auto refuse = [&](const std::string& reason, const std::string& ev, const std::string& why) {
     d.reason = reason;
     if (out.on_decision) out.on_decision(active->name(), true, d);

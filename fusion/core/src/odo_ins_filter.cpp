@@ -152,11 +152,7 @@ class OdoInsAdapter : public Filter {
   bool uses(Measurement m) const override { return m == Measurement::Imu; }
 
   std::optional<GateDecision> update(const ImuInput& m) override {
-    GateDecision d;
-    d.utime = m.utime;
-    d.sensor = m.sensor;
-    d.measurement_seq = m.seq;
-    d.gate = std::numeric_limits<double>::infinity();
+    GateDecision d = detail::decision(m.utime, m.sensor, m.seq, std::numeric_limits<double>::infinity());
     if (!m.gyro.allFinite() || !m.accel.allFinite()) {
       d.reason = "bad_input";
       return d;
