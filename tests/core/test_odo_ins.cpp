@@ -394,3 +394,49 @@ TEST(OdoInsFilter, DefaultApplyFixSetsPoseOfOtherFilters) {
   fix.pose[0] = std::nan("");
   EXPECT_FALSE(f->applyFix(fix));
 }
+
+TEST(OdoInsFilter, SetPoseWhileMovingTurnsTheVelocityWithTheHeading) {
+  // Driving east at 10 m/s; an operator's set_pose says the vehicle heads north at the same place.
+  // The INS velocity must turn with the heading (before it kept pointing east: 1 s later the
+  // estimate was 238 m off and 230 m/s fast).
+  Recorder rec;
+  EngineConfig ec;
+  ec.filter = insConfig(0.0);
+  ec.reorder_window_us = 0;
+  FusionEngine e(ec, {}, rec.outputs());
+  int64_t t = 1000000, seq = 0;
+  auto drive = [&](double theta, double v, double a, int n) {
+    for (int k = 0; k < n; ++k) {
+      t += 10000;
+      OdometryInput o;
+      o.utime = t;
+      o.delta_s = (v - 0.5 * a * 0.01) * 0.01;
+      e.push(input("ODOMETRY", seq, t, o));
+      e.push(input("IMU", seq++, t, drivingImu(t, theta, v, a)));
+      v += a * 0.01;
+    }
+    return v;
+  };
+  drive(0.0, 0.0, 0.0, 100);
+  const double v = drive(0.0, 0.0, 1.0, 1000);  // 10 s at 1 m/s^2 eastwards
+  ASSERT_NEAR(v, 10.0, 1e-6);
+  drive(0.0, v, 0.0, 100);
+  const FilterState before = e.activeState();
+  ASSERT_NEAR(before.x[4], 10.0, 0.05);  // v_east
+  e.push(EngineInput{"FUSION_CONTROL", 1, t, ControlCommand(SetPose{Pose(before.x[0], before.x[1], M_PI / 2),
+                                                                   Vec3(0.1, 0.1, 0.01)})});
+  e.flush();
+  const FilterState set = e.activeState();
+  EXPECT_NEAR(set.x[2], M_PI / 2, 1e-3);  // (before: 0.59, the old heading mixed in)
+  EXPECT_NEAR(set.x[4], 0.0, 0.05);   // v_east
+  EXPECT_NEAR(set.x[5], 10.0, 0.05);  // v_north
+  EXPECT_NEAR(set.P(0, 0), 0.01, 1e-6);
+  drive(M_PI / 2, v, 0.0, 1);
+  const FilterState moving = e.activeState();
+  drive(M_PI / 2, v, 0.0, 100);  // 1 s northwards
+  const FilterState after = e.activeState();
+  EXPECT_NEAR(after.x[0] - moving.x[0], 0.0, 0.05);
+  EXPECT_NEAR(after.x[1] - moving.x[1], 10.0, 0.05);
+  EXPECT_NEAR(std::hypot(after.x[4], after.x[5]), 10.0, 0.05);
+  EXPECT_NEAR(wrapAngle(after.x[2] - M_PI / 2), 0.0, 0.01);
+}

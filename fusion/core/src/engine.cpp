@@ -312,16 +312,14 @@ struct FusionEngine::Impl {
       event("refused", "set_pose: pose must be finite and stddev > 0", utime);
       return;
     }
-    forEachFilter([&](Filter& f, bool) {
-      FilterState s = f.state();
-      s.utime = std::max(s.utime, utime);
-      s.x.head<3>() = c.pose;
-      s.x[2] = wrapAngle(s.x[2]);
-      s.P.topRows<3>().setZero();
-      s.P.leftCols<3>().setZero();
-      s.P.topLeftCorner<3, 3>() = c.stddev.array().square().matrix().asDiagonal();
-      f.initialize(s);
-    });
+    // A pose fix for every filter: each moves what depends on the pose with it (odo_ins turns
+    // its velocity with the heading).
+    PoseFix fix;
+    fix.utime = utime;
+    fix.pose = c.pose;
+    fix.cov = c.stddev.array().square().matrix().asDiagonal();
+    fix.source = "set_pose";
+    forEachFilter([&](Filter& f, bool) { f.applyFix(fix); });
     event("ack", "set_pose", utime);
   }
 };
