@@ -321,6 +321,7 @@ core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterC
   r.get("reach_lateral", c.reach_lateral, 0.0, 100.0);
   r.get("lockout_rejections", c.lockout_rejections, 0, 1000000);
   r.get("lockout_inflation", c.lockout_inflation, 1.0, 1e6);
+  r.get("lockout_max_std", c.lockout_max_std, 1e-3, 1e6);
   r.get("scale_std0", c.scale_std0, 0.0, 1.0);
   r.get("steer_bias_std0", c.steer_bias_std0, 0.0, 1.0);
   r.get("scale_rw", c.scale_rw, 0.0, 1.0);

@@ -1,6 +1,8 @@
 // Filters of the magnetic-ruler family: gate, association, lock-out, hot swap, calibration.
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <cmath>
 #include <limits>
 #include <random>
@@ -268,12 +270,76 @@ TEST(Lockout, ConsecutiveGateRejectionsInflateOnceAndRecover) {
   EXPECT_EQ(g->state().status, FilterStatus::Lockout);
   EXPECT_TRUE(g->state().P.isApprox(P0 * c.lockout_inflation, 1e-14));
   EXPECT_EQ(g->update(detection(++t, 0.1)).reason, "gate");
-  EXPECT_TRUE(g->state().P.isApprox(P0 * c.lockout_inflation * c.lockout_inflation, 1e-14));
+  // x, y by 25 again; theta up to its cap of 1 rad (correlations kept)
+  const Eigen::MatrixXd P2 = g->state().P;
+  ASSERT_LT(P0(2, 2) * c.lockout_inflation, 1.0);
+  ASSERT_GT(P0(2, 2) * c.lockout_inflation * c.lockout_inflation, 1.0);
+  const Eigen::Matrix2d P2xy = P2.topLeftCorner<2, 2>(), P0xy = P0.topLeftCorner<2, 2>();
+  EXPECT_TRUE(P2xy.isApprox(P0xy * c.lockout_inflation * c.lockout_inflation, 1e-14));
+  EXPECT_NEAR(P2(2, 2), kLockoutMaxHeadingStd * kLockoutMaxHeadingStd, 1e-12);
+  for (int i = 0; i < 2; ++i)
+    EXPECT_NEAR(P2(i, 2) / std::sqrt(P2(i, i) * P2(2, 2)), P0(i, 2) / std::sqrt(P0(i, i) * P0(2, 2)), 1e-12);
 
   // The ungated filter never locks out.
   auto u = makeFilter(config("ukf"), straightMap(3));
   for (int i = 0; i < 5; ++i) u->update(detection(++t, 0.45));
   EXPECT_EQ(u->state().status, FilterStatus::Ok);
+}
+
+TEST(Lockout, InflationStopsAtItsCapsAndTheFilterGoesOn) {
+  // Detections with no marker in the map, for a long time (a stretch of road whose markers are
+  // not in the map): before the caps, P was multiplied by 25 every 3 rejections, the mean was
+  // lost in rounding (y exactly 0 after 100) and from the 670th P was infinite and the filter
+  // refused every input.
+  for (const std::string type : {"ukf_gated", "ukf_calib"}) {
+    for (const double cap : {100.0, 2.0}) {
+      FilterConfig c = config(type);
+      c.lockout_max_std = cap;
+      auto f = makeFilter(c, {});
+      int64_t t = 0;
+      drive(*f, 10.0, t);
+      const FilterState before = f->state();
+      ASSERT_LT(before.P(0, 0), cap * cap) << type;
+      for (int i = 0; i < 1000; ++i) ASSERT_EQ(f->update(detection(++t, 0.1)).reason, "no_candidate") << type << i;
+      const FilterState s = f->state();
+      EXPECT_EQ(s.status, FilterStatus::Lockout) << type;
+      EXPECT_EQ(s.x, before.x) << type;  // inflation moves no mean
+      EXPECT_NEAR(s.P(0, 0), cap * cap, 1e-9 * cap * cap) << type << " cap " << cap;
+      EXPECT_NEAR(s.P(1, 1), cap * cap, 1e-9 * cap * cap) << type << " cap " << cap;
+      EXPECT_NEAR(s.P(2, 2), kLockoutMaxHeadingStd * kLockoutMaxHeadingStd, 1e-9) << type;
+      if (type == "ukf_calib") {
+        // not beyond their initial sigmas (the random walk of the drive took them just above)
+        EXPECT_NEAR(s.P(3, 3), std::max(before.P(3, 3), c.scale_std0 * c.scale_std0), 1e-15);
+        EXPECT_NEAR(s.P(4, 4), std::max(before.P(4, 4), c.steer_bias_std0 * c.steer_bias_std0), 1e-15);
+      }
+      EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(s.P).eigenvalues().minCoeff(), 0.0) << type;
+      // and it goes on: a time update and further decisions, nothing refused as bad input
+      drive(*f, 2.0, t);
+      EXPECT_TRUE(f->state().x.allFinite() && f->state().P.allFinite()) << type;
+      EXPECT_GT(f->state().x[1], before.x[1] + 0.5) << type;
+      EXPECT_EQ(f->update(detection(++t, 0.1)).reason, "no_candidate") << type;
+    }
+  }
+}
+
+TEST(Association, EveryMarkerInTheWidenedWindowIsACandidate) {
+  // Position sigma 0.24 m each way: the window grows by a 3-sigma margin of 1.0 m, to
+  // |forward - 1.5| <= 1.5 and |left| <= 1.7. A marker at (2.95, 1.65) in the body frame lies in
+  // it, 3.38 m from M; the distance pre-test used to stop at 3.12 m (its radius grew by the
+  // margin, the window's corner by sqrt(2) times the margin), so the marker was no candidate.
+  FilterConfig c = config("ukf_gated");
+  c.initial_pose = Pose(0.0, 0.0, 0.0);
+  c.p0_diag = Vec3(1.0 / 18, 1.0 / 18, 1e-12);
+  for (const double y : {1.65, 1.75}) {
+    auto f = makeFilter(c, {Marker{7, 2.95, y}});
+    const GateDecision d = f->update(detection(1, 0.0));
+    if (y < 1.7) {
+      EXPECT_EQ(d.marker_id, 7);
+      EXPECT_NE(d.reason, "no_candidate");
+    } else {
+      EXPECT_EQ(d.reason, "no_candidate");  // just outside the window
+    }
+  }
 }
 
 TEST(HotSwap, CopiesPoseAndCovarianceExtraStatesFromConfig) {

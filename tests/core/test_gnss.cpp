@@ -290,6 +290,31 @@ TEST(GnssFilters, LockoutIsDetectedAndReacquiredWithinABoundedTime) {
   }
 }
 
+TEST(GnssFilters, LockoutInflationStopsAtItsCap) {
+  // GPS 10 km off for 20 minutes: every fix is refused; before the cap the position covariance
+  // was multiplied by 25 every 5 fixes without end (infinite after about 20 minutes).
+  for (const auto& type : kGnssTypes) {
+    FilterConfig c = gnssConfig(type);
+    auto f = makeFilter(c, {}), twin = makeFilter(c, {});
+    Drive drive, twin_drive;
+    std::vector<GateDecision> dec;
+    drive.run(*f, 10.0, 1200.0, true, 1e4, &dec);
+    twin_drive.run(*twin, 10.0, 1200.0, false);  // the same drive without GPS
+    ASSERT_EQ(dec.size(), 1200u) << type;
+    for (const auto& d : dec) ASSERT_EQ(d.reason, "gate") << type;
+    const FilterState s = f->state();
+    EXPECT_EQ(s.status, FilterStatus::Lockout) << type;
+    ASSERT_TRUE(s.x.allFinite() && s.P.allFinite()) << type;
+    // at the cap plus at most one second of position random walk and odometry noise
+    EXPECT_GE(s.P(0, 0), c.lockout_max_std * c.lockout_max_std) << type;
+    EXPECT_LT(s.P(0, 0), 1.01 * c.lockout_max_std * c.lockout_max_std) << type;
+    // the mean dead-reckons as without GPS (ukf_gps's mean lags the truth by 2 % over these
+    // 12 km: its heading is unaided, and the UKF's mean of cos(theta) shrinks as theta's
+    // variance grows)
+    EXPECT_LT(std::abs(s.x[0] - twin->state().x[0]), 0.5) << type;
+  }
+}
+
 TEST(GnssFilters, HotSwapKeepsPoseSpeedAndDistance) {
   auto a = makeFilter(gnssConfig("tvekf"), {});
   Drive drive;

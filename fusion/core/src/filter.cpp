@@ -52,6 +52,7 @@ void validate(const FilterConfig& c) {
   require(c.lockout_rejections >= 0, "lockout_rejections must be >= 0");
   require(std::isfinite(c.lockout_inflation) && c.lockout_inflation >= 1,
           "lockout_inflation must be >= 1");
+  require(std::isfinite(c.lockout_max_std) && c.lockout_max_std > 0, "lockout_max_std must be > 0");
   require(std::isfinite(c.scale_std0) && c.scale_std0 > 0, "scale_std0 must be > 0");
   require(std::isfinite(c.steer_bias_std0) && c.steer_bias_std0 > 0,
           "steer_bias_std0 must be > 0");
@@ -246,7 +247,7 @@ class RulerUkf final : public Filter {
     initialState(cfg_, names_, x, P);
     ukf_.reset(x, P);
     R_ = cfg_.pv_diag.asDiagonal();
-    const double f = cfg_.ruler_offset + cfg_.reach_forward;
+    const double f = std::abs(cfg_.ruler_offset) + cfg_.reach_forward;
     const double l = cfg_.ruler_half_width + cfg_.reach_lateral;
     reach_radius_ = std::sqrt(f * f + l * l) * (1.0 + 1e-9);
   }
@@ -357,8 +358,10 @@ class RulerUkf final : public Filter {
   /// tracking (cm-level sigma) the margin is negligible.
   bool reachable(const Pose& pose, const Marker& m, double margin) const {
     const double dx = m.x - pose.x(), dy = m.y - pose.y();
-    const double r = reach_radius_ + margin;
-    if (dx * dx + dy * dy > r * r) return false;  // cheap pre-test, no trigonometry
+    // cheap pre-test, no trigonometry: the window's far corner (f + margin, l + margin) is at
+    // most reach_radius_ + sqrt(2) margin from M
+    const double r = reach_radius_ + M_SQRT2 * margin;
+    if (dx * dx + dy * dy > r * r) return false;
     const Vec2 body = markerInBody(pose, m.x, m.y);
     return std::abs(body.x() - cfg_.ruler_offset) <= cfg_.reach_forward + margin &&
            std::abs(body.y()) <= cfg_.ruler_half_width + cfg_.reach_lateral + margin;

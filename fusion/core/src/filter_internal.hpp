@@ -1,7 +1,11 @@
 #pragma once
 // Helpers shared by the filter implementations (not installed; src/ only).
+#include <algorithm>
+#include <cmath>
+#include <initializer_list>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "lcmloc/core/filter.hpp"
@@ -35,6 +39,26 @@ inline GateDecision decision(int64_t utime, const std::string& sensor, int64_t s
   d.measurement_seq = seq;
   d.gate = gate;
   return d;
+}
+
+/// A state's variance and the 1-sigma beyond which lock-out inflation does not take it.
+struct InflateCap {
+  int index;
+  double max_std;
+};
+
+/// Lock-out inflation: scales the variance of each listed state by f (its row and column by
+/// sqrt(f): D P D stays positive definite and keeps the correlations), but not beyond its cap;
+/// a variance already at or above cap^2 stays as it is.
+template <typename M>
+void inflateCapped(M& P, std::initializer_list<InflateCap> states, double f) {
+  for (const InflateCap& c : states) {
+    const double g = std::min(f, c.max_std * c.max_std / P(c.index, c.index));
+    if (!(g > 1.0)) continue;
+    const double r = std::sqrt(g);
+    P.row(c.index) *= r;
+    P.col(c.index) *= r;
+  }
 }
 
 /// Gate decision, correction and lock-out bookkeeping of the gated UKFs (the magnetic-ruler
@@ -77,7 +101,14 @@ struct GateBook {
     ++consecutive_rejections;
     if (cfg.lockout_rejections > 0 && consecutive_rejections % cfg.lockout_rejections == 0) {
       status = FilterStatus::Lockout;
-      ukf.scaleCovariance(cfg.lockout_inflation);
+      auto P = ukf.P();  // state x, y, theta (, odo_scale, steer_bias for ukf_calib)
+      const double pos = cfg.lockout_max_std;
+      if constexpr (std::decay_t<decltype(P)>::RowsAtCompileTime == 5)
+        inflateCapped(P, {{0, pos}, {1, pos}, {2, kLockoutMaxHeadingStd}, {3, cfg.scale_std0}, {4, cfg.steer_bias_std0}},
+                      cfg.lockout_inflation);
+      else
+        inflateCapped(P, {{0, pos}, {1, pos}, {2, kLockoutMaxHeadingStd}}, cfg.lockout_inflation);
+      ukf.reset(ukf.x(), P);
     }
   }
 };

@@ -34,6 +34,7 @@ void validateGnss(const FilterConfig& c) {
   require(c.p0_diag.allFinite() && (c.p0_diag.array() > 0).all(), "p0_diag must be > 0");
   require(std::isfinite(c.lockout_inflation) && c.lockout_inflation >= 1,
           "lockout_inflation must be >= 1");
+  require(std::isfinite(c.lockout_max_std) && c.lockout_max_std > 0, "lockout_max_std must be > 0");
   if (c.gate.value) require(pos(*c.gate.value), "gate.value must be > 0");
   require(c.gate.probability > 0 && c.gate.probability < 1, "gate.probability must be in (0, 1)");
   require(c.gate.dof >= 0 && c.gate.dof <= 10, "gate.dof must be in 0..10");
@@ -81,17 +82,6 @@ class Lockout {
   int count_ = 0;
   bool active_ = false;
 };
-
-/// Scales the variances of the listed states by f (rows and columns by sqrt(f): D P D stays
-/// positive definite and keeps the correlations).
-template <typename M>
-void inflate(M& P, std::initializer_list<int> idx, double f) {
-  const double r = std::sqrt(f);
-  for (int i : idx) {
-    P.row(i) *= r;
-    P.col(i) *= r;
-  }
-}
 
 
 /// One odometry interval as the time update sees it.
@@ -440,8 +430,12 @@ class TvEkf final : public GnssFilterBase {
     d.reason = std::isfinite(gate2_) ? "accepted" : "ungated";
   }
 
-  void inflateHeading() override { Pth_ *= cfg_.lockout_inflation; }
-  void inflatePosition() override { Pp_ *= cfg_.lockout_inflation; }
+  void inflateHeading() override {
+    Pth_ = std::max(Pth_, std::min(Pth_ * cfg_.lockout_inflation, kLockoutMaxHeadingStd * kLockoutMaxHeadingStd));
+  }
+  void inflatePosition() override {
+    detail::inflateCapped(Pp_, {{0, cfg_.lockout_max_std}, {1, cfg_.lockout_max_std}}, cfg_.lockout_inflation);
+  }
   void growPosition(double dt) override {
     Pp_.diagonal().array() += g_.position_rw * g_.position_rw * dt;
   }
@@ -536,8 +530,8 @@ class GpsUkf final : public GnssFilterBase {
     apply(in, gate2_, d);
   }
 
-  void inflateHeading() override { inflateStates({kTheta}); }
-  void inflatePosition() override { inflateStates({kX, kY}); }
+  void inflateHeading() override { inflateStates({{kTheta, kLockoutMaxHeadingStd}}); }
+  void inflatePosition() override { inflateStates({{kX, cfg_.lockout_max_std}, {kY, cfg_.lockout_max_std}}); }
   void growPosition(double dt) override {
     U::Matrix P = ukf_.P();
     P(kX, kX) += g_.position_rw * g_.position_rw * dt;
@@ -558,9 +552,9 @@ class GpsUkf final : public GnssFilterBase {
     d.accepted = true;
     d.reason = std::isfinite(gate) ? "accepted" : "ungated";
   }
-  void inflateStates(std::initializer_list<int> idx) {
+  void inflateStates(std::initializer_list<detail::InflateCap> states) {
     U::Matrix P = ukf_.P();
-    inflate(P, idx, cfg_.lockout_inflation);
+    detail::inflateCapped(P, states, cfg_.lockout_inflation);
     ukf_.reset(ukf_.x(), P);
   }
 

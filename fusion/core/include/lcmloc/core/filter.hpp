@@ -80,6 +80,10 @@ struct InsFilterConfig {
   double max_coast = 5.0;          ///< longest dropout bridged by holding the last sample [s]
 };
 
+/// Lock-out inflation stops at this heading 1-sigma [rad]: the UKFs' sigma points stay within
+/// +-pi of the mean (sqrt(n + lambda) sigma < pi for every filter here).
+constexpr double kLockoutMaxHeadingStd = 1.0;
+
 /// Parameters shared by every filter of the magnetic-ruler family (defaults: the paper, §4,
 /// as read in docs/paper_000_reading.md).
 struct FilterConfig {
@@ -108,6 +112,12 @@ struct FilterConfig {
   /// 0 disables detection.
   int lockout_rejections = 3;
   double lockout_inflation = 25.0;
+  /// Lock-out inflation stops at this position 1-sigma [m] (every filter with a lock-out); the
+  /// heading stops at kLockoutMaxHeadingStd and ukf_calib's scale and steering bias at their
+  /// initial sigmas. Without a bound, a long run of rejections (a stretch of road whose markers
+  /// are not in the map, a GPS far off for minutes) drove the covariance to infinity: the UKF's
+  /// mean was lost in rounding, then the filter refused every input.
+  double lockout_max_std = 100.0;
   /// "ukf_calib" only: odometer scale error k (delta_s_true = (1 + k) delta_s) and steering
   /// bias b (psi_true = psi - b) as extra states, each a random walk.
   double scale_std0 = 0.02;        ///< initial 1-sigma of k [-]

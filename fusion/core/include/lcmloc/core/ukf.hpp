@@ -175,7 +175,6 @@ class Ukf {
   }
   const Vector& x() const { return x_; }
   const Matrix& P() const { return P_; }
-  void scaleCovariance(double f) { P_ *= f; }
   const SigmaWeights<N>& weights() const { return w_; }
   AngleMask angleMask() const { return angles_; }
 
