@@ -315,6 +315,43 @@ TEST(GnssFilters, LockoutInflationStopsAtItsCap) {
   }
 }
 
+TEST(GnssFilters, APoseFixLosesNoMotion) {
+  // 10 m/s with odometry at 10 Hz; a pose fix placed exactly on the estimate (as a landmark fix,
+  // set_pose, a hot swap or a checkpoint start re-initializes the filter). The next second must
+  // advance as far as without the fix: the filter used to take the first increment after an
+  // initialization only to start its clock, and fell v T = 1 m behind at every fix.
+  for (const auto& type : kGnssTypes) {
+    auto f = makeFilter(gnssConfig(type), {});
+    FilterState s0 = f->state();
+    s0.x[3] = 10.0;
+    f->initialize(s0);
+    auto twin = makeFilter(gnssConfig(type), {});
+    twin->initialize(s0);
+    int64_t t = 1'000'000;
+    auto second = [&] {
+      for (int k = 0; k < 10; ++k) {
+        t += 100'000;
+        for (Filter* g : {f.get(), twin.get()}) {
+          g->predict(odo(t, 1.0));
+          g->update(imu(t, 0.0));
+        }
+      }
+    };
+    second();
+    const FilterState before = f->state();
+    ASSERT_EQ(before.x, twin->state().x);
+    PoseFix fix;
+    fix.utime = t;
+    fix.pose = before.x.head<3>();
+    fix.cov = before.P.topLeftCorner<3, 3>();
+    ASSERT_TRUE(f->applyFix(fix));
+    second();
+    const double moved = f->state().x[0] - before.x[0], twin_moved = twin->state().x[0] - before.x[0];
+    EXPECT_NEAR(twin_moved, 10.0, 0.1) << type;  // (ukf_gps: the UKF mean of cos(theta) < 1)
+    EXPECT_NEAR(moved, twin_moved, 0.01) << type;
+  }
+}
+
 TEST(GnssFilters, HotSwapKeepsPoseSpeedAndDistance) {
   auto a = makeFilter(gnssConfig("tvekf"), {});
   Drive drive;

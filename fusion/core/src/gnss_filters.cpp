@@ -121,7 +121,10 @@ class GnssFilterBase : public Filter {
     setState(x, P);
     utime_ = from.utime;
     enc_sum_ = x[kDistance];
-    have_odo_time_ = false;
+    // A state of a time (hand-over, fix, set_pose, checkpoint): the next increment is the motion
+    // since then. A state of no time (a filter just made): the first increment starts the clock.
+    have_odo_time_ = from.utime > 0;
+    last_odo_utime_ = from.utime;
     acc_sum_ = 0;
     acc_n_ = 0;
     have_fix_ = false;
