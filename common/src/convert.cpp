@@ -10,6 +10,11 @@ namespace {
 constexpr double kHalfPi = 1.5707963267948966;
 constexpr double kMaxStepDistance = 100.0;  // [m] per odometry increment: beyond is a broken sensor
 constexpr double kMaxLateralOffset = 5.0;   // [m] far beyond any ruler's half width
+// IMU readings beyond these are a broken sensor or a corrupt message, not motion: vehicle IMUs
+// measure up to about 16 g and 35 rad/s (2000 deg/s), the earth's field is about 0.5 gauss.
+constexpr double kMaxAccel = 1000.0;  // [m/s^2], about 100 g
+constexpr double kMaxGyro = 100.0;    // [rad/s]
+constexpr double kMaxMag = 100.0;     // [gauss]
 
 bool fail(std::string* why, const std::string& reason) {
   if (why) *why = reason;
@@ -19,6 +24,12 @@ bool fail(std::string* why, const std::string& reason) {
 bool finiteField(double v, const char* name, std::string* why) {
   if (std::isfinite(v)) return true;
   return fail(why, std::string(name) + " is " + (std::isnan(v) ? "NaN" : "Inf"));
+}
+
+bool withinField(double v, double limit, const char* name, const char* unit, std::string* why) {
+  if (std::abs(v) <= limit) return true;
+  return fail(why, std::string(name) + " " + std::to_string(v) + " " + unit + " out of range (|" + name +
+                       "| <= " + std::to_string(limit) + ")");
 }
 
 bool validUtime(int64_t utime, std::string* why) {
@@ -207,7 +218,8 @@ std::optional<core::ImuInput> toCore(const lcmloc::imu_t& m, const std::string& 
   static const char* const kMag[] = {"mag[0]", "mag[1]", "mag[2]"};
   for (int i = 0; i < 3; ++i)
     if (!finiteField(m.accel[i], kAccel[i], why) || !finiteField(m.gyro[i], kGyro[i], why) ||
-        !finiteField(m.mag[i], kMag[i], why))
+        !finiteField(m.mag[i], kMag[i], why) || !withinField(m.accel[i], kMaxAccel, kAccel[i], "m/s^2", why) ||
+        !withinField(m.gyro[i], kMaxGyro, kGyro[i], "rad/s", why) || !withinField(m.mag[i], kMaxMag, kMag[i], "gauss", why))
       return std::nullopt;
   core::ImuInput in;
   in.utime = m.utime;

@@ -10,6 +10,7 @@
 #include "lcmloc/common/transport.hpp"
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/heartbeat_t.hpp"
+#include "lcmloc/imu_t.hpp"
 #include "lcmloc/pose_t.hpp"
 
 using namespace lcmloc;
@@ -240,6 +241,35 @@ TEST(Convert, RulerDetectionsOnlyAndValidated) {
   q.quality = 1.5;
   EXPECT_FALSE(common::toCore(q, "MAGRULER", &why));
   EXPECT_NE(why.find("quality"), std::string::npos);
+}
+
+TEST(Convert, ImuSamplesBeyondAnySensorsRangeAreRefused) {
+  // A finite but absurd sample (a corrupt message) used to reach the filters: accel 1e200 made
+  // tvekf's state infinite, and the next switch or set_pose stopped the daemon.
+  lcmloc::imu_t m{};
+  m.utime = 1000;
+  m.accel[2] = 9.81;
+  m.gyro[2] = 0.1;
+  m.mag[0] = 0.2;
+  std::string why;
+  ASSERT_TRUE(common::toCore(m, "IMU", &why)) << why;
+  auto strong = m;  // a hard hit and a fast spin are still samples
+  strong.accel[0] = -150.0;
+  strong.gyro[2] = 30.0;
+  EXPECT_TRUE(common::toCore(strong, "IMU", &why)) << why;
+  auto a = m;
+  a.accel[0] = 1e200;
+  EXPECT_FALSE(common::toCore(a, "IMU", &why));
+  EXPECT_NE(why.find("accel[0]"), std::string::npos) << why;
+  EXPECT_NE(why.find("out of range"), std::string::npos) << why;
+  auto g = m;
+  g.gyro[1] = -500.0;
+  EXPECT_FALSE(common::toCore(g, "IMU", &why));
+  EXPECT_NE(why.find("gyro[1]"), std::string::npos) << why;
+  auto b = m;
+  b.mag[2] = 1e6;
+  EXPECT_FALSE(common::toCore(b, "IMU", &why));
+  EXPECT_NE(why.find("mag[2]"), std::string::npos) << why;
 }
 
 TEST(Convert, RoundTrips) {

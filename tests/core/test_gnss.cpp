@@ -474,3 +474,63 @@ TEST(GnssFilters, InvalidConfigIsRefused) {
     EXPECT_NE(std::string(e.what()).find("gnss.gps_std"), std::string::npos);
   }
 }
+
+TEST(GnssEngine, ABrokenFilterIsRepairedBySwitchAndSetPoseNotFatal) {
+  // An absurd IMU sample handed to the engine directly (the daemon refuses it) makes the GNSS
+  // filters' state infinite. Switching away from such a filter, or setting its pose, threw out of
+  // FusionEngine::push and stopped the daemon; now the new filter (or the filter to be set) starts
+  // from its configured initial state, and says so.
+  EngineConfig ec;
+  ec.filter = gnssConfig("tvekf");
+  ec.shadow = {"ukf_gps"};
+  ec.reorder_window_us = 0;
+  std::vector<std::pair<std::string, std::string>> events;
+  EngineOutputs out;
+  out.on_event = [&](const std::string& e, const std::string& d, int64_t) { events.emplace_back(e, d); };
+  FusionEngine engine(ec, {}, out);
+  int64_t t = 1'000'000, seq = 0;
+  for (int k = 0; k < 10; ++k, t += 10'000) {
+    engine.push({"ODOMETRY", seq++, t, odo(t, 0.1)});
+    engine.push({"IMU", seq++, t, imu(t, k == 1 ? 1e200 : 0.0)});
+  }
+  ASSERT_FALSE(engine.activeState().x.allFinite() && engine.activeState().P.allFinite())
+      << "the sample no longer breaks the filter: this test needs another way to break it";
+  FilterConfig to = gnssConfig("ukf_gps");
+  ASSERT_NO_THROW({
+    engine.push({"FUSION_CONTROL", seq++, t, ControlCommand(SwitchFilter{to})});
+    engine.flush();
+  });
+  ASSERT_FALSE(events.empty());
+  EXPECT_EQ(events.back().first, "ack");
+  EXPECT_NE(events.back().second.find("started from its configured initial state"), std::string::npos)
+      << events.back().second;
+  EXPECT_EQ(engine.activeFilter(), "ukf_gps");
+  EXPECT_TRUE(engine.activeState().x.allFinite() && engine.activeState().P.allFinite());
+
+  // set_pose on a broken filter: tvekf active again, broken again
+  ASSERT_NO_THROW({
+    engine.push({"FUSION_CONTROL", seq++, t, ControlCommand(SwitchFilter{gnssConfig("tvekf")})});
+    engine.flush();
+  });
+  for (int k = 0; k < 10; ++k, t += 10'000) {
+    engine.push({"ODOMETRY", seq++, t, odo(t, 0.1)});
+    engine.push({"IMU", seq++, t, imu(t, k == 1 ? 1e200 : 0.0)});
+  }
+  ASSERT_FALSE(engine.activeState().x.allFinite() && engine.activeState().P.allFinite());
+  events.clear();
+  ASSERT_NO_THROW({
+    engine.push({"FUSION_CONTROL", seq++, t, ControlCommand(SetPose{Pose(5.0, 6.0, 0.3), Vec3(1.0, 1.0, 0.1)})});
+    engine.flush();
+  });
+  const FilterState s = engine.activeState();
+  ASSERT_TRUE(s.x.allFinite() && s.P.allFinite());
+  EXPECT_NEAR(s.x[0], 5.0, 1e-9);
+  EXPECT_NEAR(s.x[1], 6.0, 1e-9);
+  EXPECT_NEAR(s.x[2], 0.3, 1e-9);
+  // (tvekf's broken entries were all in the pose rows the fix replaces; the shadow ukf_gps had to
+  // start again)
+  bool restarted = false;
+  for (const auto& [e, d] : events) restarted |= e == "restarted" && d.find("ukf_gps: ") == 0;
+  EXPECT_TRUE(restarted);
+  EXPECT_EQ(events.back().first, "ack");
+}

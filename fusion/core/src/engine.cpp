@@ -282,26 +282,48 @@ struct FusionEngine::Impl {
     }
     FilterState from = active->state();
     from.utime = std::max(from.utime, utime);
-    next->initialize(from);
+    std::string note;
+    try {
+      next->initialize(from);
+    } catch (const std::exception& e) {  // a state that cannot be carried over (not finite)
+      startFresh(*next, c.config, from.utime);
+      note = std::string(" (") + e.what() + ": started from its configured initial state)";
+    }
     const std::string old = active->name();
     active = std::move(next);
     active_cfg = c.config;
-    event("ack", "switched " + old + " -> " + active->name(), utime);
+    event("ack", "switched " + old + " -> " + active->name() + note, utime);
+  }
+
+  /// The configuration a running filter was made from.
+  FilterConfig configOf(const Filter& f, bool is_active) const {
+    if (is_active) return active_cfg;
+    FilterConfig sc = cfg.filter;
+    sc.type = f.name();
+    return sc;
+  }
+  /// Starts f again from its configured initial state at utime.
+  void startFresh(Filter& f, const FilterConfig& fc, int64_t utime) {
+    auto n = makeFilter(fc, map);
+    FilterState s = n->state();
+    s.utime = utime;
+    f.initialize(s);
+  }
+  /// Applies a pose fix; a filter whose other states cannot be carried over (not finite) starts
+  /// from its configured initial state first, so a fix or set_pose also repairs a broken filter.
+  bool applyFixTo(Filter& f, bool is_active, const PoseFix& fix) {
+    try {
+      return f.applyFix(fix);
+    } catch (const std::exception& e) {
+      startFresh(f, configOf(f, is_active), fix.utime);
+      event("restarted", f.name() + ": " + e.what() + ": started from its configured initial state, then " +
+                             fix.source + " applied", fix.utime);
+      return f.applyFix(fix);
+    }
   }
 
   void control(int64_t utime, const ResetFilter&) {
-    auto fresh = [&](Filter& f, const FilterConfig& fc) {
-      auto n = makeFilter(fc, map);
-      FilterState s = n->state();
-      s.utime = utime;
-      f.initialize(s);
-    };
-    fresh(*active, active_cfg);
-    for (auto& s : shadows) {
-      FilterConfig sc = cfg.filter;
-      sc.type = s->name();
-      fresh(*s, sc);
-    }
+    forEachFilter([&](Filter& f, bool is_active) { startFresh(f, configOf(f, is_active), utime); });
     event("ack", "reset " + active->name(), utime);
   }
 
@@ -319,7 +341,7 @@ struct FusionEngine::Impl {
     fix.pose = c.pose;
     fix.cov = c.stddev.array().square().matrix().asDiagonal();
     fix.source = "set_pose";
-    forEachFilter([&](Filter& f, bool) { f.applyFix(fix); });
+    forEachFilter([&](Filter& f, bool is_active) { applyFixTo(f, is_active, fix); });
     event("ack", "set_pose", utime);
   }
 };
@@ -374,7 +396,7 @@ void FusionEngine::Impl::landmarkFix(const EngineInput& in, const BearingsInput&
   d.reason = "fix";
   forEachFilter([&](Filter& f, bool is_active) {
     GateDecision fd = d;
-    fd.accepted = f.applyFix(fix);
+    fd.accepted = applyFixTo(f, is_active, fix);
     if (!fd.accepted) fd.reason = "bad_input";
     if (is_active) ++(fd.accepted ? counters.accepted : counters.rejected);
     if (out.on_decision) out.on_decision(f.name(), is_active, fd);
