@@ -73,6 +73,7 @@ void parseInsFilter(KeyReader& filter, core::InsFilterConfig& c) {
   r.get("attitude_term", c.attitude_term);
   r.get("paper_exact_h", c.paper_exact_h);
   r.get("max_imu_gap", c.max_imu_gap, 1e-4, 1e3);
+  r.get("max_coast", c.max_coast, 0.0, 1e5);
   r.finish();
 }
 

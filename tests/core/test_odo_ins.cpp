@@ -440,3 +440,50 @@ TEST(OdoInsFilter, SetPoseWhileMovingTurnsTheVelocityWithTheHeading) {
   EXPECT_NEAR(std::hypot(after.x[4], after.x[5]), 10.0, 0.05);
   EXPECT_NEAR(wrapAngle(after.x[2] - M_PI / 2), 0.0, 0.01);
 }
+
+TEST(OdoInsFilter, ALongImuDropoutHoldsTheLastSampleForMaxCoastOnly) {
+  // Straight east at 10 m/s; the last IMU sample before a 15 s dropout reads a 0.2 rad/s yaw
+  // rate (a bump). Held for the whole dropout (ins.max_coast was read from no configuration
+  // and never applied), it kept turning the estimate; held for max_coast, then attitude and
+  // velocity held, the estimate stops turning.
+  auto run = [](double max_coast) {
+    FilterConfig c = insConfig(0.0);
+    c.ins.max_coast = max_coast;
+    auto f = makeFilter(c, {});
+    int64_t t = 1000000;
+    double v = 0.0;
+    auto step = [&](double a, bool imu, double yaw = 0.0) {
+      t += 10000;
+      OdometryInput o;
+      o.utime = t;
+      o.delta_s = (v + 0.5 * a * 0.01) * 0.01;
+      v += a * 0.01;
+      f->predict(o);
+      if (imu) {
+        ImuInput m = drivingImu(t, 0.0, v, a);
+        m.gyro.z() += yaw;
+        f->update(m);
+      }
+    };
+    for (int k = 0; k < 100; ++k) step(0.0, true);
+    for (int k = 0; k < 1000; ++k) step(1.0, true);  // to 10 m/s
+    for (int k = 0; k < 100; ++k) step(0.0, true);
+    step(0.0, true, 0.2);
+    std::vector<double> theta{f->state().x[2]};  // theta[s]: s seconds into the dropout
+    for (int s = 0; s < 15; ++s) {
+      for (int k = 0; k < 100; ++k) step(0.0, false);
+      theta.push_back(f->state().x[2]);
+    }
+    EXPECT_EQ(f->state().status, FilterStatus::DeadReckoning);
+    EXPECT_TRUE(f->state().x.allFinite());
+    return theta;
+  };
+  for (const double max_coast : {5.0, 2.0}) {
+    const std::vector<double> th = run(max_coast);
+    const int k = static_cast<int>(max_coast);
+    EXPECT_GT(th[k] - th[0], 0.1 * max_coast) << max_coast;  // turned while the sample was held
+    EXPECT_LT(std::abs(th[15] - th[k]), 0.1) << max_coast;  // and hardly after (0.054 rad measured)
+  }
+  const std::vector<double> held = run(1000.0);  // the sample held throughout
+  EXPECT_GT(std::abs(wrapAngle(held[15] - held[5])), 1.0);
+}

@@ -145,7 +145,7 @@ class OdoInsAdapter : public Filter {
     if (odo.utime - ins_utime_ > gapUs()) {
       if (status_ != FilterStatus::DeadReckoning) coast_started_ = ins_utime_;
       status_ = FilterStatus::DeadReckoning;
-      advanceTo(odo.utime, last_gyro_, last_accel_);
+      advanceTo(odo.utime, last_gyro_, last_accel_, coast_started_ + maxCoastUs());
     }
   }
 
@@ -183,7 +183,7 @@ class OdoInsAdapter : public Filter {
     }
     const bool gap = m.utime - last_imu_utime_ > gapUs();
     const int64_t gap_from = status_ == FilterStatus::DeadReckoning ? coast_started_ : last_imu_utime_;
-    if (m.utime > ins_utime_) advanceTo(m.utime, w, f);
+    if (m.utime > ins_utime_) advanceTo(m.utime, w, f, gap ? gap_from + maxCoastUs() : INT64_MAX);
     last_imu_utime_ = m.utime;
     last_gyro_ = w;
     last_accel_ = f;
@@ -219,6 +219,7 @@ class OdoInsAdapter : public Filter {
               c.odo_scale >= 0 && c.odo_markov >= 0 && c.odo_white >= 0,
           "ins sensor grade values must be >= 0");
     check(c.max_imu_gap > 0, "ins.max_imu_gap must be > 0");
+    check(c.max_coast >= 0, "ins.max_coast must be >= 0");
     ins::OdoInsFilter::Options o;
     o.grade.gyro_markov = c.gyro_markov * ins::kDegPerHour;
     o.grade.gyro_tau = c.gyro_tau;
@@ -242,6 +243,7 @@ class OdoInsAdapter : public Filter {
 
   double theta() const { return wrapAngle(M_PI / 2 - ins::headingOf(kf_.state().cbn())); }
   int64_t gapUs() const { return static_cast<int64_t>(std::llround(cfg_.ins.max_imu_gap * 1e6)); }
+  int64_t maxCoastUs() const { return static_cast<int64_t>(std::llround(cfg_.ins.max_coast * 1e6)); }
 
   /// The velocity from a state without v_east / v_north (a hand-over from dead_reckoning, a UKF,
   /// tvekf): its forward "speed" along theta where it has one, else unknown (0 with a standard
@@ -303,14 +305,21 @@ class OdoInsAdapter : public Filter {
 
   /// Propagates the INS to t with one sample (held over the interval, in steps of at most
   /// kMaxStepUs when bridging a gap) and applies the queued odometer increments on the way.
-  void advanceTo(int64_t t, const ins::Vec3& w, const ins::Vec3& f) {
+  /// Bridging a dropout, the sample is held until hold_until (ins.max_coast after the dropout
+  /// began); beyond, the INS holds its attitude and velocity (the sample an ideal IMU measures
+  /// on a vehicle neither turning nor accelerating), so that a yaw rate held from the last sample
+  /// does not turn the estimate in circles, nor a held acceleration run it away, over a long gap.
+  void advanceTo(int64_t t, const ins::Vec3& w, const ins::Vec3& f, int64_t hold_until = INT64_MAX) {
     while (ins_utime_ < t) {
       int64_t next = std::min(t, ins_utime_ + kMaxStepUs);
       if (!pending_.empty() && pending_.front().utime > ins_utime_ && pending_.front().utime < next)
         next = pending_.front().utime;
+      if (ins_utime_ < hold_until && hold_until < next) next = hold_until;
+      ins::Vec3 wi = w, fi = f;
+      if (ins_utime_ >= hold_until) ins::idealImu(kf_.state(), ins::Vec3::Zero(), ins::Vec3::Zero(), &wi, &fi);
       const double dt = (next - ins_utime_) * 1e-6;
       const ins::Vec3 v0 = kf_.state().v;
-      if (kf_.propagate(w, f, dt)) {
+      if (kf_.propagate(wi, fi, dt)) {
         v_sum_ += 0.5 * (v0 + kf_.state().v) * dt;
         t_sum_ += dt;
       }

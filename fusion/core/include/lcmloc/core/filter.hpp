@@ -77,7 +77,7 @@ struct InsFilterConfig {
   bool attitude_term = true;       ///< heading coupling of the odometer velocity in H
   bool paper_exact_h = false;      ///< the paper's printed H (no dKr column, no heading term)
   double max_imu_gap = 0.1;        ///< IMU interval beyond this is a dropout: coast, report [s]
-  double max_coast = 5.0;          ///< longest dropout bridged by holding the last sample [s]
+  double max_coast = 5.0;          ///< dropout bridged this long by holding the last sample; beyond: attitude and velocity held [s]
 };
 
 /// Lock-out inflation stops at this heading 1-sigma [rad]: the UKFs' sigma points stay within
