@@ -14,7 +14,7 @@ int main(int argc, char** argv) {
   int64_t count = 1000;
   int size = 100;
   std::string channel = "BURST";
-  app.add_option("--count,-n", count, "messages to publish")->check(CLI::PositiveNumber);
+  app.add_option("--count,-n", count, "messages to publish")->check(lcmloc::common::positive());
   app.add_option("--size,-s", size, "encoded message size [bytes] (at least 45)")->check(CLI::Range(45, 60000));
   app.add_option("--channel,-c", channel, "channel");
   return common::runProcess(app, argc, argv, opts, "lcmloc-burst", [&] {

@@ -95,11 +95,17 @@ int main(int argc, char** argv) {
                  "log file name pattern: strftime codes (%Y%m%d-%H%M%S) and {index} (overrides logger.output)");
   app.add_option("--channel", channels, "channel regex to record (repeatable; overrides logger.channels)");
   app.add_option("--max-file-mb", max_mb, "start a new file before one exceeds this many MB (overrides logger.max_file_bytes)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Validator(
+          [](std::string& s) -> std::string {
+            double v = 0.0;
+            if (!CLI::detail::lexical_cast(s, v)) return s + " is not a number";
+            return v == 0.0 || (v >= 1e-3 && v <= 1e9) ? "" : s + " is not 0 (off) or within [0.001, 1e9] MB";
+          },
+          "0 or MB in [0.001, 1e9]"));
   app.add_option("--max-file-seconds", max_seconds, "start a new file after this many seconds (overrides logger.max_file_seconds)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0.0, 1e9));
   app.add_option("--flush-period", flush_period, "fsync period in seconds (overrides logger.flush_period)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(0.001, 3600.0));
   bool overwrite = false;
   app.add_flag("--overwrite", overwrite,
                "replace an existing log file (default: keep it and write NAME-001.lcmlog, the first free name)");

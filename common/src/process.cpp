@@ -4,7 +4,11 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
+#include <cmath>
 #include <csignal>
+#include <cstdlib>
+#include <new>
 #include <thread>
 
 #include <spdlog/sinks/stdout_color_sinks.h>
@@ -21,6 +25,41 @@ void addLogLevelOption(CLI::App& app, std::string& level) {
   app.add_option("--log-level", level, "trace, debug, info, warn, error, critical, off")
       ->capture_default_str()
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
+}
+
+/// CLI11 checks ranges, but "nan" passes every range check (each comparison with it is false)
+/// and "inf" an open one, and an integer beyond its type is clamped: refuses both, for every
+/// numeric option of app and its subcommands, naming the option.
+void checkNumbers(const CLI::App& app) {
+  for (const CLI::Option* o : app.get_options()) {
+    const std::string type = o->get_type_name();
+    const bool is_float = type.rfind("FLOAT", 0) == 0, is_int = type.rfind("INT", 0) == 0 || type.rfind("UINT", 0) == 0;
+    if (!is_float && !is_int) continue;
+    for (const std::string& result : o->results()) {
+      std::size_t start = 0;
+      while (start <= result.size()) {  // "a,b" for options with a delimiter
+        const std::size_t comma = std::min(result.find(',', start), result.size());
+        const std::string token = result.substr(start, comma - start);
+        start = comma + 1;
+        if (token.empty()) continue;
+        errno = 0;
+        char* end = nullptr;
+        if (is_float) {
+          const double v = std::strtod(token.c_str(), &end);
+          if (end != token.c_str() && !std::isfinite(v))
+            throw CLI::ValidationError(o->get_name(), token + " is not a finite number");
+        } else {
+          if (token[0] == '-')
+            (void)std::strtoll(token.c_str(), &end, 10);
+          else
+            (void)std::strtoull(token.c_str(), &end, 10);
+          if (end != token.c_str() && errno == ERANGE)
+            throw CLI::ValidationError(o->get_name(), token + " is out of range for an integer");
+        }
+      }
+    }
+  }
+  for (const CLI::App* sub : app.get_subcommands()) checkNumbers(*sub);
 }
 
 std::atomic<bool> g_stop{false};
@@ -57,6 +96,20 @@ CLI::Option* addOfflineOptions(CLI::App& app, CommonOptions& opts, const std::st
   return config;
 }
 
+namespace {
+CLI::Validator bound(const char* name, bool (*ok)(double), const char* what) {
+  return CLI::Validator(
+      [ok, what](std::string& s) -> std::string {
+        double v = 0.0;
+        if (!CLI::detail::lexical_cast(s, v)) return s + " is not a number";
+        return ok(v) ? std::string() : s + " is not " + what;
+      },
+      name);
+}
+}  // namespace
+CLI::Validator positive() { return bound("POSITIVE", [](double v) { return v > 0.0; }, "> 0"); }
+CLI::Validator nonNegative() { return bound("NONNEGATIVE", [](double v) { return v >= 0.0; }, ">= 0"); }
+
 void setupLogging(const std::string& process_name, const std::string& level) {
   auto logger = spdlog::stderr_color_mt(process_name);
   spdlog::set_default_logger(logger);
@@ -84,6 +137,7 @@ int runProcess(CLI::App& app, int argc, char** argv, const CommonOptions& opts,
                const std::string& process_name, const std::function<int()>& body) {
   try {
     app.parse(argc, argv);
+    checkNumbers(app);
   } catch (const CLI::ParseError& e) {
     // --help / --version exit 0; any other command-line error is a configuration error
     // (exit 2, as a bad config file), with CLI11's message.
@@ -96,6 +150,12 @@ int runProcess(CLI::App& app, int argc, char** argv, const CommonOptions& opts,
   } catch (const ConfigError& e) {
     spdlog::error("configuration error: {}", e.what());
     return kExitConfigError;
+  } catch (const CLI::Error& e) {  // an argument found bad after parsing (e.g. lcmloc-ctl's --param)
+    spdlog::error("{}", e.what());
+    return kExitConfigError;
+  } catch (const std::bad_alloc&) {
+    spdlog::error("out of memory: the run asks for more than this machine has (a very long duration, a huge input?)");
+    return kExitRuntimeError;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return kExitRuntimeError;
@@ -149,8 +209,9 @@ bool Pacer::waitUntil(int64_t sim_utime, const std::function<void()>& idle) {
     if (idle) idle();
     return !stopRequested();
   }
-  const auto due = wall0_ + duration_cast<steady_clock::duration>(
-                                duration<double, std::micro>((sim_utime - t0_) / factor_));
+  // (a very small factor: the wait saturates at about 30 years instead of overflowing the clock)
+  const double wait_us = std::min(static_cast<double>(sim_utime - t0_) / factor_, 1e15);
+  const auto due = wall0_ + duration_cast<steady_clock::duration>(duration<double, std::micro>(wait_us));
   while (!stopRequested()) {
     if (idle) idle();
     const auto now = steady_clock::now();

@@ -138,6 +138,13 @@ TEST_F(GnssProcess, HelpAndBadConfig) {
     EXPECT_EQ(b.wait(5s).value_or(-1), 2) << b.output();
     EXPECT_NE(b.output().find("gps.error_model"), std::string::npos) << b.output();
   }
+  // An IMU rate beyond the configuration's range (2 MHz: a sample period of 0 us) divided by
+  // zero on the first ground-truth sample (SIGFPE); NaN was taken as "not given".
+  for (const char* rate : {"2000001", "nan"}) {
+    Child b(LCMLOC_IMU, {"--rate", rate, "--lcm-url", url_}, path("rate.log"));
+    EXPECT_EQ(b.wait(5s).value_or(-1), 2) << b.output();
+    EXPECT_NE(b.output().find("--rate"), std::string::npos) << b.output();
+  }
 }
 
 TEST_F(GnssProcess, SimulatedImuAndGpsDriversFeedTheFusion) {

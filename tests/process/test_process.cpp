@@ -428,6 +428,30 @@ TEST_F(ProcessTest, EveryExecutableHasHelp) {
   }
 }
 
+TEST_F(ProcessTest, NumericFlagsRefuseNaNInfOverflowAndValuesOutOfRange) {
+  // NaN passes CLI11's range checks (every comparison with it is false) and was then taken as
+  // "not given" or used; an integer beyond its type was clamped; a tiny --max-file-mb meant "no
+  // size limit". Each is now a bad command line (exit 2) naming the option, in a short message.
+  const std::vector<std::tuple<std::string, std::vector<std::string>, std::string>> cases{
+      {LCMLOC_SIM, {"--realtime-factor", "nan"}, "--realtime-factor: nan is not a finite number"},
+      {LCMLOC_SIM, {"--realtime-factor", "2e6"}, "--realtime-factor"},
+      {LCMLOC_FUSION, {"--checkpoint-period", "inf"}, "--checkpoint-period: inf is not a finite number"},
+      {LCMLOC_FUSION, {"--checkpoint-period", "0"}, "--checkpoint-period: 0 is not > 0"},
+      {LCMLOC_FUSION, {"--init-from-bus", "-1"}, "--init-from-bus: -1 is not >= 0"},
+      {LCMLOC_LOGGER, {"--max-file-mb", "1e-7"}, "--max-file-mb"},
+      {LCMLOC_LOGGER, {"--flush-period", "nan"}, "--flush-period: nan is not a finite number"},
+      {LCMLOC_LOGGER, {"--flush-period", "-inf"}, "--flush-period"},
+  };
+  for (const auto& [exe, args, expected] : cases) {
+    std::vector<std::string> argv = args;
+    argv.insert(argv.end(), {"--lcm-url", url_});
+    Child c(exe, argv, path("flags.out"));
+    ASSERT_EQ(c.wait(10s), std::optional<int>(2)) << exe << " " << args[0] << " " << args[1] << "\n" << c.output();
+    EXPECT_NE(c.output().find(expected), std::string::npos) << c.output();
+    EXPECT_LT(c.output().size(), 300u) << c.output();  // not the 300 digits of a double's range
+  }
+}
+
 TEST_F(ProcessTest, LauncherRefusesTwoProcessesOfTheSameName) {
   // Unnamed processes are named after their executable: two magnetic rulers need names.
   const std::string system = writeFile("system.yaml", std::string("processes:\n") +

@@ -451,8 +451,13 @@ TEST_F(ReplayProcessTest, HelpAndCtlWithoutDaemonOrWithBadArguments) {
   EXPECT_EQ(none.wait(10s).value_or(-1), 1) << none.output();
   EXPECT_NE(none.output().find("is lcmloc-fusion running"), std::string::npos) << none.output();
   Child bad(LCMLOC_CTL, {"--lcm-url", url_, "switch", "ukf", "--param", "novalue"}, path("bad.out"));
-  EXPECT_NE(bad.wait(10s).value_or(0), 0) << bad.output();
+  EXPECT_EQ(bad.wait(10s).value_or(0), 2) << bad.output();  // bad arguments (it was 1)
   EXPECT_NE(bad.output().find("KEY=VALUE"), std::string::npos) << bad.output();
+  for (const char* utime : {"99999999999999999999", "-5"}) {  // was clamped / taken as not given
+    Child u(LCMLOC_CTL, {"--lcm-url", url_, "--utime", utime, "reset"}, path("utime.out"));
+    EXPECT_EQ(u.wait(10s).value_or(0), 2) << u.output();
+    EXPECT_NE(u.output().find("--utime"), std::string::npos) << u.output();
+  }
   Child noout(LCMLOC_REPLAY, {"in.lcmlog", "--config", LCMLOC_PAPER_YAML}, path("noout.out"));
   EXPECT_EQ(noout.wait(10s).value_or(-1), 2) << noout.output();
 }

@@ -72,10 +72,11 @@ int main(int argc, char** argv) {
   double timeout = 5.0;
   int64_t utime = -1;
   app.add_option("--timeout", timeout, "[s] to wait for the daemon (its time, then its answer)")
-      ->check(CLI::PositiveNumber);
+      ->check(lcmloc::common::positive());
   app.add_option("--utime", utime,
                  "message time of the command [us] (default: one reorder window after the newest ODOMETRY, IMU, "
-                 "POSE or FUSION_STATUS on the bus)");
+                 "POSE or FUSION_STATUS on the bus)")
+      ->check(lcmloc::common::nonNegative());
   app.require_subcommand(1);
 
   std::string filter, params_yaml;

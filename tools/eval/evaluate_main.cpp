@@ -69,16 +69,16 @@ int main(int argc, char** argv) {
   app.add_option("--tum-dir", tum_dir, "write estimate.tum (estimate_<CHANNEL>.tum for POSE_*) and truth.tum here");
   app.add_flag("--export-only", export_only, "only export TUM files (--tum-dir): no truth needed, no scoring");
   app.add_option("--segment-lengths", eo.segment_lengths, "drift segment lengths [m]")
-      ->delimiter(',')->capture_default_str()->check(CLI::PositiveNumber);
+      ->delimiter(',')->capture_default_str()->check(lcmloc::common::positive());
   app.add_option("--max-truth-gap", eo.max_truth_gap_s,
                  "estimates between truth samples further apart than this are not scored [s] (0 = no limit)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()->check(lcmloc::common::nonNegative());
   app.add_option("--confidence", eo.confidence, "probability of the two-sided chi-square intervals")
       ->capture_default_str()->check(CLI::Range(0.5, 0.9999));
   app.add_option("--ellipse-every", po.ellipse_every, "covariance ellipse at every k-th scored estimate (0 = about 40)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()->check(lcmloc::common::nonNegative());
   app.add_option("--ellipse-sigma", po.ellipse_sigma, "ellipse size in standard deviations")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()->check(lcmloc::common::positive());
   app.add_flag("--no-plots", no_plots, "do not draw figures");
   common::addOfflineOptions(app, opts,
                             "system config (YAML): its channels.pose, channels.ground_truth, channels.gate and "

@@ -21,8 +21,8 @@ int main(int argc, char** argv) {
   app.add_option("--out", out, "output directory")->capture_default_str();
   app.add_option("--filters", types, "filters to run")->delimiter(',')->capture_default_str();
   app.add_option("--seed", seed, "override scenario.seed");
-  app.add_option("--converged", eo.converged_m, "convergence threshold [m]")->capture_default_str();
-  app.add_option("--hold", eo.hold_s, "time the error must stay below it [s]")->capture_default_str();
+  app.add_option("--converged", eo.converged_m, "convergence threshold [m]")->capture_default_str()->check(lcmloc::common::positive());
+  app.add_option("--hold", eo.hold_s, "time the error must stay below it [s]")->capture_default_str()->check(lcmloc::common::nonNegative());
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-gps-experiment", [&] {
     auto cfg = common::loadSystemConfig(opts.config);

@@ -26,11 +26,12 @@ int main(int argc, char** argv) {
   app.add_option("--out", eo.out_dir, "output directory")->capture_default_str();
   app.add_option("--filters", eo.filters, "filters to run")->delimiter(',')->capture_default_str();
   app.add_option("--holdout-every", io.holdout_every, "hold every k-th fix out")->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(lcmloc::common::positive());
   app.add_option("--holdout-phase", io.holdout_phase, "fix i is held out when i % k == phase")->capture_default_str();
   app.add_option("--max-rows", io.max_rows, "a slice: the first N odometry rows and the GPS rows of their time span (0 = all)")->capture_default_str();
   app.add_option("--gps-std", io.gps_std, "position_std written into the fixes [m] (0 = gnss.gps_std)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(lcmloc::common::nonNegative());
   app.add_flag("--no-gps-init", no_init, "start from fusion.filter.initial_pose instead of the first fixes");
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-vp-experiment", [&]() -> int {

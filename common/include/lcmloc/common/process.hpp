@@ -48,6 +48,12 @@ void requestStop();
 /// Signal number that requested the stop (0 if none).
 int stopSignal();
 
+/// Validators for numeric options with a short message (CLI11's PositiveNumber and
+/// NonNegativeNumber print the whole range of a double, 300 digits). NaN and Inf are refused
+/// for every floating-point option by runProcess.
+CLI::Validator positive();     ///< > 0
+CLI::Validator nonNegative();  ///< >= 0
+
 /// Parses the command line and runs body(), turning exceptions into one clear error line and
 /// an exit code (ConfigError -> 2, anything else -> 1). A bad command line exits 2 with CLI11's
 /// message (--help: 0). Returns the process exit code.
