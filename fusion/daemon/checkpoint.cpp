@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "lcmloc/common/convert.hpp"
+#include "lcmloc/core/filter.hpp"
 #include "lcmloc/pose_t.hpp"
 
 namespace lcmloc::fusion {
@@ -54,8 +55,8 @@ std::optional<Checkpoint> readCheckpoint(const std::string& path) {
   Checkpoint c;
   c.state = common::toCore(m);
   c.filter = m.filter;
-  if (!c.state.x.allFinite() || !c.state.P.allFinite())
-    throw std::runtime_error("checkpoint '" + path + "' holds a non-finite state");
+  if (const std::string why = core::unusableState(c.state); !why.empty())
+    throw std::runtime_error("checkpoint '" + path + "' holds a state no filter can start from: " + why);
   return c;
 }
 

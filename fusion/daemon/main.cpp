@@ -1,5 +1,6 @@
 // lcmloc-fusion: the fusion daemon (see daemon.hpp).
 #include <chrono>
+#include <memory>
 #include <optional>
 
 #include <spdlog/spdlog.h>
@@ -15,33 +16,46 @@ using namespace lcmloc;
 namespace {
 
 /// Process-level hand-over: listens for the running daemon's POSE until it reports "stopped" on
-/// the status channel or the timeout passes; returns its last POSE.
+/// the status channel or the timeout passes; returns its last POSE. (The bus cannot drop a
+/// subscription: the handlers keep their state on the heap and ignore what comes afterwards.)
 std::optional<core::FilterState> lastPoseOnBus(common::Bus& bus, const common::SystemConfig& cfg,
                                                common::Heartbeat& hb, double timeout_s, std::string* filter) {
-  std::optional<core::FilterState> last;
-  bool waiting = true, stopped = false;
-  bus.subscribe<lcmloc::pose_t>(cfg.channels.pose, [&](const std::string&, const lcmloc::pose_t& m, int64_t) {
-    if (!waiting || m.dim < 3 || static_cast<int>(m.state.size()) < 3) return;
-    last = common::toCore(m);
-    *filter = m.filter;
+  struct Watch {
+    std::optional<core::FilterState> last;
+    std::string filter;
+    bool waiting = true, stopped = false, warned = false;
+  };
+  auto w = std::make_shared<Watch>();
+  const std::string pose_channel = cfg.channels.pose;
+  bus.subscribe<lcmloc::pose_t>(pose_channel, [w, pose_channel](const std::string&, const lcmloc::pose_t& m, int64_t) {
+    if (!w->waiting || m.dim < 3 || static_cast<int>(m.state.size()) < 3) return;
+    core::FilterState s = common::toCore(m);
+    if (const std::string why = core::unusableState(s); !why.empty()) {
+      if (!w->warned) spdlog::warn("a {} on the bus no filter can start from, not taken: {}", pose_channel, why);
+      w->warned = true;
+      return;
+    }
+    w->last = std::move(s);
+    w->filter = m.filter;
   });
   bus.subscribe<lcmloc::fusion_status_t>(
-      cfg.channels.status, [&](const std::string&, const lcmloc::fusion_status_t& m, int64_t) {
-        if (waiting && m.event == "stopped") stopped = true;
+      cfg.channels.status, [w](const std::string&, const lcmloc::fusion_status_t& m, int64_t) {
+        if (w->waiting && m.event == "stopped") w->stopped = true;
       });
   spdlog::info("waiting up to {:.1f} s for the running daemon's last {} (until it reports stopped on {})", timeout_s,
                cfg.channels.pose, cfg.channels.status);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  while (!common::stopRequested() && !stopped && std::chrono::steady_clock::now() < deadline) {
+  while (!common::stopRequested() && !w->stopped && std::chrono::steady_clock::now() < deadline) {
     hb.tick();
     bus.handle(50);
   }
   while (bus.handle(0) > 0) {}
-  waiting = false;
-  if (last && !stopped)
+  w->waiting = false;
+  if (w->last && !w->stopped)
     spdlog::warn("the daemon that published {} did not report stopped within {:.1f} s: it may still be running",
                  cfg.channels.pose, timeout_s);
-  return last;
+  *filter = w->filter;
+  return w->last;
 }
 
 }  // namespace

@@ -331,6 +331,30 @@ TEST_F(ReplayTest, CheckpointRoundTripsExactlyAndRejectsGarbage) {
   EXPECT_FALSE(fusion::readCheckpoint(path("absent")).has_value());
   std::ofstream(path("garbage")) << "not a checkpoint";
   EXPECT_THROW(fusion::readCheckpoint(path("garbage")), std::runtime_error);
+  // A covariance no filter can start from (zero, a negative variance, not positive
+  // semi-definite): refused with the reason. Taken as it was, a zero covariance froze the filter
+  // at the checkpoint's pose (every marker refused, the frozen state written back).
+  auto refuses = [&](const Eigen::MatrixXd& P, const std::string& why) {
+    core::FilterState bad = s;
+    bad.P = P;
+    fusion::writeCheckpoint(path("bad.ck"), bad, "ukf_calib");
+    try {
+      fusion::readCheckpoint(path("bad.ck"));
+      ADD_FAILURE() << "accepted: " << why;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+  };
+  refuses(Eigen::MatrixXd::Zero(5, 5), "the variance of x is not > 0");
+  Eigen::MatrixXd neg = s.P;
+  neg(2, 2) = -1.0;
+  refuses(neg, "the variance of theta is not > 0");
+  Eigen::MatrixXd indefinite = s.P;
+  indefinite(0, 1) = indefinite(1, 0) = 0.01;  // correlation 10
+  refuses(indefinite, "not positive semi-definite");
+  Eigen::MatrixXd asym = s.P;
+  asym(0, 1) = 0.0;
+  refuses(asym, "not symmetric");
 
   EXPECT_EQ(fusion::checkpointUnwritable(path("new.ck")), "");
   EXPECT_FALSE(fs::exists(path("new.ck.tmp")));  // the probe is removed again

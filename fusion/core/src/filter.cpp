@@ -5,6 +5,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include <Eigen/Eigenvalues>
+
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/chi2.hpp"
 #include "lcmloc/core/odometry_batch.hpp"
@@ -109,13 +111,23 @@ void initialState(const FilterConfig& c, const std::vector<std::string>& names,
 /// Hot swap: starts from the filter's initial values and copies every state of `from` that has
 /// the same name (x, y, theta always: a source without names is read as x, y, theta, ...),
 /// with the covariance among copied states; cross-covariances to other states are zero.
+std::string unusableState(const FilterState& s) {
+  const auto n = s.x.size();
+  if (n < 3 || s.P.rows() != n || s.P.cols() != n) return "state must have >= 3 entries and a matching P";
+  if (!s.x.allFinite() || !s.P.allFinite()) return "state or covariance not finite";
+  for (int i = 0; i < 3; ++i)
+    if (!(s.P(i, i) > 0.0)) return "the variance of " + std::string(i == 0 ? "x" : i == 1 ? "y" : "theta") + " is not > 0";
+  const double scale = s.P.diagonal().cwiseAbs().maxCoeff();
+  if (!(s.P - s.P.transpose()).isZero(1e-9 * scale)) return "covariance not symmetric";
+  const double min_eig = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(s.P, Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
+  if (min_eig < -1e-9 * scale) return "covariance not positive semi-definite (an eigenvalue is " + std::to_string(min_eig) + ")";
+  return "";
+}
+
 void detail::copyMatching(const FilterState& from, const std::vector<std::string>& names,
                   Eigen::VectorXd& x, Eigen::MatrixXd& P) {
   const auto n_from = from.x.size();
-  if (n_from < 3 || from.P.rows() != n_from || from.P.cols() != n_from)
-    throw std::invalid_argument("initialize: state must have >= 3 entries and a matching P");
-  if (!from.x.allFinite() || !from.P.allFinite())
-    throw std::invalid_argument("initialize: state or covariance not finite");
+  if (const std::string why = unusableState(from); !why.empty()) throw std::invalid_argument("initialize: " + why);
   const bool named = static_cast<Eigen::Index>(from.names.size()) == n_from;
   std::vector<int> src(names.size(), -1);
   for (size_t i = 0; i < names.size(); ++i) {
@@ -402,7 +414,7 @@ std::string filterTypeList() {
 }
 
 bool Filter::applyFix(const PoseFix& fix) {
-  if (!fix.pose.allFinite() || !fix.cov.allFinite()) return false;
+  if (!detail::usableFix(fix)) return false;
   FilterState s = state();
   s.utime = std::max(s.utime, fix.utime);
   s.x.head<3>() = fix.pose;

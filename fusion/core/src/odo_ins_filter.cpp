@@ -89,9 +89,8 @@ class OdoInsAdapter : public Filter {
   }
 
   void initialize(const FilterState& from) override {
-    if (from.x.size() < 3 || from.P.rows() != from.x.size() || from.P.cols() != from.x.size() ||
-        !from.x.allFinite() || !from.P.allFinite())
-      throw std::invalid_argument(name_ + ": malformed initial state");
+    if (const std::string why = unusableState(from); !why.empty())
+      throw std::invalid_argument(name_ + ": initialize: " + why);
     setPose(from.x.head<3>(), from.P.topLeftCorner<3, 3>(), from.utime);
     // The other states by name: the scale, and velocity and biases when the source is an odo_ins
     // filter (their variances and the covariances among them; cross terms to the rest zeroed).
@@ -124,7 +123,7 @@ class OdoInsAdapter : public Filter {
   }
 
   bool applyFix(const PoseFix& fix) override {
-    if (!fix.pose.allFinite() || !fix.cov.allFinite()) return false;
+    if (!detail::usableFix(fix)) return false;
     setPose(fix.pose, fix.cov, fix.utime);
     utime_ = std::max(utime_, fix.utime);
     return true;

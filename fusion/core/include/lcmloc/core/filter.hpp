@@ -202,6 +202,12 @@ class Filter {
 /// type or an invalid configuration (message names the parameter).
 std::unique_ptr<Filter> makeFilter(const FilterConfig& cfg, const MarkerMap& map);
 
+/// Why a state cannot start a filter ("" when it can): fewer than 3 entries or a P of another
+/// size, a value that is not finite, a P that is not symmetric or not positive semi-definite,
+/// or a pose variance (x, y, theta) that is not > 0. Hand-overs, checkpoints and fixes are
+/// checked with it: a zero or negative covariance froze the filter (every measurement refused).
+std::string unusableState(const FilterState& s);
+
 /// Names accepted by makeFilter.
 std::vector<std::string> filterTypes();
 /// filterTypes() as "a, b, c" (help texts, error messages).
