@@ -126,6 +126,9 @@ void installSignalHandlers() {
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
   std::signal(SIGPIPE, SIG_IGN);
+  // A file-size limit (ulimit -f) makes write(2) fail with EFBIG, which every writer reports,
+  // instead of killing the process in the middle of an event.
+  std::signal(SIGXFSZ, SIG_IGN);
 }
 
 bool stopRequested() { return g_stop.load(); }

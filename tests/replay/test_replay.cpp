@@ -299,6 +299,28 @@ TEST_F(ReplayTest, DamagedLogIsReplayedUpToTheDamageAndSaysWhere) {
   EXPECT_NE(missing.output().find("no such file"), std::string::npos) << missing.output();
 }
 
+TEST_F(ReplayTest, AnOutputThatCannotBeWrittenIsAnErrorNotASuccess) {
+  // A full disk: the replay said "write ... failed", then "written 3170" and exited 0.
+  Child full(LCMLOC_REPLAY, {log_, "-o", "/dev/full", "--config", LCMLOC_PAPER_YAML}, path("full.out"));
+  EXPECT_EQ(full.wait(30s).value_or(-1), 1) << full.output();
+  EXPECT_NE(full.output().find("could not be written (No space left on device)"), std::string::npos) << full.output();
+  EXPECT_EQ(full.output().find(", written "), std::string::npos) << full.output();  // no summary of success
+  // A file-size limit: SIGXFSZ killed it (exit 153) with a torn last event; now EFBIG is an
+  // error and the output holds whole events only.
+  const std::string out = path("limited.lcmlog");
+  Child limited("/usr/bin/prlimit", {"--fsize=2000", LCMLOC_REPLAY, log_, "--with-inputs", "-o", out, "--config",
+                                     LCMLOC_PAPER_YAML},
+                path("limited.out"));
+  EXPECT_EQ(limited.wait(30s).value_or(-1), 1) << limited.output();
+  EXPECT_NE(limited.output().find("could not be written (File too large)"), std::string::npos) << limited.output();
+  std::vector<eval::LogIssue> issues;
+  eval::LogScanner scanner(out, &issues);
+  while (scanner.next()) {}
+  EXPECT_FALSE(scanner.damaged()) << (issues.empty() ? "" : issues[0].what);
+  EXPECT_GT(scanner.eventsRead(), 0);
+  EXPECT_LE(fs::file_size(out), 2000u);
+}
+
 TEST_F(ReplayTest, OutputOverTheInputIsRefusedAndTheInputKept) {
   const std::string before = slurp(log_);
   EXPECT_THROW(run(log_, log_, cfg_), std::runtime_error);

@@ -96,6 +96,12 @@ int main(int argc, char** argv) {
                              cfg.fusion.filter.type,
                              cfg.fusion.shadow.empty() ? "none" : fmt::format("{}", fmt::join(cfg.fusion.shadow, ", ")),
                              output);
+    if (!r.write_error.empty()) {
+      spdlog::error("the output log {} could not be written ({}): the replay stopped after {} of the input's events; "
+                    "the output holds the events that could be written (lcmloc-log info {})",
+                    output, r.write_error, r.events_read, output);
+      return common::kExitRuntimeError;
+    }
     std::string per;
     for (const auto& [ch, n] : r.written_per_channel) per += fmt::format("{}{} {}", per.empty() ? "" : ", ", ch, n);
     std::cout << fmt::format(

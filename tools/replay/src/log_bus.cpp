@@ -38,8 +38,14 @@ LogBus::LogBus(const std::string& output) {
 LogBus::~LogBus() = default;
 
 void LogBus::close() {
-  if (writer_ && writer_->file->close(false) != 0) publishFailed("(output log)", "write to the output log");
+  if (writer_ && write_error_.empty())
+    if (const int err = writer_->file->close(false); err != 0) writeFailed(err);
   writer_.reset();
+}
+
+bool LogBus::writeFailed(int err) {
+  write_error_ = std::strerror(err);
+  return false;
 }
 
 std::map<std::string, int64_t> LogBus::writtenPerChannel() const {
@@ -49,6 +55,7 @@ std::map<std::string, int64_t> LogBus::writtenPerChannel() const {
 }
 
 bool LogBus::write(const std::string& channel, const void* data, std::size_t size, int64_t timestamp) {
+  if (!write_error_.empty()) return false;
   ++written_;
   // A handful of channels: a linear search beats a map lookup per event.
   auto it = per_channel_.begin();
@@ -58,8 +65,7 @@ bool LogBus::write(const std::string& channel, const void* data, std::size_t siz
   else
     ++it->second;
   if (!writer_) return true;
-  if (writer_->file->append(timestamp, channel, data, size) != 0)
-    return publishFailed(channel, "write to the output log");
+  if (const int err = writer_->file->append(timestamp, channel, data, size); err != 0) return writeFailed(err);
   return true;
 }
 

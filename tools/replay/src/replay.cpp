@@ -43,6 +43,7 @@ ReplayResult replayLog(const common::SystemConfig& cfg, const ReplayOptions& opt
       r.interrupted = true;
       break;
     }
+    if (!bus.writeError().empty()) break;  // the output cannot hold more
     const lcm::LogEvent* ev = scanner.next();
     for (; issues_reported < r.issues.size(); ++issues_reported) {
       const auto& is = r.issues[issues_reported];
@@ -81,6 +82,7 @@ ReplayResult replayLog(const common::SystemConfig& cfg, const ReplayOptions& opt
   r.rejected = daemon.rejected();
   r.gaps = daemon.gaps();
   r.written = bus.written();
+  r.write_error = bus.writeError();
   r.written_per_channel = bus.writtenPerChannel();
   r.final_filter = daemon.activeFilter();
   r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();

@@ -40,12 +40,16 @@ class LogBus : public common::MessageBus {
   bool subscribed(const std::string& channel);
 
   int64_t written() const { return written_; }
+  /// What failed writing the output log ("" while every write succeeded); nothing is written
+  /// after a failure.
+  const std::string& writeError() const { return write_error_; }
   std::map<std::string, int64_t> writtenPerChannel() const;
   /// Writes out what is buffered and closes the output.
   void close();
 
  private:
   bool write(const std::string& channel, const void* data, std::size_t size, int64_t timestamp);
+  bool writeFailed(int err);
   const std::vector<std::size_t>& handlersFor(const std::string& channel);
 
   struct Sub {
@@ -59,6 +63,7 @@ class LogBus : public common::MessageBus {
   const std::vector<std::size_t>* last_route_ = nullptr;
   std::unique_ptr<class LogWriter> writer_;
   int64_t written_ = 0;
+  std::string write_error_;
   std::vector<std::pair<std::string, int64_t>> per_channel_;
 };
 

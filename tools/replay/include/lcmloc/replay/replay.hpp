@@ -40,6 +40,8 @@ struct ReplayResult {
   std::map<std::string, int64_t> written_per_channel;
   std::string final_filter;
   bool damaged = false, interrupted = false;
+  /// Why the output log could not be written ("": it was): the replay stopped there.
+  std::string write_error;
   int64_t bytes_unreadable = 0;
   std::vector<eval::LogIssue> issues;  ///< damage of the input, with event index and byte offset
   double seconds = 0;              ///< wall time of the replay
