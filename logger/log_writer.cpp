@@ -11,7 +11,8 @@
 
 namespace lcmloc::logger {
 
-std::string fileName(const std::string& pattern, int index, std::time_t t, bool overwrite) {
+std::string fileName(const std::string& pattern, int index, std::time_t t, bool overwrite,
+                     const std::vector<std::string>& own) {
   char idx[16];
   std::snprintf(idx, sizeof idx, "%03d", index);
   std::string p = pattern;
@@ -25,7 +26,10 @@ std::string fileName(const std::string& pattern, int index, std::time_t t, bool 
   std::vector<char> buf(p.size() * 4 + 256);
   const std::size_t n = std::strftime(buf.data(), buf.size(), p.c_str(), &tm);
   std::string name = (n == 0 && !p.empty()) ? p : std::string(buf.data(), n);
-  if (overwrite || !std::filesystem::exists(name)) return name;
+  auto usable = [&](const std::string& n) {
+    return std::find(own.begin(), own.end(), n) == own.end() && (overwrite || !std::filesystem::exists(n));
+  };
+  if (usable(name)) return name;
   // Taken: insert -NNN before the extension (of the file name, not of a directory).
   const std::filesystem::path path(name);
   const std::string stem = (path.parent_path() / path.stem()).string();
@@ -33,7 +37,7 @@ std::string fileName(const std::string& pattern, int index, std::time_t t, bool 
   for (int i = has_index ? 1 : std::max(index, 1);; ++i) {
     std::snprintf(idx, sizeof idx, "-%03d", i);
     std::string candidate = stem + idx + ext;
-    if (!std::filesystem::exists(candidate)) return candidate;
+    if (usable(candidate)) return candidate;
   }
 }
 
@@ -91,14 +95,17 @@ void LogWriter::finishFile() {
 }
 
 void LogWriter::openNext() {
-  int index = 0;
+  std::vector<std::string> own;
   {
     std::lock_guard<std::mutex> lock(mu_);
-    index = static_cast<int>(paths_.size());
+    own = paths_;
   }
+  const int index = static_cast<int>(own.size());
   const std::time_t now = std::time(nullptr);
-  const std::string name = fileName(opts_.pattern, index, now, opts_.overwrite);
-  if (const std::string wanted = fileName(opts_.pattern, index, now, true); wanted != name)
+  const std::string name = fileName(opts_.pattern, index, now, opts_.overwrite, own);
+  // (a name this run wrote already, from a pattern without {index}, is no earlier recording)
+  if (const std::string wanted = fileName(opts_.pattern, index, now, true);
+      wanted != name && std::find(own.begin(), own.end(), wanted) == own.end())
     spdlog::warn("{} exists (an earlier recording): writing {} instead (--overwrite replaces it)", wanted, name);
   try {
     file_ = std::make_unique<EventFile>(name);

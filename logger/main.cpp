@@ -27,12 +27,13 @@ namespace {
 std::atomic<bool> g_hup{false};
 extern "C" void onHup(int) { g_hup.store(true); }
 
-/// One regex for LCM (which anchors it): empty = every channel.
+/// One regex for LCM: empty = every channel. LCM anchors it as ^...$, which binds only the
+/// first and the last alternative of A|B: the alternation is grouped, ((A)|(B)).
 std::string channelRegex(const std::vector<std::string>& regexes) {
   if (regexes.empty()) return ".*";
   std::string r;
   for (std::size_t i = 0; i < regexes.size(); ++i) r += (i ? "|" : "") + ("(" + regexes[i] + ")");
-  return r;
+  return "(" + r + ")";
 }
 
 /// A udpm URL without recv_buf_size gets one: the kernel default drops bursts.

@@ -165,6 +165,42 @@ TEST_F(LoggerTest, SighupStartsANewFile) {
   EXPECT_NE(logger->output().find("SIGHUP: starting a new file"), std::string::npos);
 }
 
+TEST_F(LoggerTest, SighupWithOverwriteAndAPatternWithoutIndexKeepsEveryFile) {
+  // With --overwrite and no {index}, every new file of the run took the pattern's name again and
+  // truncated the run's own first file (6 of 10 events gone); and every rotation warned about
+  // "an earlier recording".
+  const std::string log = path("o.lcmlog");
+  std::ofstream(log) << "an earlier recording";
+  auto logger = start({"--output", log, "--overwrite"});
+  for (int i = 0; i < 5; ++i) publish(i);
+  ASSERT_TRUE(waitStatus([](const auto& s) { return s.written == 5; }, 10s)) << logger->output();
+  logger->signal(SIGHUP);
+  ASSERT_TRUE(waitStatus([](const auto& s) { return s.files == 2; }, 10s)) << logger->output();
+  for (int i = 5; i < 12; ++i) publish(i);
+  ASSERT_TRUE(waitStatus([](const auto& s) { return s.written == 12; }, 10s)) << logger->output();
+  logger->signal(SIGTERM);
+  ASSERT_EQ(logger->wait(10s), std::optional<int>(0)) << logger->output();
+  EXPECT_EQ(readBack(log).seqs, (std::vector<int64_t>{0, 1, 2, 3, 4}));  // the earlier one replaced
+  EXPECT_EQ(readBack(path("o-001.lcmlog")).seqs, (std::vector<int64_t>{5, 6, 7, 8, 9, 10, 11}));
+  EXPECT_EQ(logger->output().find("earlier recording"), std::string::npos) << logger->output();
+}
+
+TEST_F(LoggerTest, ChannelRegexesMatchWholeChannelNames) {
+  // Two regexes were joined as (A)|(B), which LCM anchors as ^(A)|(B)$: channels that merely
+  // began with A or ended with B were recorded too.
+  auto logger = start({"--output", path("c.lcmlog"), "--channel", "GATE"});
+  lcmloc::odometry_t o{};
+  for (const char* ch : {"ODOMETRY", "ODOMETRY_EXTRA", "GATE", "NOT_A_GATE"}) ASSERT_TRUE(bus_->publish(ch, o));
+  ASSERT_TRUE(waitStatus([](const auto& s) { return s.received >= 2; }, 10s)) << logger->output();
+  logger->signal(SIGTERM);
+  ASSERT_EQ(logger->wait(10s), std::optional<int>(0)) << logger->output();
+  std::vector<std::string> channels;
+  lcmloc::eval::scanLog(path("c.lcmlog"), [&](const lcmloc::eval::RawEvent& ev) {
+    if (*ev.channel != "LOGGER_STATUS" && *ev.channel != "HEARTBEAT") channels.push_back(*ev.channel);
+  });
+  EXPECT_EQ(channels, (std::vector<std::string>{"ODOMETRY", "GATE"}));
+}
+
 TEST_F(LoggerTest, CleanShutdownCountsUpstreamGapsApartFromDrops) {
   auto logger = start({"--output", path("run-%Y.lcmlog")});
   for (int64_t seq : {0, 1, 2, 5, 6}) publish(seq);

@@ -353,6 +353,8 @@ TEST(FileName, ExpandsStrftimeAndIndexAndNeverReusesATakenName) {
   // An earlier recording is kept: file 0 of a new run takes the next free name too.
   EXPECT_EQ(fileName(pattern, 0, t), (dir / "run-001.lcmlog").string());
   EXPECT_EQ(fileName(pattern, 0, t, true), pattern) << "--overwrite";
+  EXPECT_EQ(fileName(pattern, 1, t, true, {pattern}), (dir / "run-001.lcmlog").string())
+      << "--overwrite never takes a name of the run's own files";
   EXPECT_EQ(fileName(pattern, 1, t), (dir / "run-001.lcmlog").string());
   std::ofstream((dir / "run-001.lcmlog").string()) << "x";
   EXPECT_EQ(fileName(pattern, 1, t), (dir / "run-002.lcmlog").string());

@@ -53,8 +53,10 @@ struct WriterStats {
 /// Name of file number index (0-based) from pattern at time t (local time): strftime codes are
 /// expanded and "{index}" becomes the index with 3 digits. A name that is already taken (by an
 /// earlier run, or an earlier file of this one) gets "-NNN" before its extension, the first
-/// free one from -001 (or from -index without "{index}"), unless overwrite.
-std::string fileName(const std::string& pattern, int index, std::time_t t, bool overwrite = false);
+/// free one from -001 (or from -index without "{index}"). overwrite lets a name of an earlier
+/// run be taken again, never one of this run's own files (own: the names written so far).
+std::string fileName(const std::string& pattern, int index, std::time_t t, bool overwrite = false,
+                     const std::vector<std::string>& own = {});
 
 class LogWriter {
  public:
