@@ -452,6 +452,50 @@ TEST_F(ProcessTest, NumericFlagsRefuseNaNInfOverflowAndValuesOutOfRange) {
   }
 }
 
+namespace {
+/// Has process pid ended (gone, or a zombie waiting for its new parent)?
+bool ended(pid_t pid) {
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  if (!std::getline(stat, line)) return true;
+  const auto close = line.rfind(')');
+  return close != std::string::npos && close + 2 < line.size() && line[close + 2] == 'Z';
+}
+}  // namespace
+
+TEST_F(ProcessTest, LauncherStopsAChildsWholeProcessGroupAndLeaksItNoDescriptors) {
+  // A child (here a script that starts a background job) is stopped with its process group: the
+  // launcher used to signal the child alone and leave its own children running. The child got the
+  // launcher's LCM sockets and pipes. A child ended by the stop's SIGTERM (one that does not
+  // handle it, or not yet) is stopped, not failed.
+  const std::string script = writeFile("child.sh", "#!/bin/sh\nsleep 300 &\necho $! > " + path("sleep.pid") +
+                                                       "\nfor f in /proc/$$/fd/*; do echo \"${f##*/} $(readlink $f)\"; "
+                                                       "done > " + path("fds.txt") + ".tmp\nmv " + path("fds.txt") +
+                                                       ".tmp " + path("fds.txt") + "\nwait\n");
+  fs::permissions(script, fs::perms::owner_all);
+  const std::string system =
+      writeFile("system.yaml", "scenario: " + std::string(LCMLOC_PAPER_YAML) +
+                                   "\nready_timeout: 0.1\nprocesses:\n  - {name: script, executable: " + script + "}\n");
+  Child launcher(LCMLOC_LAUNCHER, {"--system", system, "--lcm-url", url_}, path("launcher.out"));
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while (!fs::exists(path("fds.txt")) && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(20ms);
+  ASSERT_TRUE(fs::exists(path("fds.txt"))) << launcher.output();
+  pid_t sleeper = 0;
+  std::ifstream(path("sleep.pid")) >> sleeper;
+  ASSERT_GT(sleeper, 0);
+  launcher.signal(SIGINT);
+  EXPECT_EQ(launcher.wait(10s), std::optional<int>(0)) << launcher.output();
+  EXPECT_NE(launcher.output().find("stopped by SIGTERM  ok"), std::string::npos) << launcher.output();
+  const auto gone_by = std::chrono::steady_clock::now() + 5s;
+  while (!ended(sleeper) && std::chrono::steady_clock::now() < gone_by) std::this_thread::sleep_for(20ms);
+  EXPECT_TRUE(ended(sleeper)) << "the child's own child still runs";
+  if (!ended(sleeper)) ::kill(sleeper, SIGKILL);
+  std::ifstream fds(path("fds.txt"));
+  for (std::string line; std::getline(fds, line);)
+    EXPECT_EQ(line.find("socket:"), std::string::npos) << "inherited: " << line;
+}
+
 TEST_F(ProcessTest, LauncherRefusesTwoProcessesOfTheSameName) {
   // Unnamed processes are named after their executable: two magnetic rulers need names.
   const std::string system = writeFile("system.yaml", std::string("processes:\n") +

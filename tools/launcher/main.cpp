@@ -33,6 +33,7 @@ struct Child {
   bool running = false;
   int status = 0;            ///< waitpid status once exited
   bool killed = false;       ///< needed SIGKILL
+  bool terminated = false;   ///< sent SIGTERM by the launcher (a stop)
   Clock::time_point started;
   double runtime = 0.0;
   int restarts = 0;                         ///< times started again (ProcessSpec::restart)
@@ -51,35 +52,67 @@ std::string resolveExecutable(const std::string& exe) {
   return exe;  // execvp searches PATH
 }
 
+/// Starts the child in a process group of its own. Between fork and exec the child must not run
+/// the launcher's signal handler (a SIGTERM would only set a flag in a copy about to be
+/// replaced, and be lost): SIGINT/SIGTERM are blocked across fork and set back to their default
+/// action in the child before they are unblocked, so such a signal ends the child (a stop).
+/// The child gets none of the launcher's file descriptors (LCM sockets and pipes) and the
+/// default action for the signals the launcher ignores.
 pid_t spawn(const Child& c, const std::string& scenario, const std::string& url) {
   std::vector<std::string> args{resolveExecutable(c.spec.executable), "--config", scenario, "--lcm-url", url};
   args.insert(args.end(), c.spec.args.begin(), c.spec.args.end());
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  sigset_t stop_signals, before;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  ::sigprocmask(SIG_BLOCK, &stop_signals, &before);
   const pid_t parent = ::getpid();
   const pid_t pid = ::fork();
-  if (pid < 0) throw std::runtime_error("fork failed for " + c.spec.name);
   if (pid == 0) {
     ::setpgid(0, 0);                      // Ctrl-C reaches the launcher only: it stops us in order
+    for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGPIPE, SIGXFSZ}) ::signal(sig, SIG_DFL);
+    ::sigprocmask(SIG_SETMASK, &before, nullptr);
     ::prctl(PR_SET_PDEATHSIG, SIGTERM);   // and we stop if the launcher dies
     if (::getppid() != parent) ::_exit(127);
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
+    ::close_range(3, ~0U, 0);
     ::execvp(argv[0], argv.data());
     std::fprintf(stderr, "lcmloc-launcher: cannot execute %s: %s\n", argv[0], std::strerror(errno));
     ::_exit(127);
   }
+  const int fork_errno = errno;
+  if (pid > 0) ::setpgid(pid, pid);  // (also here: the group exists before we signal it)
+  ::sigprocmask(SIG_SETMASK, &before, nullptr);
+  if (pid < 0) throw std::runtime_error("fork failed for " + c.spec.name + ": " + std::strerror(fork_errno));
   return pid;
+}
+
+/// Sends sig to the child's process group (the child and what it started), or to the child
+/// alone while it has no group yet.
+void signalChild(const Child& c, int sig) {
+  if (::kill(-c.pid, sig) != 0) ::kill(c.pid, sig);
+}
+
+/// Ended by the SIGTERM of a stop (before it had set up its own handling of it): stopped.
+bool stoppedBySigterm(const Child& c) {
+  return c.terminated && !c.killed && WIFSIGNALED(c.status) && WTERMSIG(c.status) == SIGTERM;
 }
 
 std::string describeStatus(const Child& c) {
   if (c.running) return "still running";
   if (WIFEXITED(c.status)) return "exit " + std::to_string(WEXITSTATUS(c.status));
+  if (stoppedBySigterm(c)) return "stopped by SIGTERM";
   if (WIFSIGNALED(c.status))
     return std::string("killed by ") + strsignal(WTERMSIG(c.status)) + (c.killed ? " (stop timeout)" : "");
   return "unknown";
 }
 
-bool failed(const Child& c) { return c.killed || !WIFEXITED(c.status) || WEXITSTATUS(c.status) != 0; }
+bool failed(const Child& c) {
+  if (stoppedBySigterm(c)) return false;
+  return c.killed || !WIFEXITED(c.status) || WEXITSTATUS(c.status) != 0;
+}
 
 class Launcher {
  public:
@@ -159,6 +192,7 @@ class Launcher {
     c.pid = spawn(c, scenario_, url_);
     c.running = true;
     c.killed = false;
+    c.terminated = false;
     c.started = Clock::now();
     spdlog::info("started {} again (pid {}, {} of {})", c.spec.name, c.pid, c.restarts, c.spec.restart);
   }
@@ -180,13 +214,14 @@ class Launcher {
     for (auto it = children_.rbegin(); it != children_.rend(); ++it) {
       Child& c = *it;
       if (!c.running) continue;
-      ::kill(c.pid, SIGTERM);
+      c.terminated = true;
+      signalChild(c, SIGTERM);
       const auto deadline = Clock::now() + secs(cfg_.stop_timeout);
       while (!reap(c, false) && Clock::now() < deadline)
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
       if (c.running) {
         spdlog::error("{} did not stop within {:.1f} s: SIGKILL", c.spec.name, cfg_.stop_timeout);
-        ::kill(c.pid, SIGKILL);
+        signalChild(c, SIGKILL);
         c.killed = true;
         reap(c, true);
       }
