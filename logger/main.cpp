@@ -7,6 +7,7 @@
 #include <sys/socket.h>
 
 #include <atomic>
+#include <regex>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -139,6 +140,8 @@ int main(int argc, char** argv) {
     common::SeqTracker gaps;  // keyed by channel (HEARTBEAT: by channel and process)
     common::LogThrottle gap_log;  // every gap is counted; the first 5 per key are logged, then 1 in 1000
     int64_t received = 0;
+    int64_t awaited_status_seq = -1;  // our final status, once published: recorded when it comes back
+    bool final_status_back = false;
     bus.subscribeRaw(regex, [&](const std::string& ch, const uint8_t* data, std::size_t size, int64_t recv) {
       ++received;
       auto& s = stats[ch];
@@ -151,6 +154,9 @@ int main(int argc, char** argv) {
           lcmloc::heartbeat_t hb;
           if (hb.decode(data, 0, static_cast<int>(size)) >= 0) key = ch + "[" + hb.process + "]";
         }
+        if (awaited_status_seq >= 0 && seq == awaited_status_seq && ch == status_channel &&
+            type->hash == lcmloc::logger_status_t::getHash())
+          final_status_back = true;
         const auto gap = gaps.observe(key, seq);
         if (gap.restarted && gap_log.allow(key + ":restart")) spdlog::warn("{}", gap.describeRestart(key));
         if (gap) {
@@ -219,8 +225,15 @@ int main(int argc, char** argv) {
     const bool write_error = writer.failed();
     while (bus.handle(0) > 0) {}  // take what already arrived
     hb.publish("stopping");
+    awaited_status_seq = status_seq;
     publishStatus(write_error ? "write_error" : "stopping");
-    while (bus.handle(0) > 0) {}  // (our own last heartbeat and status included)
+    // Our own last status (and heartbeat, sent before it) come back over the bus: wait for the
+    // status when we record its channel (bounded), so the log ends with it.
+    if (!status_channel.empty() && std::regex_match(status_channel, std::regex(regex, std::regex::extended))) {
+      const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(500);
+      while (!final_status_back && std::chrono::steady_clock::now() < until) bus.handle(20);
+    }
+    while (bus.handle(0) > 0) {}
     writer.close();
 
     const auto w = writer.stats();

@@ -201,6 +201,27 @@ TEST_F(LoggerTest, ChannelRegexesMatchWholeChannelNames) {
   EXPECT_EQ(channels, (std::vector<std::string>{"ODOMETRY", "GATE"}));
 }
 
+TEST_F(LoggerTest, TheLogEndsWithTheLoggersOwnFinalStatusWhenItRecordsThatChannel) {
+  // The final LOGGER_STATUS ("stopping", with the final counters) was published and then only
+  // one pass over what had arrived was made: it was missing from the log in 1 of 3 runs.
+  for (int run = 0; run < 3; ++run) {
+    const std::string log = path("s" + std::to_string(run) + ".lcmlog");
+    while (bus_->handle(100) > 0) {}  // the last run's statuses
+    status_.reset();
+    auto logger = start({"--output", log, "--channel", "LOGGER_STATUS"});
+    publish(1);
+    ASSERT_TRUE(waitStatus([](const auto& s) { return s.written >= 1; }, 10s)) << logger->output();
+    logger->signal(SIGTERM);
+    ASSERT_EQ(logger->wait(10s), std::optional<int>(0)) << logger->output();
+    std::string last_state;
+    lcmloc::eval::scanLog(log, [&](const lcmloc::eval::RawEvent& ev) {
+      lcmloc::logger_status_t m;
+      if (*ev.channel == "LOGGER_STATUS" && m.decode(ev.data, 0, ev.size) >= 0) last_state = m.state;
+    });
+    EXPECT_EQ(last_state, "stopping") << "run " << run;
+  }
+}
+
 TEST_F(LoggerTest, CleanShutdownCountsUpstreamGapsApartFromDrops) {
   auto logger = start({"--output", path("run-%Y.lcmlog")});
   for (int64_t seq : {0, 1, 2, 5, 6}) publish(seq);
