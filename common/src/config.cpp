@@ -3,6 +3,9 @@
 #include "lcmloc/common/config.hpp"
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -217,6 +220,26 @@ void parseChannels(KeyReader& root, ChannelConfig& c) {
   r.get("beacons", c.beacons);
   r.get("vision", c.vision);
   r.finish();
+  // Every name non-empty and without blanks; the daemon's outputs and its control channel apart
+  // from every input (a POSE published on ODOMETRY would be read back as odometry).
+  std::vector<std::pair<std::string, std::string>> named{
+      {"ground_truth", c.ground_truth}, {"odometry", c.odometry}, {"magruler_fault", c.magruler_fault},
+      {"fault_events", c.fault_events}, {"pose", c.pose}, {"gate", c.gate}, {"control", c.control},
+      {"status", c.status}, {"heartbeat", c.heartbeat}, {"imu", c.imu}, {"gps", c.gps},
+      {"landmarks", c.landmarks}, {"beacons", c.beacons}, {"vision", c.vision}};
+  for (std::size_t i = 0; i < c.magruler.size(); ++i) named.push_back({"magruler[" + std::to_string(i) + "]", c.magruler[i]});
+  for (const auto& [key, name] : named)
+    if (name.empty() || name.find_first_of(" \t\n") != std::string::npos)
+      throw ConfigError(root.file(), "channels." + key, "a channel name must be non-empty and without blanks");
+  const std::vector<std::string> outputs{"pose", "gate", "status", "control", "heartbeat"};
+  for (const auto& [out_key, out_name] : named) {
+    if (std::find(outputs.begin(), outputs.end(), out_key) == outputs.end()) continue;
+    for (const auto& [key, name] : named)
+      if (key != out_key && name == out_name)
+        throw ConfigError(root.file(), "channels." + out_key,
+                          "'" + out_name + "' is also channels." + key + ": each of pose, gate, status, control "
+                          "and heartbeat needs a channel of its own");
+  }
 }
 
 void checkFilterType(const std::string& type, const std::string& file, const std::string& key) {
@@ -396,12 +419,22 @@ SystemConfig parseSystemConfig(const std::string& yaml_text, const std::string& 
   return cfg;
 }
 
-SystemConfig loadSystemConfig(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw ConfigError(path, "", "cannot open config file (does it exist?)");
+std::string readConfigFile(const std::string& path, const std::string& what) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const auto st = fs::status(path, ec);
+  if (ec || !fs::exists(st)) throw ConfigError(path, "", "cannot open " + what + " (does it exist?)");
+  if (fs::is_directory(st)) throw ConfigError(path, "", "is a directory, not a " + what);
+  if (!fs::is_regular_file(st)) throw ConfigError(path, "", "is not a regular file (a " + what + " is)");
+  constexpr std::uintmax_t kMaxBytes = 64u << 20;
+  if (fs::file_size(path, ec) > kMaxBytes) throw ConfigError(path, "", "larger than 64 MB: not a " + what);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ConfigError(path, "", "cannot open " + what + ": " + std::strerror(errno));
   std::stringstream ss;
   ss << in.rdbuf();
-  return parseSystemConfig(ss.str(), path);
+  return ss.str();
 }
+
+SystemConfig loadSystemConfig(const std::string& path) { return parseSystemConfig(readConfigFile(path), path); }
 
 }  // namespace lcmloc::common

@@ -168,6 +168,34 @@ TEST(Config, MissingFileNamesTheFile) {
   }
 }
 
+TEST(Config, ADirectoryOrADeviceIsNoConfigFile) {
+  // A directory was read as an empty file (all defaults, exit 0); /dev/zero until memory ran out.
+  auto errorLoading = [](const std::string& path) -> std::string {
+    try {
+      common::loadSystemConfig(path);
+    } catch (const ConfigError& e) {
+      return e.what();
+    }
+    return "(no error)";
+  };
+  EXPECT_EQ(errorLoading("/tmp"), "/tmp: is a directory, not a config file");
+  EXPECT_EQ(errorLoading("/dev/zero"), "/dev/zero: is not a regular file (a config file is)");
+}
+
+TEST(Config, ChannelNamesAreNonEmptyAndTheDaemonsOutputsHaveChannelsOfTheirOwn) {
+  // An empty POSE channel made the replay write events a log reader cannot read back; POSE on
+  // ODOMETRY made the daemon read its own estimates as odometry (1 of 3116 inputs used).
+  EXPECT_NE(errorOf("channels: {pose: \"\"}\n").find("channels.pose: a channel name must be non-empty"),
+            std::string::npos);
+  EXPECT_NE(errorOf("channels: {magruler: [MAGRULER, \"A B\"]}\n").find("channels.magruler[1]"), std::string::npos);
+  EXPECT_NE(errorOf("channels: {pose: ODOMETRY}\n").find("channels.pose: 'ODOMETRY' is also channels.odometry"),
+            std::string::npos);
+  EXPECT_NE(errorOf("channels: {status: GATE}\n").find("channels.gate: 'GATE' is also channels.status"), std::string::npos);
+  EXPECT_NE(errorOf("channels: {control: MAGRULER}\n").find("channels.control: 'MAGRULER' is also channels.magruler[0]"),
+            std::string::npos);
+  EXPECT_EQ(errorOf("channels: {pose: POSE_MAIN, magruler: [R1, R2, R3], magruler_fault: R3}\n"), "(no error)");
+}
+
 TEST(Config, FilterParametersFromAControlString) {
   const core::FilterConfig base;
   const auto c = common::parseFilterConfig(YAML::Load("{type: ukf_calib, scale_std0: 0.05}"), base,

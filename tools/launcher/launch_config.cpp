@@ -10,10 +10,10 @@ namespace lcmloc::launcher {
 LaunchConfig loadLaunchConfig(const std::string& path) {
   namespace fs = std::filesystem;
   using common::ConfigError;
-  if (!fs::exists(path)) throw ConfigError(path, "", "cannot open system file (does it exist?)");
+  const std::string text = common::readConfigFile(path, "system file");
   YAML::Node doc;
   try {
-    doc = YAML::LoadFile(path);
+    doc = YAML::Load(text);
   } catch (const YAML::Exception& e) {
     throw ConfigError(path, "", std::string("YAML error: ") + e.what());
   }

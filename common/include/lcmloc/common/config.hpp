@@ -93,6 +93,10 @@ struct SystemConfig {
 
 /// Reads a system config file. Missing sections take defaults; throws ConfigError.
 SystemConfig loadSystemConfig(const std::string& path);
+/// The text of a configuration file (what: "config file", "system file", ...): ConfigError when
+/// it does not exist, is a directory or another non-regular file (/dev/zero was read until memory
+/// ran out), is larger than 64 MB or cannot be read.
+std::string readConfigFile(const std::string& path, const std::string& what = "config file");
 /// Same from YAML text (file names the source in errors).
 SystemConfig parseSystemConfig(const std::string& yaml_text, const std::string& file);
 
