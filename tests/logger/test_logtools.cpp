@@ -241,12 +241,100 @@ TEST_F(LogTools, CutKeepsTheTimeWindowAndChannelsAndLcmReadsTheResult) {
   EXPECT_EQ(n, 30);  // seq 20 .. 50 (0.20 .. 0.50 s inclusive), 50 missing
   EXPECT_NE(r.err.find("wrote 30 of 135 events"), std::string::npos) << r.err;
 
-  // Cutting a log onto itself is refused before the file is opened for writing.
+  // Cutting a log onto itself is refused before the file is opened for writing (a bad argument).
   const auto size = fs::file_size(log);
   const ToolRun self = tool("cut " + log + " -o " + log);
-  EXPECT_EQ(self.rc, 1) << self.err;
+  EXPECT_EQ(self.rc, 2) << self.err;
   EXPECT_NE(self.err.find("is the input log"), std::string::npos) << self.err;
   EXPECT_EQ(fs::file_size(log), size);
+}
+
+TEST_F(LogTools, ToCsvAndCutNeverWriteOverTheLog) {
+  const std::string log = path("ref.lcmlog");
+  writeReference(log);
+  const std::string before = slurp(log);
+  fs::create_symlink(log, path("sym.lcmlog"));
+  fs::create_hard_link(log, path("hard.lcmlog"));
+  for (const std::string& out : {log, path("sym.lcmlog"), path("hard.lcmlog"), path("./ref.lcmlog")}) {
+    for (const std::string& cmd : {"to-csv " + log + " -c ODOMETRY -o " + out, "cut " + log + " -o " + out}) {
+      const ToolRun r = tool(cmd);
+      EXPECT_EQ(r.rc, 2) << cmd << "\n" << r.err;
+      EXPECT_NE(r.err.find("is the input log"), std::string::npos) << cmd << "\n" << r.err;
+    }
+  }
+  // Several channels to a directory in which one CHANNEL.csv is the log itself.
+  fs::create_directories(path("d"));
+  fs::create_hard_link(log, path("d/POSE.csv"));
+  const ToolRun dir = tool("to-csv " + log + " -o " + path("d"));
+  EXPECT_EQ(dir.rc, 2) << dir.err;
+  EXPECT_NE(dir.err.find("is the input log"), std::string::npos) << dir.err;
+  EXPECT_FALSE(fs::exists(path("d/ODOMETRY.csv"))) << "nothing written";
+  EXPECT_EQ(slurp(log), before);
+}
+
+TEST_F(LogTools, CutBoundsBeyondTheLogOrNotANumber) {
+  const std::string log = path("ref.lcmlog");
+  writeReference(log);
+  auto kept = [&](const std::string& args) -> int64_t {
+    fs::remove(path("cut.lcmlog"));
+    const ToolRun r = tool("cut " + log + " -o " + path("cut.lcmlog") + " " + args);
+    EXPECT_EQ(r.rc, 0) << args << "\n" << r.err;
+    if (r.rc != 0) return -1;
+    return lcmloc::eval::scanLog(path("cut.lcmlog"), [](const lcmloc::eval::RawEvent&) {}).events_read;
+  };
+  // 1e13 s and 1e14 s are beyond int64 microseconds: they used to overflow (keep all / none).
+  EXPECT_EQ(kept("--from 1e13"), 0);
+  EXPECT_EQ(kept("--to 1e14"), 135);
+  EXPECT_EQ(kept("--from 0 --to 1e300"), 135);
+  for (const std::string& bad : std::vector<std::string>{"--from nan", "--to nan", "--from 0.5 --to 0.2",
+                                 "--from-utime " + std::to_string(kT0 + 2) + " --to-utime " + std::to_string(kT0 + 1)}) {
+    const ToolRun r = tool("cut " + log + " -o " + path("bad.lcmlog") + " " + bad);
+    EXPECT_EQ(r.rc, 2) << bad << "\n" << r.err;
+    EXPECT_FALSE(fs::exists(path("bad.lcmlog"))) << bad;
+  }
+}
+
+TEST_F(LogTools, LogTimesBeforeTheEpochAndEmptyPayloadsAreShownAsTheyAre) {
+  const std::string log = path("odd.lcmlog");
+  {
+    lcm::LogFile out(log, "w");
+    auto put = [&](int64_t t, const std::vector<uint8_t>& data) {
+      lcm::LogEvent ev;
+      ev.eventnum = 0;
+      ev.timestamp = t;
+      ev.channel = "ODOMETRY";
+      ev.datalen = static_cast<int32_t>(data.size());
+      ev.data = const_cast<uint8_t*>(data.data());
+      ASSERT_EQ(out.writeEvent(&ev), 0);
+    };
+    lcmloc::odometry_t o{};
+    std::vector<uint8_t> b(static_cast<std::size_t>(o.getEncodedSize()));
+    o.encode(b.data(), 0, static_cast<int>(b.size()));
+    put(-1, b);   // 1 us before 1970
+    put(5, {});   // an empty payload on the same channel
+    put(7, b);
+  }
+  ToolRun r = tool("info " + log);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("time span:  1969-12-31 23:59:59.999999 UTC .. 1970-01-01 00:00:00.000007 UTC"),
+            std::string::npos) << r.out;
+  auto odo = row(r.out, "ODOMETRY");
+  ASSERT_EQ(odo.size(), 7u) << r.out;
+  EXPECT_EQ(odo[1], "lcmloc.odometry_t") << "an empty payload is no type of its own";
+  EXPECT_EQ(odo[6], "1");
+  EXPECT_NE(r.out.find("undecodable ODOMETRY event at byte"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("0 bytes, shorter than a fingerprint"), std::string::npos) << r.out;
+  r = tool("to-csv " + log + " -o " + path("o.csv"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.err.find("ODOMETRY: 1 undecodable event(s) skipped"), std::string::npos) << r.err;
+  EXPECT_EQ(lines(slurp(path("o.csv"))).size(), 3u);
+  // Relative bounds count from the first event (-1 us), absolute ones may be negative too.
+  r = tool("cut " + log + " -o " + path("rel.lcmlog") + " --from 0.000006");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(lcmloc::eval::scanLog(path("rel.lcmlog"), [](const lcmloc::eval::RawEvent&) {}).events_read, 2);
+  r = tool("cut " + log + " -o " + path("abs.lcmlog") + " --to-utime -1");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(lcmloc::eval::scanLog(path("abs.lcmlog"), [](const lcmloc::eval::RawEvent&) {}).events_read, 1);
 }
 
 TEST_F(LogTools, EveryToolReadsATruncatedLogUpToTheDamageAndSaysWhere) {
@@ -306,6 +394,14 @@ TEST_F(LogTools, BadInputGetsAClearErrorAndNonZeroExit) {
   ToolRun r = tool("info " + path("missing.lcmlog"));
   EXPECT_EQ(r.rc, 2);
   EXPECT_NE(r.err.find("no such log file"), std::string::npos) << r.err;
+  // A directory is no log (it used to read as 4096 damaged bytes, exit 0).
+  for (const std::string& cmd : {"info " + dir_.string(), "to-csv " + dir_.string(),
+                                 "cut " + dir_.string() + " -o " + path("x.lcmlog")}) {
+    r = tool(cmd);
+    EXPECT_EQ(r.rc, 2) << cmd;
+    EXPECT_NE(r.err.find("is a directory"), std::string::npos) << cmd << "\n" << r.err;
+    EXPECT_EQ(r.out.find("DAMAGE"), std::string::npos) << cmd << "\n" << r.out;
+  }
   writeReference(path("ref.lcmlog"));
   r = tool("to-csv " + path("ref.lcmlog") + " -c 'NOPE'");
   EXPECT_EQ(r.rc, 1);

@@ -315,6 +315,17 @@ TEST_F(EvalTest, MissingFileThrows) {
   EXPECT_THROW(eval::readLog(file("nope.lcmlog"), cfg_.channels), std::runtime_error);
 }
 
+TEST_F(EvalTest, ADirectoryIsNotALog) {
+  // It used to read as one damaged stretch of 4096 bytes and an empty log.
+  try {
+    eval::readLog(dir_.string(), cfg_.channels);
+    FAIL() << "a directory was read as a log";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("is a directory"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(eval::scanLog(dir_.string(), [](const eval::RawEvent&) {}), std::runtime_error);
+}
+
 TEST(TruthAt, InterpolatesInsideAndRefusesFarOutside) {
   std::vector<eval::TruthSample> truth{{1000000, 0.0, 0.0, 3.0, 0.0}, {1010000, 1.0, 2.0, -3.0, 1.0}};
   auto mid = eval::truthAt(truth, 1005000);
@@ -366,6 +377,12 @@ TEST_F(EvalTest, CommandLineWritesReportAndFigures) {
 TEST_F(EvalTest, CommandLineFailsWhenNothingIsUsable) {
   EXPECT_NE(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("missing.lcmlog") + " --no-plots --out " +
                 file("out") + " > /dev/null 2>&1"), 0);
+  fs::create_directories(file("adir"));
+  EXPECT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("adir") + " --no-plots --out " + file("out") + " > " +
+                  file("dir.txt") + " 2>&1"), 1);
+  std::ifstream dir_out(file("dir.txt"));
+  const std::string dir_text((std::istreambuf_iterator<char>(dir_out)), std::istreambuf_iterator<char>());
+  EXPECT_NE(dir_text.find("is a directory"), std::string::npos) << dir_text;
   { std::ofstream empty(file("empty.lcmlog")); }
   EXPECT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("empty.lcmlog") + " --no-plots --out " +
                 file("out") + " > /dev/null 2>&1"), 1);

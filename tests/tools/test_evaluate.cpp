@@ -511,6 +511,11 @@ TEST_F(EvaluateTest, BadInputsGiveClearErrors) {
   // Missing file.
   EXPECT_EQ(evaluate(file("missing.lcmlog") + out), 1);
   EXPECT_NE(output_.find("cannot open"), std::string::npos) << output_;
+  // A directory: not read as a damaged log.
+  fs::create_directories(file("adir"));
+  EXPECT_EQ(evaluate(file("adir") + out), 1);
+  EXPECT_NE(output_.find("is a directory"), std::string::npos) << output_;
+  EXPECT_EQ(output_.find("DAMAGE"), std::string::npos) << output_;
   // Estimates but no truth: an error naming the channels; --export-only exports anyway.
   {
     LogWriter w(file("notruth.lcmlog"));

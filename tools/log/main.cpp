@@ -11,6 +11,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
+#include <optional>
 #include <regex>
 #include <set>
 
@@ -64,13 +66,35 @@ std::string typeOf(const uint8_t* data, std::size_t size) {
   return "unknown " + fingerprintHex(h);
 }
 
+/// Whole seconds rounded down (floor, also before 1970) and the microseconds past them.
 std::string utimeText(int64_t us) {
-  const std::time_t t = static_cast<std::time_t>(us / 1000000);
+  int64_t sec = us / 1000000, frac = us % 1000000;
+  if (frac < 0) { --sec; frac += 1000000; }
+  const std::time_t t = static_cast<std::time_t>(sec);
   std::tm tm{};
-  gmtime_r(&t, &tm);
   char b[64];
-  std::strftime(b, sizeof b, "%Y-%m-%d %H:%M:%S", &tm);
-  return fmt::format("{}.{:06d} UTC", b, static_cast<int>(us % 1000000));
+  if (!gmtime_r(&t, &tm) || !std::strftime(b, sizeof b, "%Y-%m-%d %H:%M:%S", &tm))
+    return fmt::format("{} us (not a calendar time)", us);
+  return fmt::format("{}.{:06d} UTC", b, frac);
+}
+
+/// Seconds between two log times, without overflowing int64 on extreme times.
+double spanSeconds(int64_t from, int64_t to) { return (static_cast<double>(to) - static_cast<double>(from)) * 1e-6; }
+
+/// A payload too short to hold an LCM fingerprint (an empty event, say): no type can decode it.
+bool noFingerprint(const eval::RawEvent& ev) {
+  int64_t h = 0;
+  return !logger::readFingerprint(ev.data, static_cast<std::size_t>(ev.size), &h);
+}
+
+/// Refuses an output that is the log itself (the same file, also through a link), before it is
+/// opened for writing: that would truncate the log before it is read. A bad argument: exit 2.
+void refuseOutputOverLog(const std::string& log, const std::string& output) {
+  try {
+    eval::refuseOutputOverInput(log, output);
+  } catch (const std::runtime_error& e) {
+    throw common::ConfigError("--output", "", e.what());
+  }
 }
 
 std::regex channelRegex(const std::vector<std::string>& regexes) {
@@ -87,7 +111,7 @@ std::regex channelRegex(const std::vector<std::string>& regexes) {
 
 struct ChannelInfo {
   int64_t count = 0, bytes = 0, undecodable = 0, gaps = 0, first = 0, last = 0;
-  std::map<std::string, int64_t> types;
+  std::map<std::string, int64_t> types;   ///< of the events with a fingerprint
 };
 
 int info(const std::string& path) {
@@ -104,17 +128,19 @@ int info(const std::string& path) {
     if (n++ == 0) first = ev.utime;
     first = std::min(first, ev.utime);
     last = std::max(last, ev.utime);
+    auto undecodableEvent = [&](const std::string& why) {
+      ++c.undecodable;
+      if (++undecodable <= 10)
+        bad.push_back(fmt::format("undecodable {} event at byte {} (event {}): {} bytes, {}", *ev.channel, ev.offset,
+                                  ev.index, ev.size, why));
+    };
+    if (noFingerprint(ev)) return undecodableEvent("shorter than a fingerprint");  // not a type of its own
     const auto* type = logger::findType(ev.data, static_cast<std::size_t>(ev.size));
     ++c.types[typeOf(ev.data, static_cast<std::size_t>(ev.size))];
     if (!type) return;
     logger::Fields fields;
-    if (!type->fields(ev.data, static_cast<std::size_t>(ev.size), &fields)) {
-      ++c.undecodable;
-      if (++undecodable <= 10)
-        bad.push_back(fmt::format("undecodable {} event at byte {} (event {}): {} bytes, fingerprint of {}",
-                                  *ev.channel, ev.offset, ev.index, ev.size, type->name));
-      return;
-    }
+    if (!type->fields(ev.data, static_cast<std::size_t>(ev.size), &fields))
+      return undecodableEvent("fingerprint of " + type->name);
     std::string key = *ev.channel;
     if (type->name == "lcmloc.heartbeat_t")  // many publishers share HEARTBEAT: one seq each
       for (const auto& f : fields)
@@ -127,14 +153,14 @@ int info(const std::string& path) {
             << (s.damaged ? fmt::format(", DAMAGED: {} bytes unreadable", s.bytes_unreadable) : "") << "\n";
   if (n > 0) {
     std::cout << "time span:  " << utimeText(first) << " .. " << utimeText(last)
-              << fmt::format(" ({:.3f} s)\n", (last - first) * 1e-6);
+              << fmt::format(" ({:.3f} s)\n", spanSeconds(first, last));
   }
   std::cout << fmt::format("{:<24} {:<28} {:>9} {:>10} {:>12} {:>9} {:>11}\n", "channel", "type", "count",
                            "rate[Hz]", "bytes", "seq_gaps", "undecodable");
   for (const auto& [name, c] : channels) {
-    std::string type = c.types.begin()->first;
+    std::string type = c.types.empty() ? "(shorter than a fingerprint)" : c.types.begin()->first;
     if (c.types.size() > 1) type = "mixed (" + std::to_string(c.types.size()) + " types)";
-    const double span = (c.last - c.first) * 1e-6;
+    const double span = spanSeconds(c.first, c.last);
     const std::string rate = (c.count > 1 && span > 0) ? fmt::format("{:.2f}", (c.count - 1) / span) : "-";
     std::cout << fmt::format("{:<24} {:<28} {:>9} {:>10} {:>12} {:>9} {:>11}\n", name, type, c.count, rate, c.bytes,
                              c.gaps, c.undecodable);
@@ -177,6 +203,8 @@ struct Columns {
 };
 
 int toCsv(const std::string& path, const std::vector<std::string>& channel_regexes, const std::string& output) {
+  const bool to_stdout = output.empty() || output == "-";
+  if (!to_stdout) refuseOutputOverLog(path, output);
   const std::regex re = channelRegex(channel_regexes);
   std::map<std::string, Columns> columns;
   std::map<std::string, int64_t> undecodable, unknown;
@@ -184,7 +212,7 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
   const auto s = scan(path, [&](const eval::RawEvent& ev) {
     if (!std::regex_match(*ev.channel, re)) return;
     const auto* type = logger::findType(ev.data, static_cast<std::size_t>(ev.size));
-    if (!type) { ++unknown[*ev.channel]; return; }
+    if (!type) { ++(noFingerprint(ev) ? undecodable : unknown)[*ev.channel]; return; }
     logger::Fields fields;
     if (!type->fields(ev.data, static_cast<std::size_t>(ev.size), &fields)) { ++undecodable[*ev.channel]; return; }
     columns[*ev.channel].merge(fields);
@@ -198,14 +226,15 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
     return common::kExitRuntimeError;
   }
   const bool to_dir = columns.size() > 1;
-  if (to_dir && (output.empty() || output == "-"))
+  if (to_dir && to_stdout)
     throw std::runtime_error(fmt::format("{} channels match: give --output DIR to get one CSV per channel",
                                          columns.size()));
   std::map<std::string, std::unique_ptr<std::ofstream>> files;
   std::ostream* single = &std::cout;
   if (to_dir) {
+    for (const auto& kv : columns) refuseOutputOverLog(path, (fs::path(output) / (kv.first + ".csv")).string());
     fs::create_directories(output);
-  } else if (!output.empty() && output != "-") {
+  } else if (!to_stdout) {
     auto f = std::make_unique<std::ofstream>(output);
     if (!*f) throw std::runtime_error("cannot write '" + output + "'");
     single = f.get();
@@ -247,7 +276,7 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
   for (const auto& [ch, n] : rows)
     spdlog::info("{}: {} rows, {} columns{}", ch, n, columns[ch].names.size() + 1,
                  to_dir ? " -> " + (fs::path(output) / (ch + ".csv")).string()
-                        : (output.empty() || output == "-" ? "" : " -> " + output));
+                        : (to_stdout ? "" : " -> " + output));
   for (auto& [ch, f] : files) {
     f->flush();
     if (!*f) throw std::runtime_error("writing CSV for " + ch + " failed (disk full?)");
@@ -259,23 +288,49 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
 
 struct CutOptions {
   std::vector<std::string> channels;
-  double from = -1, to = -1;            // seconds from the first event
-  int64_t from_utime = -1, to_utime = -1;
+  std::optional<double> from, to;                 // seconds from the first event
+  std::optional<int64_t> from_utime, to_utime;    // log times [us]
 };
 
+/// --from / --to [s] in microseconds, compared in integers (0.2 s is 200000 us exactly). A bound
+/// beyond the int64 range of log times saturates (keeps all or none, as asked); not finite: refused.
+int64_t boundMicros(const char* flag, double seconds) {
+  if (!std::isfinite(seconds)) throw common::ConfigError(flag, "", fmt::format("{} is not a number of seconds", seconds));
+  const double us = seconds * 1e6;
+  if (us >= 9.2e18) return std::numeric_limits<int64_t>::max();
+  if (us <= -9.2e18) return std::numeric_limits<int64_t>::min();
+  return std::llround(us);
+}
+
+/// a - b, saturated to the int64 range (log times may be anything a writer put there).
+int64_t saturatingSub(int64_t a, int64_t b) {
+  int64_t d = 0;
+  if (!__builtin_sub_overflow(a, b, &d)) return d;
+  return b < 0 ? std::numeric_limits<int64_t>::max() : std::numeric_limits<int64_t>::min();
+}
+
 int cut(const std::string& path, const std::string& output, const CutOptions& o) {
-  eval::refuseOutputOverInput(path, output);
+  refuseOutputOverLog(path, output);
+  std::optional<int64_t> from, to;
+  if (o.from) from = boundMicros("--from", *o.from);
+  if (o.to) to = boundMicros("--to", *o.to);
+  if (from && to && *from > *to)
+    throw common::ConfigError("--from", "", fmt::format("{} s is after --to {} s: nothing to keep", *o.from, *o.to));
+  if (o.from_utime && o.to_utime && *o.from_utime > *o.to_utime)
+    throw common::ConfigError("--from-utime", "", fmt::format("{} is after --to-utime {}: nothing to keep",
+                                                              *o.from_utime, *o.to_utime));
   const std::regex re = channelRegex(o.channels);
   logger::EventFile out(output);
-  int64_t t0 = -1, kept = 0, err = 0;
+  std::optional<int64_t> t0;
+  int64_t kept = 0, err = 0;
   const auto s = scan(path, [&](const eval::RawEvent& ev) {
-    if (t0 < 0) t0 = ev.utime;
+    if (!t0) t0 = ev.utime;
     if (err) return;
-    const int64_t rel = ev.utime - t0;  // [us], compared in integers: 0.2 s is 200000 us exactly
-    if (o.from >= 0 && rel < std::llround(o.from * 1e6)) return;
-    if (o.to >= 0 && rel > std::llround(o.to * 1e6)) return;
-    if (o.from_utime >= 0 && ev.utime < o.from_utime) return;
-    if (o.to_utime >= 0 && ev.utime > o.to_utime) return;
+    const int64_t rel = saturatingSub(ev.utime, *t0);  // [us]
+    if (from && rel < *from) return;
+    if (to && rel > *to) return;
+    if (o.from_utime && ev.utime < *o.from_utime) return;
+    if (o.to_utime && ev.utime > *o.to_utime) return;
     if (!std::regex_match(*ev.channel, re)) return;
     err = out.append(ev.utime, *ev.channel, ev.data, static_cast<std::size_t>(ev.size));
     if (!err) ++kept;
@@ -325,6 +380,7 @@ int main(int argc, char** argv) {
   return common::runProcess(app, argc, argv, opts, "lcmloc-log", [&] {
     if (!opts.config.empty()) common::loadSystemConfig(opts.config);
     if (!fs::exists(log_path)) throw common::ConfigError(log_path, "", "no such log file");
+    if (fs::is_directory(log_path)) throw common::ConfigError(log_path, "", "is a directory, not a log file");
     if (info_cmd->parsed()) return info(log_path);
     if (csv_cmd->parsed()) return toCsv(log_path, channels, output);
     return cut(log_path, output, cut_opts);

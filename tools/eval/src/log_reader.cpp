@@ -25,9 +25,13 @@ namespace {
 
 constexpr int64_t kEventHeaderBytes = 28;  // sync, event number, utime, channel len, data len
 
-int64_t fileSize(const std::string& path) {
+/// Size of the regular file at path. Throws std::runtime_error when there is none: a directory
+/// or a device would otherwise read as one damaged stretch of st_size bytes.
+int64_t logFileSize(const std::string& path) {
   struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) return -1;
+  if (::stat(path.c_str(), &st) != 0) throw std::runtime_error("cannot open log '" + path + "': no such file");
+  if (S_ISDIR(st.st_mode)) throw std::runtime_error("cannot read log '" + path + "': it is a directory");
+  if (!S_ISREG(st.st_mode)) throw std::runtime_error("cannot read log '" + path + "': not a regular file");
   return static_cast<int64_t>(st.st_size);
 }
 
@@ -166,8 +170,7 @@ struct LogScanner::Impl {
 
 LogScanner::LogScanner(const std::string& path, std::vector<LogIssue>* issues)
     : impl_(std::make_unique<Impl>()), issues_(issues) {
-  file_size_ = lcmloc::eval::fileSize(path);
-  if (file_size_ < 0) throw std::runtime_error("cannot open log '" + path + "': no such file");
+  file_size_ = logFileSize(path);
   impl_->file.reset(std::fopen(path.c_str(), "rb"));
   if (!impl_->file) throw std::runtime_error("cannot open log '" + path + "' for reading");
   std::setvbuf(impl_->file.get(), impl_->iobuf.data(), _IOFBF, impl_->iobuf.size());

@@ -92,7 +92,8 @@ struct LogData {
 /// (lcmloc-replay) all read through it.
 class LogScanner {
  public:
-  /// Throws std::runtime_error when the file cannot be opened. issues may be null.
+  /// Throws std::runtime_error when the file cannot be opened or is not a regular file (a
+  /// directory, a device: no log). issues may be null.
   LogScanner(const std::string& path, std::vector<LogIssue>* issues);
   ~LogScanner();
   LogScanner(const LogScanner&) = delete;
