@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -15,6 +17,7 @@
 #include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/common/csv.hpp"
 #include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/import/checks.hpp"
 #include "lcmloc/import/import.hpp"
 #include "lcmloc/import/magnet_grid.hpp"
 #include "lcmloc/landmark_obs_t.hpp"
@@ -95,6 +98,157 @@ TEST(Import, TimeUnitAndBaseDetection) {
   EXPECT_EQ(import::detectTimeUnit({5000.0, 5000.05, 5000.1}), TimeUnit::Seconds);          // a lab clock in s
   EXPECT_EQ(import::detectTimeBase(1'700'000'000'000'000LL), import::TimeBase::Absolute);
   EXPECT_EQ(import::detectTimeBase(5'000'000'000LL), import::TimeBase::Relative);
+  // One wrong time does not decide the unit (the largest |t| used to).
+  EXPECT_EQ(import::detectTimeUnit({1000.0, 1000.05, 1e12, 1000.15, 1000.2}), TimeUnit::Seconds);
+  EXPECT_EQ(import::detectTimeUnit({1.7e15, 1.7e15 + 1e5, 3.0, 1.7e15 + 3e5}), TimeUnit::Microseconds);
+}
+
+TEST(Import, TheTimeOrderRuleRefusesAnOutlierAloneAndKeepsTheEarlierOfTwoSwappedRows) {
+  using V = import::TimeVerdict;
+  auto kinds = [](const std::vector<std::optional<int64_t>>& t, bool strict) {
+    std::string k;
+    for (const auto& v : import::checkTimeOrder(t, strict))
+      k += v.kind == V::Kept ? 'k' : v.kind == V::Backwards ? 'b' : 'a';
+    return k;
+  };
+  const std::optional<int64_t> none;
+  EXPECT_EQ(kinds({10, 20, 30, 40}, true), "kkkk");
+  EXPECT_EQ(kinds({10, 20, 1000000, 30, 40}, true), "kkakk");    // far ahead: refused alone
+  EXPECT_EQ(kinds({1000000, 10, 20, 30}, true), "akkk");         // also as the first row
+  EXPECT_EQ(kinds({10, 20, 1, 30, 40}, true), "kkbkk");          // far back
+  EXPECT_EQ(kinds({10, 20, 900, 901, 30, 40, 50}, true), "kkaakkk");  // two in a row
+  EXPECT_EQ(kinds({10, 25, 20, 60}, true), "kkbk");              // swapped: the later is refused
+  EXPECT_EQ(kinds({10, 10, 20}, true), "kbk");                   // repeated
+  EXPECT_EQ(kinds({10, 10, 20}, false), "kkk");                  // landmarks, beacons: allowed
+  EXPECT_EQ(kinds({10, none, 900, none, 30, 40}, true), "kkakkk");  // rows without a time take no part
+  EXPECT_EQ(kinds({10, 20, 900, 30}, true), "kkkb");  // nothing after them to tell: the earlier is kept
+  EXPECT_EQ(kinds({}, true), "");
+  const std::vector<std::optional<int64_t>> t{10, 20, 1000000, 30, 40};
+  const auto v = import::checkTimeOrder(t, true);
+  EXPECT_EQ(v[2].prev, 1u);
+  EXPECT_EQ(v[2].next, 3u);
+  const auto why = import::timeOrderReason(t, 2, v[2], true, [&](std::size_t i) { return std::to_string(*t[i]); });
+  EXPECT_NE(why.find("time 1000000 out of line: after the previous row's 20 but not before the next row's 30"),
+            std::string::npos) << why;
+}
+
+TEST(Import, OneWrongTimeIsRefusedAloneAndTheRestImported) {
+  // The audit: one odometry time of a 20 Hz file in seconds set to 1e12 made the whole file
+  // microseconds and refused every row after it.
+  const auto d = tempDir("outlier");
+  std::string odo = "time,delta_s,delta_theta\n", truth = "time,x,y,heading\n";
+  for (int k = 0; k < 200; ++k) {
+    odo += fmt::format("{},0.02,0.0\n", k == 100 ? std::string("1e12") : fmt::format("{:.3f}", 1000.0 + 0.05 * k));
+    truth += fmt::format("{},{},0,0\n", k == 50 ? std::string("5") : fmt::format("{:.3f}", 1000.0 + 0.05 * k), 0.02 * k);
+  }
+  write(d / "odometry.csv", odo);
+  write(d / "truth.csv", truth);
+  write(d / "late.csv", "time,x,y\n1000.0,0,0\n1e300,1,1\n1000.5,2,2\n1001.0,2,2\n1001.5,2,2\n");  // beyond the clock
+  import::ImportOptions o;
+  o.dir = d.string();
+  o.start_at_zero = true;  // from the earliest kept time, not the wrong 5 s
+  const auto r = import::importDirectory(o);
+  ASSERT_EQ(r.refusals.size(), 3u) << r.refusals.back().reason;
+  EXPECT_TRUE(refused(r, "odometry.csv", 102, "time 1e12 out of line: after the previous row's 1004.950 but not "
+                                              "before the next row's 1005.050"));
+  EXPECT_TRUE(refused(r, "truth.csv", 52, "time 5 not after the previous row's 1002.450 (time going backwards"));
+  EXPECT_TRUE(refused(r, "late.csv", 3, "time 1e300 seconds out of range"));
+  EXPECT_EQ(file(r, "odometry.csv")->unit, import::TimeUnit::Seconds);
+  EXPECT_EQ(file(r, "odometry.csv")->base, import::TimeBase::Relative);
+  EXPECT_EQ(file(r, "odometry.csv")->written, 199);
+  EXPECT_EQ(file(r, "truth.csv")->written, 199);
+  EXPECT_EQ(r.first_utime, 0);
+  EXPECT_EQ(r.last_utime, 9950000);
+}
+
+TEST(Import, OverlappingFilesOfOneStreamAreRefusedLandmarksMayComeFromSeveral) {
+  const auto d = tempDir("twice");
+  writeCircleRun(d, 20);
+  fs::copy_file(d / "odometry.csv", d / "odometry2.csv");  // the audit: merged into twice the motion
+  import::ImportOptions o;
+  o.dir = d.string();
+  try {
+    import::importDirectory(o);
+    FAIL() << "two odometry files merged";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("two odometry files overlap in time"), std::string::npos) << what;
+    EXPECT_NE(what.find((d / "odometry.csv").string()), std::string::npos) << what;
+    EXPECT_NE(what.find((d / "odometry2.csv").string()), std::string::npos) << what;
+  }
+  fs::remove(d / "odometry2.csv");
+  fs::copy_file(d / "truth.csv", d / "truth2.csv");
+  EXPECT_THROW(import::importDirectory(o), std::runtime_error);
+  fs::remove(d / "truth2.csv");
+  // Pieces of one stream one after the other are joined, numbered in time order (this file's
+  // name sorts before odometry.csv, its times after).
+  write(d / "a_later_odometry.csv", "time,delta_s,delta_theta\n200.0,0.05,0\n200.1,0.05,0\n");
+  // Measurements of several sensors at once (two cameras, two receivers): all imported, numbered
+  // in time order on the channel.
+  write(d / "landmarks_rear.csv", "time,landmark_id,range,bearing\n100.02,1,4.0,0.1\n100.52,unknown,4.0,0.1\n");
+  write(d / "gps_a.csv", "time,x,y\n100.5,2.1,0.3\n101.5,2.1,0.3\n");
+  write(d / "gps_b.csv", "time,latitude,longitude\n101.0,-33.883,151.195\n");
+  o.out_dir = (d / "out").string();
+  const auto r = import::importDirectory(o);
+  EXPECT_TRUE(r.refusals.empty());
+  EXPECT_EQ(file(r, "landmarks_rear.csv")->written, 2);
+  std::map<std::string, std::vector<std::pair<int64_t, int64_t>>> seq;  // (utime, seq) per channel, in log order
+  eval::scanLog(r.log_path, [&](const eval::RawEvent& e) {
+    lcmloc::landmark_obs_t l;
+    lcmloc::odometry_t m;
+    lcmloc::gps_fix_t g;
+    if (*e.channel == "LANDMARKS" && l.decode(e.data, 0, e.size) == e.size) seq[*e.channel].emplace_back(l.utime, l.seq);
+    if (*e.channel == "ODOMETRY" && m.decode(e.data, 0, e.size) == e.size) seq[*e.channel].emplace_back(m.utime, m.seq);
+    if (*e.channel == "GPS" && g.decode(e.data, 0, e.size) == e.size) seq[*e.channel].emplace_back(g.utime, g.seq);
+  });
+  ASSERT_EQ(seq["LANDMARKS"].size(), 22u);
+  ASSERT_EQ(seq["ODOMETRY"].size(), 22u);
+  ASSERT_EQ(seq["GPS"].size(), 3u);
+  for (const auto& [ch, s] : seq)
+    for (std::size_t i = 0; i < s.size(); ++i) EXPECT_EQ(s[i].second, static_cast<int64_t>(i)) << ch << ": no gap, no jump";
+  EXPECT_EQ(seq["LANDMARKS"][0].first, 100020000);
+  EXPECT_EQ(seq["ODOMETRY"][20].first, 200000000);
+}
+
+TEST(Import, OptionsBoundForTheConfigAreRefusedWithTheFlagAndNothingIsWritten) {
+  const auto d = tempDir("options");
+  writeCircleRun(d, 20);
+  write(d / "odo_steer.csv", "time,speed,steering\n300.0,2.0,0.1\n300.5,2.0,0.1\n");
+  fs::remove(d / "odometry.csv");
+  import::ImportOptions o;
+  o.dir = d.string();
+  o.out_dir = (d / "out").string();
+  auto refusedWith = [&](const std::string& flag) {
+    try {
+      import::importDirectory(o);
+      ADD_FAILURE() << flag << ": accepted";
+    } catch (const common::ConfigError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(flag + ":", 0), 0u) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(d / "out")) << flag;
+  };
+  o.wheelbase = NAN;  // used to say "needs --wheelbase"
+  refusedWith("--wheelbase");
+  o.wheelbase = 50.0;  // beyond what config.yaml accepts
+  refusedWith("--wheelbase");
+  o.wheelbase = 2.0;
+  o.initial_pose = core::Vec3(NAN, 0, 0);  // used to write initial_pose: [nan, ...]
+  refusedWith("--initial-pose");
+  o.initial_pose = core::Vec3(0, 0, 7.0);
+  refusedWith("--initial-pose");
+  o.initial_pose.reset();
+  o.filter = "kalman";
+  refusedWith("--filter");
+  o.filter.clear();
+  // The output directory is the input directory: map.csv would be overwritten.
+  o.out_dir = d.string();
+  const std::string map_before = [&] { std::ifstream in(d / "map.csv"); return std::string(std::istreambuf_iterator<char>(in), {}); }();
+  refusedWith("--output");
+  std::ifstream in(d / "map.csv");
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), map_before);
+  EXPECT_FALSE(fs::exists(d / "run.lcmlog"));
+  o.out_dir = (d / "out").string();
+  EXPECT_TRUE(import::importDirectory(o).usable());
 }
 
 TEST(Import, GoodFilesOfEveryKindBecomeALogMapAndConfig) {
@@ -306,6 +460,65 @@ TEST(MagnetGrid, SmallRunImportsAndTheGatedFilterAcceptsTheMagnetPasses) {
     hi = std::max(hi, m.lateral);
   }
   EXPECT_NEAR(hi - lo, 0.06, 0.011);
+}
+
+TEST(MagnetGrid, OneWrongTimeIsRefusedAloneAndBadFlagsAreNamed) {
+  const auto d = tempDir("magnet_outlier");
+  std::ifstream in(std::string(LCMLOC_MAGNET_GRID_DIR) + "/line2magnets.txt");
+  std::string text, line;
+  for (int n = 1; std::getline(in, line); ++n) {
+    if (n == 50) {  // the time column (4th) set to 1e12 s; it used to refuse the 148 rows after it
+      std::istringstream ss(line);
+      std::string a, b, c, t;
+      ss >> a >> b >> c >> t;
+      line = a + " " + b + " " + c + " 1e12";
+    }
+    text += line + "\n";
+  }
+  write(d / "run.txt", text);
+  import::MagnetGridOptions mo;
+  mo.input = (d / "run.txt").string();
+  auto imp = import::importMagnetGrid(mo);
+  EXPECT_EQ(imp.rows, 197);
+  ASSERT_EQ(imp.refused, 1);
+  EXPECT_EQ(imp.refusals[0].first, 50);
+  EXPECT_NE(imp.refusals[0].second.find("time 1000000000000 s out of line"), std::string::npos)
+      << imp.refusals[0].second;
+  EXPECT_EQ(imp.odometry, 196);
+  // Values bound for config.yaml and map.csv: refused with the flag's name, nothing written.
+  mo.out_dir = (d / "out").string();
+  auto refusedWith = [&](const import::MagnetGridOptions& bad, const std::string& flag) {
+    try {
+      import::importMagnetGrid(bad);
+      ADD_FAILURE() << flag << ": accepted";
+    } catch (const common::ConfigError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(flag + ":", 0), 0u) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(d / "out")) << flag;
+  };
+  auto bad = mo;
+  bad.pv_diag = core::Vec2(-1e-5, 1e-3);
+  refusedWith(bad, "--pv-diag");
+  bad = mo;
+  bad.pw_diag = core::Vec3(1e-5, -1.0, 1e-3);
+  refusedWith(bad, "--pw-diag");
+  bad = mo;
+  bad.pw_turn = -1;
+  refusedWith(bad, "--pw-turn");
+  bad = mo;
+  bad.grid_angle = NAN;  // used to write a map of NaN
+  refusedWith(bad, "--grid-angle");
+  bad = mo;
+  bad.pv_diag = core::Vec2(NAN, 0);
+  refusedWith(bad, "--pv-diag");
+  // The run file as the output's map.csv: refused, the run kept.
+  bad = mo;
+  bad.out_dir = d.string();
+  fs::copy_file(d / "run.txt", d / "map.csv");
+  bad.input = (d / "map.csv").string();
+  EXPECT_THROW(import::importMagnetGrid(bad), common::ConfigError);
+  EXPECT_EQ(fs::file_size(d / "map.csv"), fs::file_size(d / "run.txt"));
+  EXPECT_EQ(import::importMagnetGrid(mo).odometry, 196);
 }
 
 TEST(MagnetGrid, TheReedBitOrderIsTheOneTheLoopDataSupports) {

@@ -7,6 +7,8 @@
 #include <fstream>
 #include <map>
 
+#include <fmt/format.h>
+
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/convert.hpp"
 #include "lcmloc/eval/log_reader.hpp"
@@ -108,6 +110,67 @@ TEST(VpImport, BadRowsAreRefusedWithLineNumbersAndTheRestConverted) {
   ASSERT_TRUE(in.has_value());
   EXPECT_NEAR(in->x, 12.0, 1e-6);
   EXPECT_NEAR(in->y, 21.0, 1e-6);
+  fs::remove_all(d);
+}
+
+TEST(VpImport, OneWrongTimeIsRefusedAloneAndTheRestConverted) {
+  // The audit: a time_ms of 1e15 was accepted and every row after it refused as going backwards.
+  const auto d = tempDir("outlier");
+  std::string odo = "time_ms,speed_mps,steering_rad\n", gps = "time_ms,Lo_m,La_m\n";
+  for (int k = 0; k < 100; ++k) {
+    odo += fmt::format("{},2.0,0.0\n", k == 40 ? 1e15 : 1000.0 + 25.0 * k);
+    gps += fmt::format("{},{},0.0\n", k == 0 ? 1e15 : 1000.0 + 200.0 * k, 2.0 * k);  // also as the first row
+  }
+  write(d / "odo.csv", odo);
+  write(d / "gps.csv", gps);
+  vp::ImportOptions o;
+  o.odometry_csv = (d / "odo.csv").string();
+  o.gps_csv = (d / "gps.csv").string();
+  o.holdout_every = 0;
+  const auto r = vp::importVictoriaPark(o);
+  EXPECT_EQ(r.odometry_refused, 1);
+  EXPECT_EQ(r.odometry_written, 99);
+  EXPECT_EQ(r.gps_refused, 1);
+  EXPECT_EQ(r.gps_written, 99);
+  ASSERT_EQ(r.refusals.size(), 2u);
+  EXPECT_EQ(r.refusals[0].line, 42);
+  EXPECT_NE(r.refusals[0].reason.find("out of line: after the previous row's 1975 ms but not before the next row's "
+                                      "2025 ms"),
+            std::string::npos) << r.refusals[0].reason;
+  EXPECT_EQ(r.refusals[1].line, 2);
+  EXPECT_NE(r.refusals[1].reason.find("out of line: the first row but not before the next row's 1200 ms"),
+            std::string::npos) << r.refusals[1].reason;
+  EXPECT_EQ(r.last_utime, 1000000 + 200000 * 99);
+  // a slice ends at the odometry's span, but not at an outlier
+  o.max_rows = 50;
+  const auto slice = vp::importVictoriaPark(o);
+  EXPECT_EQ(slice.odometry_written, 49);
+  EXPECT_EQ(slice.gps_rows, 7);  // the outlier and 1200 .. 2200 ms (odometry up to 2225 ms)
+  fs::remove_all(d);
+}
+
+TEST(VpImport, AnOutputThatIsAnInputIsRefused) {
+  const auto d = tempDir("self");
+  write(d / "odo.csv", "time_ms,speed_mps,steering_rad\n1000.0,2.0,0.0\n1025.0,2.0,0.0\n");
+  write(d / "gps.csv", "time_ms,Lo_m,La_m\n1000.0,10.0,20.0\n");
+  fs::create_hard_link(d / "odo.csv", d / "link.csv");
+  vp::ImportOptions o;
+  o.odometry_csv = (d / "odo.csv").string();
+  o.gps_csv = (d / "gps.csv").string();
+  for (const auto& out : {d / "odo.csv", d / "link.csv", d / "." / "gps.csv"}) {
+    o.output = out.string();
+    try {
+      vp::importVictoriaPark(o);
+      ADD_FAILURE() << out << " overwritten";
+    } catch (const common::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("--output: '" + out.string() + "' is the input file"), std::string::npos)
+          << e.what();
+    }
+  }
+  EXPECT_EQ(fs::file_size(d / "odo.csv"), 61u);
+  EXPECT_EQ(fs::file_size(d / "gps.csv"), 35u);
+  o.output = (d / "out.lcmlog").string();
+  EXPECT_EQ(vp::importVictoriaPark(o).odometry_written, 2);
   fs::remove_all(d);
 }
 

@@ -45,13 +45,6 @@ int main(int argc, char** argv) {
     io.base = base == "absolute" ? import::TimeBase::Absolute
               : base == "relative" ? import::TimeBase::Relative : import::TimeBase::Auto;
     if (pose.size() == 3) io.initial_pose = core::Vec3(pose[0], pose[1], pose[2]);
-    if (!io.filter.empty()) {
-      const auto types = core::filterTypes();
-      if (std::find(types.begin(), types.end(), io.filter) == types.end()) {
-        spdlog::error("unknown filter type '{}'", io.filter);
-        return common::kExitConfigError;
-      }
-    }
     const auto r = import::importDirectory(io);
     std::cout << import::importSummary(r, show);
     if (!r.usable()) {

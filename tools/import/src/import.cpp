@@ -4,7 +4,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <stdexcept>
 
@@ -16,6 +18,7 @@
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"
+#include "lcmloc/import/checks.hpp"
 #include "lcmloc/import/event_log.hpp"
 #include "lcmloc/landmark_obs_t.hpp"
 #include "lcmloc/odometry_t.hpp"
@@ -55,6 +58,7 @@ struct Row {
   int64_t utime = 0;
   double t_raw = 0;
   std::vector<std::string> fields;  ///< as read (time first)
+  std::string time_refusal;         ///< why the time-order rule refuses the row ("" = kept)
 };
 
 struct DataFile {
@@ -62,6 +66,7 @@ struct DataFile {
   Format format = Format::Map;
   std::size_t columns = 0;          ///< columns in this file (with time)
   std::vector<Row> rows;            ///< rows that split into the right number of columns with a numeric time
+  std::optional<int64_t> first_kept, last_kept;  ///< time span of the rows the time-order rule keeps
 };
 
 /// Header -> format; forced unit from time_s / time_us. False when not recognised.
@@ -90,8 +95,6 @@ bool classify(const std::vector<std::string>& h, Format& f, std::size_t& ncol, T
   }
   return false;
 }
-
-int64_t toUtime(double t, TimeUnit u) { return std::llround(u == TimeUnit::Seconds ? t * 1e6 : t); }
 
 template <typename M>
 void addMsg(EventLog& log, FileReport& rep, int order, const std::string& ch, const M& m) {
@@ -122,6 +125,16 @@ bool parseId(const std::string& s, int& id, bool allow_unknown, std::string& why
   return true;
 }
 
+/// The options that go into config.yaml, refused with the flag's name when config.yaml would
+/// not accept them (the replay would refuse the generated file).
+void checkOptions(const ImportOptions& opt) {
+  if (opt.wheelbase != 0.0) checkFilterValue("--wheelbase", "wheelbase", fmt::format("{}", opt.wheelbase));
+  if (opt.initial_pose)
+    checkFilterValue("--initial-pose", "initial_pose",
+                     fmt::format("[{}, {}, {}]", (*opt.initial_pose)[0], (*opt.initial_pose)[1], (*opt.initial_pose)[2]));
+  if (!opt.filter.empty()) checkFilterValue("--filter", "type", opt.filter);
+}
+
 }  // namespace
 
 std::string toString(TimeUnit u) {
@@ -140,9 +153,11 @@ std::string toString(TimeBase b) {
 }
 
 TimeUnit detectTimeUnit(const std::vector<double>& t) {
-  double mx = 0;
-  for (double v : t) mx = std::max(mx, std::abs(v));
-  if (mx >= 1e11) return TimeUnit::Microseconds;
+  if (t.empty()) return TimeUnit::Seconds;
+  std::vector<double> mag;  // the median, not the largest: one wrong time does not decide
+  for (double v : t) mag.push_back(std::abs(v));
+  std::nth_element(mag.begin(), mag.begin() + mag.size() / 2, mag.end());
+  if (mag[mag.size() / 2] >= 1e11) return TimeUnit::Microseconds;
   std::vector<double> steps;
   for (std::size_t i = 1; i < t.size(); ++i)
     if (t[i] > t[i - 1]) steps.push_back(t[i] - t[i - 1]);
@@ -164,6 +179,12 @@ ImportResult importDirectory(const ImportOptions& opt) {
     if (e.is_regular_file() && e.path().extension() == ".csv") paths.push_back(e.path());
   if (ec) throw std::runtime_error("cannot list '" + opt.dir + "': " + ec.message());
   std::sort(paths.begin(), paths.end());
+  checkOptions(opt);
+  if (!opt.out_dir.empty()) {
+    const std::vector<std::string> inputs(paths.begin(), paths.end());
+    for (const char* name : {"run.lcmlog", "map.csv", "config.yaml"})
+      refuseOutputOverInputs("--output", (fs::path(opt.out_dir) / name).string(), inputs);
+  }
 
   auto refuse = [&](FileReport& f, int64_t line, const std::string& why) {
     r.refusals.push_back({f.path, line, why});
@@ -230,12 +251,32 @@ ImportResult importDirectory(const ImportOptions& opt) {
       df.rows.push_back(std::move(row));
     }
     if (df.report.unit == TimeUnit::Auto) df.report.unit = detectTimeUnit(raw);
-    for (auto& row : df.rows) row.utime = toUtime(row.t_raw, df.report.unit);
-    if (!df.rows.empty()) {
-      df.report.base = opt.base != TimeBase::Auto ? opt.base : detectTimeBase(df.rows.front().utime);
-    } else {
-      df.report.base = opt.base;
+    // Times in microseconds (out of range: refused), then the time-order rule (an outlier is
+    // refused alone); the base is the first kept row's.
+    std::vector<std::optional<int64_t>> utimes;
+    for (const auto& row : df.rows) {
+      utimes.push_back(toMicros(row.t_raw, df.report.unit == TimeUnit::Seconds ? 1e6 : 1.0));
+      if (!utimes.back())
+        refuse(df.report, row.line, fmt::format("time {} {} out of range", row.fields[0], toString(df.report.unit)));
     }
+    const bool strict = f != Format::Landmarks && f != Format::Beacons;
+    const auto order = checkTimeOrder(utimes, strict);
+    for (std::size_t i = 0; i < df.rows.size(); ++i) {
+      if (!utimes[i]) continue;
+      df.rows[i].utime = *utimes[i];
+      if (order[i].kind != TimeVerdict::Kept) {
+        df.rows[i].time_refusal =
+            timeOrderReason(utimes, i, order[i], strict, [&](std::size_t k) { return df.rows[k].fields[0]; });
+        continue;
+      }
+      if (!df.first_kept) df.first_kept = df.rows[i].utime;
+      df.last_kept = df.rows[i].utime;  // the kept rows are in time order
+    }
+    std::vector<Row> timed;  // the rows with a time in range
+    for (std::size_t i = 0; i < df.rows.size(); ++i)
+      if (utimes[i]) timed.push_back(std::move(df.rows[i]));
+    df.rows = std::move(timed);
+    df.report.base = opt.base != TimeBase::Auto || !df.first_kept ? opt.base : detectTimeBase(*df.first_kept);
     files.push_back(std::move(df));
   }
   r.map_size = static_cast<int64_t>(map.size());
@@ -253,15 +294,31 @@ ImportResult importDirectory(const ImportOptions& opt) {
         "'{}' has absolute (epoch) times, '{}' relative ones: they do not share a clock (force one with "
         "--time-base, and check --time-unit)",
         abs_file->report.path, rel_file->report.path));
-  int64_t shift = 0;
-  if (opt.start_at_zero) {
-    bool any = false;
-    for (const auto& f : files)
-      for (const auto& row : f.rows) {
-        shift = any ? std::min(shift, row.utime) : row.utime;
-        any = true;
-      }
+  // One motion source, one truth: files of odometry or ground truth are pieces of one stream,
+  // one after the other; two that overlap in time would be merged into one channel (the motion
+  // counted twice, two truths interleaved). Measurements (landmarks, beacons, gps) may come
+  // from several files at once (several sensors).
+  std::vector<const DataFile*> in_time;  // files in the order of their first kept time
+  for (const auto& f : files) in_time.push_back(&f);
+  std::stable_sort(in_time.begin(), in_time.end(), [](const DataFile* a, const DataFile* b) {
+    constexpr int64_t kNever = std::numeric_limits<int64_t>::max();  // no kept row: last
+    return a->first_kept.value_or(kNever) < b->first_kept.value_or(kNever);
+  });
+  std::map<std::string, const DataFile*> last_of_kind;
+  for (const DataFile* f : in_time) {
+    const bool stream = f->report.kind == "odometry" || f->report.kind == "ground_truth";
+    if (!f->first_kept || !stream) continue;
+    const DataFile*& before = last_of_kind[f->report.kind];
+    if (before && *f->first_kept <= *before->last_kept)
+      throw std::runtime_error(fmt::format(
+          "two {} files overlap in time: '{}' ({:.6f} .. {:.6f} s) and '{}' ({:.6f} .. {:.6f} s); one {} stream per "
+          "directory (files of one kind are joined one after the other): remove or merge one",
+          f->report.kind, before->report.path, *before->first_kept * 1e-6, *before->last_kept * 1e-6, f->report.path,
+          *f->first_kept * 1e-6, *f->last_kept * 1e-6, f->report.kind));
+    before = f;
   }
+  int64_t shift = 0;  // --start-at-zero: the earliest kept time
+  if (opt.start_at_zero && !in_time.empty() && in_time.front()->first_kept) shift = *in_time.front()->first_kept;
 
   std::map<int, core::Marker> by_id;
   for (const auto& m : map) by_id[m.id] = m;
@@ -271,15 +328,21 @@ ImportResult importDirectory(const ImportOptions& opt) {
   std::optional<core::Vec3> first_truth;
   int64_t first_truth_utime = 0;
   std::map<std::string, int64_t> seq;
+  // Landmarks, beacons and gps may come from several files at once: numbered per channel in
+  // time order once all are read (the daemon counts a jump in seq as lost messages).
+  std::vector<std::pair<lcmloc::landmark_obs_t, FileReport*>> landmark_msgs;
+  std::vector<std::pair<lcmloc::beacon_range_t, FileReport*>> beacon_msgs;
+  std::vector<std::pair<lcmloc::gps_fix_t, FileReport*>> gps_msgs;
 
-  // Pass 2: convert, in file order, each file's rows in line order.
-  for (auto& df : files) {
+  // Pass 2: convert, file after file in time order (sequence numbers in time order), each
+  // file's rows in line order.
+  for (const DataFile* in_order : in_time) {
+    DataFile& df = files[static_cast<std::size_t>(in_order - files.data())];
     FileReport& rep = df.report;
     if (df.format == Format::OdoSteering && !(opt.wheelbase > 0))
       throw std::runtime_error("'" + rep.path + "': speed,steering odometry needs --wheelbase (L [m], eq. 2)");
     bool have_prev = false;
     int64_t t_prev = 0;
-    std::string t_prev_raw;
     double a_prev = 0, b_prev = 0, dist = 0, x_prev = 0, y_prev = 0;
     std::string why;
     std::vector<double> v;
@@ -296,13 +359,8 @@ ImportResult importDirectory(const ImportOptions& opt) {
         else
           ok = common::csv::parseNumber(row.fields[i], i + 1, v[i], why);
       }
+      if (!row.time_refusal.empty()) { refuse(rep, ln, row.time_refusal); continue; }
       if (!ok) { refuse(rep, ln, why); continue; }
-      const bool strict = df.format != Format::Landmarks && df.format != Format::Beacons;
-      if (have_prev && (strict ? row.utime <= t_prev : row.utime < t_prev)) {
-        refuse(rep, ln, fmt::format("time {} {} the previous row's {} (time going backwards{})", row.fields[0],
-                                    strict ? "not after" : "before", t_prev_raw, strict ? " or repeated" : ""));
-        continue;
-      }
       const double dt = have_prev ? (row.utime - t_prev) * 1e-6 : 0.0;
       switch (df.format) {
         case Format::OdoDelta:
@@ -358,11 +416,10 @@ ImportResult importDirectory(const ImportOptions& opt) {
           if (std::abs(v[3]) > kPi) { refuse(rep, ln, fmt::format("bearing {} outside [-pi, pi] (radians expected)", v[3])); continue; }
           lcmloc::landmark_obs_t m{};
           m.utime = row.utime;
-          m.seq = seq[opt.channels.landmarks]++;
           m.landmark_id = id;
           m.range = v[2];
           m.bearing = core::wrapAngle(v[3]);
-          addMsg(log, rep, 2, opt.channels.landmarks, m);
+          landmark_msgs.emplace_back(m, &rep);
           have_landmarks = true;
           break;
         }
@@ -375,10 +432,9 @@ ImportResult importDirectory(const ImportOptions& opt) {
           if (v[2] < 0) { refuse(rep, ln, fmt::format("negative range {}", v[2])); continue; }
           lcmloc::beacon_range_t m{};
           m.utime = row.utime;
-          m.seq = seq[opt.channels.beacons]++;
           m.beacon_id = id;
           m.range = v[2];
-          addMsg(log, rep, 3, opt.channels.beacons, m);
+          beacon_msgs.emplace_back(m, &rep);
           have_beacons = true;
           break;
         }
@@ -405,8 +461,7 @@ ImportResult importDirectory(const ImportOptions& opt) {
             m.longitude = v[2];
             m.altitude = opt.datum.altitude;
           }
-          m.seq = seq[opt.channels.gps]++;
-          addMsg(log, rep, 4, opt.channels.gps, m);
+          gps_msgs.emplace_back(m, &rep);
           have_gps = true;
           break;
         }
@@ -435,9 +490,19 @@ ImportResult importDirectory(const ImportOptions& opt) {
       }
       have_prev = true;
       t_prev = row.utime;
-      t_prev_raw = row.fields[0];
     }
   }
+  auto addInTimeOrder = [&](auto& msgs, int order, const std::string& channel) {
+    std::stable_sort(msgs.begin(), msgs.end(),
+                     [](const auto& a, const auto& b) { return a.first.utime < b.first.utime; });
+    for (auto& [m, rep] : msgs) {
+      m.seq = seq[channel]++;
+      addMsg(log, *rep, order, channel, m);
+    }
+  };
+  addInTimeOrder(landmark_msgs, 2, opt.channels.landmarks);
+  addInTimeOrder(beacon_msgs, 3, opt.channels.beacons);
+  addInTimeOrder(gps_msgs, 4, opt.channels.gps);
 
   log.sort();
   r.messages = static_cast<int64_t>(log.size());

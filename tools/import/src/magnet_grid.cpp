@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -22,6 +23,7 @@
 #include "lcmloc/eval/trajectory.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/gate_decision_t.hpp"
+#include "lcmloc/import/checks.hpp"
 #include "lcmloc/import/event_log.hpp"
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
@@ -65,6 +67,18 @@ MagnetGridImport importMagnetGrid(const MagnetGridOptions& opt) {
   if (opt.bit0 != "right" && opt.bit0 != "left") throw std::invalid_argument("bit0 must be 'right' or 'left'");
   if (!(opt.wheel_radius > 0 && opt.track > 0 && opt.dots_per_rev > 0 && opt.grid > 0 && opt.reed_offset > 0))
     throw std::invalid_argument("wheel radius, track, dots per revolution, grid and reed offset must be > 0");
+  // What goes into config.yaml and map.csv: refused with the flag's name, before anything is
+  // written, rather than by the replay naming the generated file.
+  checkFilterValue("--filter", "type", opt.filter);
+  checkFilterValue("--pv-diag", "pv_diag", fmt::format("[{}, {}]", opt.pv_diag[0], opt.pv_diag[1]));
+  checkFilterValue("--pw-diag", "pw_diag", fmt::format("[{}, {}, {}]", opt.pw_diag[0], opt.pw_diag[1], opt.pw_diag[2]));
+  checkFilterValue("--pw-turn", "pw_turn", fmt::format("{}", opt.pw_turn));
+  checkFilterValue("--reach", "reach_forward", fmt::format("{}", opt.reach));
+  if (!std::isfinite(opt.grid_angle))
+    throw common::ConfigError("--grid-angle", "", fmt::format("{} is not an angle [rad]", opt.grid_angle));
+  if (!opt.out_dir.empty())
+    for (const char* name : {"run.lcmlog", "map.csv", "config.yaml"})
+      refuseOutputOverInputs("--output", (fs::path(opt.out_dir) / name).string(), {opt.input});
   std::ifstream in(opt.input);
   if (!in) throw std::runtime_error("cannot open '" + opt.input + "'");
   MagnetGridImport r;
@@ -75,7 +89,6 @@ MagnetGridImport importMagnetGrid(const MagnetGridOptions& opt) {
   int64_t lineno = 0, seq_odo = 0;
   bool have_prev = false;
   double l_prev = 0, r_prev = 0;
-  int64_t t_prev = 0;
   core::Vec3 pose = core::Vec3::Zero();
   std::vector<Pass> open;
   std::vector<std::pair<int64_t, core::Vec3>> poses;  // (utime, dead-reckoned pose) for the grid anchor
@@ -90,6 +103,15 @@ MagnetGridImport importMagnetGrid(const MagnetGridOptions& opt) {
     ++r.refused;
     r.refusals.emplace_back(lineno, why);
   };
+  // Read every row first (the time-order rule looks at the rows after each): the four numbers,
+  // or why the row is refused; times in microseconds; then the time-order rule.
+  struct Sample {
+    int64_t line = 0;
+    double v[4] = {0, 0, 0, 0};
+    std::string why;  ///< "" = usable so far
+  };
+  std::vector<Sample> samples;
+  std::vector<std::optional<int64_t>> utimes;
   while (std::getline(in, line)) {
     ++lineno;
     std::istringstream ss(line);
@@ -97,17 +119,32 @@ MagnetGridImport importMagnetGrid(const MagnetGridOptions& opt) {
     std::string tok;
     while (ss >> tok) f.push_back(tok);
     if (f.empty()) continue;
-    ++r.rows;
-    if (f.size() < 4) { refuse(fmt::format("expected at least 4 columns, got {}", f.size())); continue; }
-    double v[4];
-    std::string why;
+    Sample& sm = samples.emplace_back();
+    sm.line = lineno;
+    utimes.emplace_back();
+    if (f.size() < 4) { sm.why = fmt::format("expected at least 4 columns, got {}", f.size()); continue; }
     bool ok = true;
-    for (int i = 0; i < 4 && ok; ++i) ok = common::csv::parseNumber(f[static_cast<std::size_t>(i)], i + 1, v[i], why);
-    if (!ok) { refuse(why); continue; }
-    if (v[2] < 0 || v[2] > 255 || v[2] != std::floor(v[2])) { refuse(fmt::format("reed byte {} not in 0..255", f[2])); continue; }
-    if (v[3] < 0) { refuse("negative time"); continue; }
-    const int64_t t = std::llround(v[3] * 1e6);
-    if (have_prev && t <= t_prev) { refuse(fmt::format("time {} s not after the previous row's", f[3])); continue; }
+    for (int i = 0; i < 4 && ok; ++i) ok = common::csv::parseNumber(f[static_cast<std::size_t>(i)], i + 1, sm.v[i], sm.why);
+    if (!ok) continue;
+    if (sm.v[2] < 0 || sm.v[2] > 255 || sm.v[2] != std::floor(sm.v[2])) {
+      sm.why = fmt::format("reed byte {} not in 0..255", f[2]);
+      continue;
+    }
+    if (sm.v[3] < 0) { sm.why = "negative time"; continue; }
+    utimes.back() = toMicros(sm.v[3], 1e6);
+    if (!utimes.back()) sm.why = fmt::format("time {} s out of range", f[3]);
+  }
+  const auto order = checkTimeOrder(utimes, true);
+  for (std::size_t i = 0; i < samples.size(); ++i)
+    if (order[i].kind != TimeVerdict::Kept)
+      samples[i].why = timeOrderReason(utimes, i, order[i], true,
+                                       [&](std::size_t k) { return fmt::format("{} s", samples[k].v[3]); });
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    lineno = samples[k].line;
+    const double* v = samples[k].v;
+    ++r.rows;
+    if (!samples[k].why.empty()) { refuse(samples[k].why); continue; }
+    const int64_t t = *utimes[k];
     if (have_prev && (std::abs(v[0] - l_prev) > opt.max_step_dots || std::abs(v[1] - r_prev) > opt.max_step_dots)) {
       refuse(fmt::format("encoder jump ({}, {}) dots above {}", v[0] - l_prev, v[1] - r_prev, opt.max_step_dots));
       continue;
@@ -153,7 +190,6 @@ MagnetGridImport importMagnetGrid(const MagnetGridOptions& opt) {
       if (!it->seen) { close(*it); it = open.erase(it); } else ++it;
     }
     have_prev = true;
-    t_prev = t;
     l_prev = v[0];
     r_prev = v[1];
   }

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -10,6 +11,7 @@
 
 #include "lcmloc/common/csv.hpp"
 #include "lcmloc/common/geodesy.hpp"
+#include "lcmloc/import/checks.hpp"
 #include "lcmloc/import/event_log.hpp"
 #include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/odometry_t.hpp"
@@ -17,10 +19,48 @@
 
 namespace lcmloc::vp {
 namespace {
-using common::csv::parseRow;
-std::ifstream openCsv(const std::string& path, const std::string& header) {
-  return common::csv::openWithHeader(path, header);
+
+/// The data rows of one file, read whole (the time-order rule looks at the next row): each row's
+/// three numbers, its time in microseconds, and why it is refused so far ("" = usable).
+struct Rows {
+  std::vector<int64_t> line;
+  std::vector<std::vector<double>> v;
+  std::vector<std::optional<int64_t>> utime;  ///< nullopt: no usable time
+  std::vector<std::string> why;
+  std::size_t size() const { return line.size(); }
+};
+
+/// Reads the rows after header (at most max_rows non-empty rows; 0 = all): not a number, not
+/// finite, wrong column count, negative or out-of-range time, then the time-order rule
+/// (import::checkTimeOrder: strictly increasing, a single time far ahead refused alone).
+Rows readRows(const std::string& path, const std::string& header, int64_t max_rows) {
+  auto in = common::csv::openWithHeader(path, header);
+  Rows r;
+  std::string text, why;
+  std::vector<double> v;
+  for (int64_t lineno = 2; std::getline(in, text); ++lineno) {
+    if (text.empty() || text == "\r") continue;
+    if (max_rows > 0 && static_cast<int64_t>(r.size()) >= max_rows) break;
+    r.line.push_back(lineno);
+    r.utime.emplace_back();
+    if (!common::csv::parseRow(text, 3, v, why)) {
+      r.v.emplace_back();
+      r.why.push_back(why);
+      continue;
+    }
+    r.v.push_back(v);
+    r.why.emplace_back();
+    if (v[0] < 0) r.why.back() = fmt::format("negative time {} ms", v[0]);
+    else if (!(r.utime.back() = import::toMicros(v[0], 1e3))) r.why.back() = fmt::format("time {} ms out of range", v[0]);
+  }
+  const auto order = import::checkTimeOrder(r.utime, true);
+  for (std::size_t i = 0; i < r.size(); ++i)
+    if (order[i].kind != import::TimeVerdict::Kept)
+      r.why[i] = import::timeOrderReason(r.utime, i, order[i], true,
+                                         [&](std::size_t k) { return fmt::format("{} ms", r.v[k][0]); });
+  return r;
 }
+
 }  // namespace
 
 ImportResult importVictoriaPark(const ImportOptions& opt) {
@@ -28,6 +68,7 @@ ImportResult importVictoriaPark(const ImportOptions& opt) {
     throw std::invalid_argument("wheelbase must be > 0 and the encoder offset finite");
   if (opt.holdout_every < 0 || (opt.holdout_every > 0 && (opt.holdout_phase < 0 || opt.holdout_phase >= opt.holdout_every)))
     throw std::invalid_argument("holdout: every must be >= 0 and phase in [0, every)");
+  if (!opt.output.empty()) import::refuseOutputOverInputs("--output", opt.output, {opt.odometry_csv, opt.gps_csv});
   ImportResult r;
   import::EventLog events;
   const common::LocalFrame frame(opt.datum);
@@ -39,35 +80,25 @@ ImportResult importVictoriaPark(const ImportOptions& opt) {
 
   // Odometry: the speed and steering of a row hold over the interval up to the next accepted row.
   {
-    auto in = openCsv(opt.odometry_csv, "time_ms,speed_mps,steering_rad");
-    std::string line, why;
-    std::vector<double> v;
-    int64_t lineno = 1, seq = 0;
+    const Rows rows = readRows(opt.odometry_csv, "time_ms,speed_mps,steering_rad", opt.max_rows);
+    int64_t seq = 0;
     bool have_prev = false;
     double t_prev = 0, speed_prev = 0, steer_prev = 0;
-    while (std::getline(in, line)) {
-      ++lineno;
-      if (line.empty() || line == "\r") continue;
-      if (opt.max_rows > 0 && r.odometry_rows >= opt.max_rows) break;
+    for (std::size_t i = 0; i < rows.size(); ++i) {
       if ((r.odometry_rows & 4095) == 0 && stopped()) { r.interrupted = true; break; }
       ++r.odometry_rows;
-      if (!parseRow(line, 3, v, why)) { refuse(opt.odometry_csv, lineno, why); continue; }
-      const double t = v[0], speed = v[1], steer = v[2];
-      if (t < 0) { refuse(opt.odometry_csv, lineno, fmt::format("negative time {} ms", t)); continue; }
-      if (have_prev && !(t > t_prev)) {
-        refuse(opt.odometry_csv, lineno, fmt::format("time {} ms not after the previous row's {} ms", t, t_prev));
-        continue;
-      }
+      if (!rows.why[i].empty()) { refuse(opt.odometry_csv, rows.line[i], rows.why[i]); continue; }
+      const double t = rows.v[i][0], speed = rows.v[i][1], steer = rows.v[i][2];
       if (std::abs(speed) > opt.max_speed) {
-        refuse(opt.odometry_csv, lineno, fmt::format("|speed| {} m/s above {} m/s", speed, opt.max_speed));
+        refuse(opt.odometry_csv, rows.line[i], fmt::format("|speed| {} m/s above {} m/s", speed, opt.max_speed));
         continue;
       }
       if (std::abs(steer) > opt.max_steering) {
-        refuse(opt.odometry_csv, lineno, fmt::format("|steering| {} rad above {} rad", steer, opt.max_steering));
+        refuse(opt.odometry_csv, rows.line[i], fmt::format("|steering| {} rad above {} rad", steer, opt.max_steering));
         continue;
       }
       lcmloc::odometry_t m{};
-      m.utime = std::llround(t * 1000.0);
+      m.utime = *rows.utime[i];
       m.seq = seq++;
       m.ticks = 0;
       m.has_steering = true;
@@ -99,39 +130,23 @@ ImportResult importVictoriaPark(const ImportOptions& opt) {
 
   // GPS: local metres -> lat/lon about the datum; every k-th accepted fix held out.
   if (!r.interrupted) {
-    auto in = openCsv(opt.gps_csv, "time_ms,Lo_m,La_m");
-    std::string line, why;
-    std::vector<double> v;
-    int64_t lineno = 1, seq = 0, hseq = 0, index = 0;
-    bool have_prev = false;
-    double t_prev = 0;
-    while (std::getline(in, line)) {
-      ++lineno;
-      if (line.empty() || line == "\r") continue;
-      if (!parseRow(line, 3, v, why)) {
-        ++r.gps_rows;
-        refuse(opt.gps_csv, lineno, why);
-        continue;
-      }
-      const double t = v[0], x = v[1], y = v[2];
-      // a slice (max_rows): the GPS rows of the odometry's time span only
-      if (opt.max_rows > 0 && std::llround(t * 1000.0) > last_odo_utime) break;
+    const Rows rows = readRows(opt.gps_csv, "time_ms,Lo_m,La_m", 0);
+    int64_t seq = 0, hseq = 0, index = 0;
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      // a slice (max_rows): the GPS rows of the odometry's time span only (a row refused for its
+      // time, an outlier say, does not end it)
+      if (opt.max_rows > 0 && rows.why[i].empty() && *rows.utime[i] > last_odo_utime) break;
       ++r.gps_rows;
-      if (t < 0) { refuse(opt.gps_csv, lineno, fmt::format("negative time {} ms", t)); continue; }
-      if (have_prev && !(t > t_prev)) {
-        refuse(opt.gps_csv, lineno, fmt::format("time {} ms not after the previous row's {} ms", t, t_prev));
-        continue;
-      }
+      if (!rows.why[i].empty()) { refuse(opt.gps_csv, rows.line[i], rows.why[i]); continue; }
+      const double x = rows.v[i][1], y = rows.v[i][2];
       if (std::abs(x) > 1e5 || std::abs(y) > 1e5) {
-        refuse(opt.gps_csv, lineno, fmt::format("position ({}, {}) m more than 100 km from the origin", x, y));
+        refuse(opt.gps_csv, rows.line[i], fmt::format("position ({}, {}) m more than 100 km from the origin", x, y));
         continue;
       }
-      have_prev = true;
-      t_prev = t;
       const bool held = opt.holdout_every > 0 && index % opt.holdout_every == opt.holdout_phase;
       ++index;
       lcmloc::gps_fix_t m{};
-      m.utime = std::llround(t * 1000.0);
+      m.utime = *rows.utime[i];
       m.seq = held ? hseq++ : seq++;
       double h = 0;
       frame.toGeodetic(x, y, 0.0, m.latitude, m.longitude, h);

@@ -58,17 +58,20 @@ struct ImportResult {
   bool usable() const { return messages > 0; }
 };
 
-/// Unit rule for a column of times as read (any order): microseconds when the largest |t| is at
+/// Unit rule for a column of times as read (any order): microseconds when the median |t| is at
 /// least 1e11 (epoch seconds are ~1.7e9, epoch microseconds ~1.7e15) or when the median step
 /// between consecutive rows is at least 1000 (1000 s between samples is implausible, 1 ms is
-/// not); seconds otherwise.
+/// not); seconds otherwise. Medians, so that a few wrong times do not decide the unit.
 TimeUnit detectTimeUnit(const std::vector<double>& times);
 /// Absolute (Unix epoch) when the first time is at least 1e9 s (2001-09-09), else relative.
 TimeBase detectTimeBase(int64_t first_utime);
 
-/// Imports opt.dir. Throws std::runtime_error for an unreadable directory, a bad map file, a
-/// missing --wheelbase for speed,steering odometry or files whose clocks disagree (absolute
-/// and relative); bad rows are refused and listed, never fatal.
+/// Imports opt.dir. Throws std::runtime_error for an unreadable directory, a bad map file, two
+/// files of a kind there must be one of (odometry, gps, ground truth, map), a missing
+/// --wheelbase for speed,steering odometry or files whose clocks disagree (absolute and
+/// relative); common::ConfigError (naming the flag) for an option config.yaml would not accept
+/// or an output file that is one of the input files. Bad rows are refused and listed, never
+/// fatal; the time column follows the time-order rule of checkTimeOrder (import/checks.hpp).
 ImportResult importDirectory(const ImportOptions& opt);
 
 /// Human report: per file rows read / refused / written and time span, the refused rows.
