@@ -27,15 +27,16 @@ int main(int argc, char** argv) {
     m.quality = 0;
     const int bytes = m.getEncodedSize();
     const auto t0 = std::chrono::steady_clock::now();
-    int64_t failed = 0;
-    for (int64_t i = 0; i < count && !common::stopRequested(); ++i) {
+    int64_t failed = 0, sent = 0;
+    for (; sent < count && !common::stopRequested(); ++sent) {
       m.utime = common::wallMicros();
-      m.seq = i;
+      m.seq = sent;
       if (!bus.publish(channel, m)) ++failed;
     }
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    spdlog::info("published {} messages of {} bytes on {} in {:.3f} s ({:.0f} msg/s), {} failed", count, bytes,
-                 channel, s, count / s, failed);
+    spdlog::info("published {} messages of {} bytes on {} in {:.3f} s ({:.0f} msg/s), {} failed{}", sent, bytes,
+                 channel, s, static_cast<double>(sent) / s, failed,
+                 sent < count ? fmt::format(" (stopped: {} of {} not sent)", count - sent, count) : "");
     return failed ? common::kExitRuntimeError : common::kExitOk;
   });
 }

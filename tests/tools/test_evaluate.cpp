@@ -547,6 +547,11 @@ TEST_F(EvaluateTest, BadInputsGiveClearErrors) {
   // Bad options.
   EXPECT_EQ(evaluate(file("apart.lcmlog") + out + " --datum 95,0"), 2);
   EXPECT_EQ(evaluate(file("apart.lcmlog") + out + " --config " + file("missing.yaml")), 2);
+  // The estimates' channel as the truth: said so (it said "no estimates on POSE" though the log
+  // lists POSE), for --all-poses a shadow's channel too.
+  EXPECT_EQ(evaluate(file("apart.lcmlog") + out + " --truth-channel POSE"), 2);
+  EXPECT_NE(output_.find("--truth-channel POSE is a channel of the estimates"), std::string::npos) << output_;
+  EXPECT_EQ(evaluate(file("apart.lcmlog") + out + " --all-poses --truth-channel POSE_DEAD_RECKONING"), 2);
   EXPECT_NE(evaluate(file("apart.lcmlog") + out + " --log-level loud"), 0);
   EXPECT_NE(output_.find("--log-level: loud not in"), std::string::npos) << output_;
 }

@@ -108,6 +108,14 @@ int main(int argc, char** argv) {
       spdlog::error("{}", e.what());
       return kExitBadConfig;
     }
+    const bool truth_is_a_pose = lo.truth_channel == lo.pose_channel ||
+                                 (lo.all_pose_channels && lo.truth_channel.rfind(lo.pose_channel + "_", 0) == 0);
+    if (truth_is_a_pose) {
+      spdlog::error("--truth-channel {} is a channel of the estimates (--pose-channel {}{}): the truth must come "
+                    "from another channel",
+                    lo.truth_channel, lo.pose_channel, lo.all_pose_channels ? ", --all-poses" : "");
+      return kExitBadConfig;
+    }
 
     eval::TrajectoryLog log;
     try {
