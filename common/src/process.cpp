@@ -7,6 +7,9 @@
 #include <cerrno>
 #include <cmath>
 #include <csignal>
+#include <filesystem>
+#include <cstring>
+#include <cstdio>
 #include <cstdlib>
 #include <new>
 #include <thread>
@@ -109,6 +112,19 @@ CLI::Validator bound(const char* name, bool (*ok)(double), const char* what) {
 }  // namespace
 CLI::Validator positive() { return bound("POSITIVE", [](double v) { return v > 0.0; }, "> 0"); }
 CLI::Validator nonNegative() { return bound("NONNEGATIVE", [](double v) { return v >= 0.0; }, ">= 0"); }
+
+void prepareOutputDir(const std::string& dir) {
+  namespace fs = std::filesystem;
+  const fs::path d = dir.empty() ? fs::path(".") : fs::path(dir);
+  std::error_code ec;
+  fs::create_directories(d, ec);
+  if (ec) throw std::runtime_error("output directory '" + dir + "': " + ec.message());
+  const fs::path probe = d / (".lcmloc_probe_" + std::to_string(::getpid()));
+  std::FILE* f = std::fopen(probe.c_str(), "wb");
+  if (!f) throw std::runtime_error("output directory '" + dir + "' is not writable: " + std::strerror(errno));
+  std::fclose(f);
+  fs::remove(probe, ec);
+}
 
 void setupLogging(const std::string& process_name, const std::string& level) {
   auto logger = spdlog::stderr_color_mt(process_name);

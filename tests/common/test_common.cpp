@@ -1,7 +1,10 @@
 // lcmloc_common: YAML config, conversions, the typed LCM bus over memq://, process helpers.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <fstream>
+#include <filesystem>
 #include <limits>
 
 #include "lcmloc/common/config.hpp"
@@ -194,6 +197,26 @@ TEST(Config, ChannelNamesAreNonEmptyAndTheDaemonsOutputsHaveChannelsOfTheirOwn) 
   EXPECT_NE(errorOf("channels: {control: MAGRULER}\n").find("channels.control: 'MAGRULER' is also channels.magruler[0]"),
             std::string::npos);
   EXPECT_EQ(errorOf("channels: {pose: POSE_MAIN, magruler: [R1, R2, R3], magruler_fault: R3}\n"), "(no error)");
+}
+
+TEST(Process, AnOutputDirectoryIsCheckedBeforeTheWork) {
+  // The experiments computed everything and then failed to create --out.
+  namespace fs = std::filesystem;
+  const fs::path base = fs::temp_directory_path() / ("lcmloc_outdir_" + std::to_string(::getpid()));
+  fs::remove_all(base);
+  fs::create_directories(base);
+  common::prepareOutputDir((base / "a" / "b").string());
+  EXPECT_TRUE(fs::is_directory(base / "a" / "b"));
+  EXPECT_TRUE(fs::is_empty(base / "a" / "b"));  // the probe is removed
+  std::ofstream((base / "file").string()) << "x";
+  try {
+    common::prepareOutputDir((base / "file" / "sub").string());
+    ADD_FAILURE() << "a directory under a file was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("output directory '" + (base / "file" / "sub").string() + "'"), std::string::npos)
+        << e.what();
+  }
+  fs::remove_all(base);
 }
 
 TEST(Config, FilterParametersFromAControlString) {

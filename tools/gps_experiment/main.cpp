@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-gps-experiment", [&] {
     auto cfg = common::loadSystemConfig(opts.config);
+    common::prepareOutputDir(out);
     if (seed) cfg.scenario.seed = seed;
     std::vector<core::FilterConfig> filters;
     for (const auto& t : types) {

@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::IsMember({"auto", "absolute", "relative"}));
   app.add_flag("--start-at-zero", io.start_at_zero, "shift every time so that the earliest row is at 0");
   app.add_option("--wheelbase", io.wheelbase, "L [m]: needed for speed,steering odometry (eq. 2)")
-      ->check(CLI::PositiveNumber);
+      ->check(lcmloc::common::positive());
   app.add_option("--filter", io.filter, "filter type written into config.yaml (default: from the data)");
   app.add_option("--initial-pose", pose, "x y theta [m m rad] (default: first ground-truth row, else 0 0 0)")
       ->expected(3);

@@ -39,6 +39,7 @@ int main(int argc, char** argv) {
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-ins-experiment", [&] {
     auto cfg = common::loadSystemConfig(opts.config);
+    common::prepareOutputDir(out);
     auto ic = cfg.ins_sim;
     if (duration > 0) ic.duration = duration;
     if (seed) ic.seed = seed;

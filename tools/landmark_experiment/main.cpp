@@ -113,6 +113,7 @@ int main(int argc, char** argv) {
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-landmark-experiment", [&] {
     const auto cfg = common::loadSystemConfig(opts.config);
+    common::prepareOutputDir(out);
     const auto& v = cfg.scenario.vision;
     eo.seed = seed ? seed : v.seed ? v.seed : models::componentSeed(cfg.scenario.seed, "vision");
     eo.ins_offset = Eigen::Vector2d(ins_offset[0], ins_offset[1]);

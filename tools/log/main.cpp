@@ -371,9 +371,9 @@ int main(int argc, char** argv) {
   cut_cmd->add_option("--output,-o", output, "new log file")->required();
   cut_cmd->add_option("--channel,-c", cut_opts.channels, "channel regex to keep (repeatable; default: all)");
   cut_cmd->add_option("--from", cut_opts.from, "keep from this many seconds after the first event")
-      ->check(CLI::NonNegativeNumber);
+      ->check(lcmloc::common::nonNegative());
   cut_cmd->add_option("--to", cut_opts.to, "keep up to this many seconds after the first event")
-      ->check(CLI::NonNegativeNumber);
+      ->check(lcmloc::common::nonNegative());
   cut_cmd->add_option("--from-utime", cut_opts.from_utime, "keep events with log time >= this [us]");
   cut_cmd->add_option("--to-utime", cut_opts.to_utime, "keep events with log time <= this [us]");
 

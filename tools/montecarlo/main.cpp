@@ -184,6 +184,7 @@ int main(int argc, char** argv) {
   app.add_option("--out", o.out, "JSON report path")->capture_default_str();
   return lcmloc::common::runProcess(app, argc, argv, common, "lcmloc-montecarlo", [&] {
     o.config = common.config;
+    lcmloc::common::prepareOutputDir(std::filesystem::path(o.out).parent_path().string());
     return run(o);
   });
 }

@@ -36,6 +36,7 @@ int main(int argc, char** argv) {
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-vp-experiment", [&]() -> int {
     const auto cfg = common::loadSystemConfig(opts.config);
+    common::prepareOutputDir(eo.out_dir);
     io.odometry_csv = dir + "/vp_odometry.csv";
     io.gps_csv = dir + "/vp_gps.csv";
     io.stop = [] { return common::stopRequested(); };

@@ -25,11 +25,11 @@ int main(int argc, char** argv) {
   app.add_option("--odometry", io.odometry_csv, "odometry CSV (overrides --dir)");
   app.add_option("--gps", io.gps_csv, "GPS CSV (overrides --dir)");
   app.add_option("-o,--output", io.output, "output LCM log")->required();
-  app.add_option("--wheelbase", io.wheelbase, "L [m]")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--wheelbase", io.wheelbase, "L [m]")->capture_default_str()->check(lcmloc::common::positive());
   app.add_option("--encoder-offset", io.encoder_offset, "H: speed encoder left of the rear axle centre [m]")
       ->capture_default_str();
   app.add_option("--holdout-every", io.holdout_every, "hold every k-th fix out on GPS_HELDOUT (0 = none)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()->check(lcmloc::common::nonNegative());
   app.add_option("--holdout-phase", io.holdout_phase, "fix i is held out when i % k == phase")->capture_default_str();
   app.add_option("--heldout-channel", io.heldout_channel, "channel of the held-out fixes")->capture_default_str();
   app.add_option("--gps-std", io.gps_std, "position_std written into the fixes [m] (0 = the filter's gnss.gps_std)")

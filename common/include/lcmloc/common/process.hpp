@@ -54,6 +54,11 @@ int stopSignal();
 CLI::Validator positive();     ///< > 0
 CLI::Validator nonNegative();  ///< >= 0
 
+/// Creates the output directory dir (and its parents) and checks that a file can be written in
+/// it: a long experiment finds a bad --out before it computes, not after. Throws
+/// std::runtime_error naming dir and the reason.
+void prepareOutputDir(const std::string& dir);
+
 /// Parses the command line and runs body(), turning exceptions into one clear error line and
 /// an exit code (ConfigError -> 2, anything else -> 1). A bad command line exits 2 with CLI11's
 /// message (--help: 0). Returns the process exit code.
