@@ -5,6 +5,7 @@
 // each with its own lock-out detector. Derivations and measured results: docs/tvekf.md.
 #include <algorithm>
 #include <cmath>
+#include <utility>
 #include <limits>
 #include <stdexcept>
 
@@ -122,8 +123,11 @@ class GnssFilterBase : public Filter {
     utime_ = from.utime;
     enc_sum_ = x[kDistance];
     // A state of a time (hand-over, fix, set_pose, checkpoint): the next increment is the motion
-    // since then. A state of no time (a filter just made): the first increment starts the clock.
+    // since then, if it comes within kMaxHandOverGapUs (a daemon started from a checkpoint after
+    // a crash does not know how the vehicle moved meanwhile: resume_gap). A state of no time (a
+    // filter just made): the first increment starts the clock.
     have_odo_time_ = from.utime > 0;
+    clock_from_state_ = have_odo_time_;
     last_odo_utime_ = from.utime;
     acc_sum_ = 0;
     acc_n_ = 0;
@@ -139,8 +143,9 @@ class GnssFilterBase : public Filter {
         !(odo.has_steering ? std::isfinite(odo.steering) : std::isfinite(odo.delta_theta)))
       return;
     utime_ = std::max(utime_, odo.utime);
-    if (!have_odo_time_) {  // the first increment only starts the clock and the encoder sum
-      have_odo_time_ = true;
+    const bool from_state = std::exchange(clock_from_state_, false);
+    if (!have_odo_time_ || (from_state && odo.utime - last_odo_utime_ > kMaxHandOverGapUs)) {
+      have_odo_time_ = true;  // the first increment only starts the clock and the encoder sum
       last_odo_utime_ = odo.utime;
       return;
     }
@@ -316,6 +321,8 @@ class GnssFilterBase : public Filter {
  private:
   int64_t utime_ = 0;
   bool have_odo_time_ = false;
+  bool clock_from_state_ = false;  ///< the clock runs from the state initialize() took
+  static constexpr int64_t kMaxHandOverGapUs = 500000;
   int64_t last_odo_utime_ = 0;
   double acc_sum_ = 0;
   int acc_n_ = 0;
