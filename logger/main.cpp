@@ -7,7 +7,6 @@
 #include <sys/socket.h>
 
 #include <atomic>
-#include <regex>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -228,8 +227,9 @@ int main(int argc, char** argv) {
     awaited_status_seq = status_seq;
     publishStatus(write_error ? "write_error" : "stopping");
     // Our own last status (and heartbeat, sent before it) come back over the bus: wait for the
-    // status when we record its channel (bounded), so the log ends with it.
-    if (!status_channel.empty() && std::regex_match(status_channel, std::regex(regex, std::regex::extended))) {
+    // status when we record its channel (bounded), so the log ends with it. (Recorded: an earlier
+    // status of ours came in; LCM's regex dialect is its own, so it is not matched here.)
+    if (!status_channel.empty() && stats.count(status_channel)) {
       const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(500);
       while (!final_status_back && std::chrono::steady_clock::now() < until) bus.handle(20);
     }

@@ -2,6 +2,7 @@
 #include "lcmloc/common/convert.hpp"
 
 #include <cmath>
+#include <cstdio>
 
 namespace lcmloc::common {
 
@@ -28,8 +29,9 @@ bool finiteField(double v, const char* name, std::string* why) {
 
 bool withinField(double v, double limit, const char* name, const char* unit, std::string* why) {
   if (std::abs(v) <= limit) return true;
-  return fail(why, std::string(name) + " " + std::to_string(v) + " " + unit + " out of range (|" + name +
-                       "| <= " + std::to_string(limit) + ")");
+  char text[120];
+  std::snprintf(text, sizeof text, "%s %g %s out of range (|%s| <= %g)", name, v, unit, name, limit);
+  return fail(why, text);
 }
 
 bool validUtime(int64_t utime, std::string* why) {

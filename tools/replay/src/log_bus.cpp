@@ -56,6 +56,8 @@ std::map<std::string, int64_t> LogBus::writtenPerChannel() const {
 
 bool LogBus::write(const std::string& channel, const void* data, std::size_t size, int64_t timestamp) {
   if (!write_error_.empty()) return false;
+  if (writer_)
+    if (const int err = writer_->file->append(timestamp, channel, data, size); err != 0) return writeFailed(err);
   ++written_;
   // A handful of channels: a linear search beats a map lookup per event.
   auto it = per_channel_.begin();
@@ -64,8 +66,6 @@ bool LogBus::write(const std::string& channel, const void* data, std::size_t siz
     per_channel_.emplace_back(channel, 1);
   else
     ++it->second;
-  if (!writer_) return true;
-  if (const int err = writer_->file->append(timestamp, channel, data, size); err != 0) return writeFailed(err);
   return true;
 }
 
