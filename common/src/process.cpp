@@ -38,27 +38,21 @@ void checkNumbers(const CLI::App& app) {
     const std::string type = o->get_type_name();
     const bool is_float = type.rfind("FLOAT", 0) == 0, is_int = type.rfind("INT", 0) == 0 || type.rfind("UINT", 0) == 0;
     if (!is_float && !is_int) continue;
-    for (const std::string& result : o->results()) {
-      std::size_t start = 0;
-      while (start <= result.size()) {  // "a,b" for options with a delimiter
-        const std::size_t comma = std::min(result.find(',', start), result.size());
-        const std::string token = result.substr(start, comma - start);
-        start = comma + 1;
-        if (token.empty()) continue;
-        errno = 0;
-        char* end = nullptr;
-        if (is_float) {
-          const double v = std::strtod(token.c_str(), &end);
-          if (end != token.c_str() && !std::isfinite(v))
-            throw CLI::ValidationError(o->get_name(), token + " is not a finite number");
-        } else {
-          if (token[0] == '-')
-            (void)std::strtoll(token.c_str(), &end, 10);
-          else
-            (void)std::strtoull(token.c_str(), &end, 10);
-          if (end != token.c_str() && errno == ERANGE)
-            throw CLI::ValidationError(o->get_name(), token + " is out of range for an integer");
-        }
+    for (const std::string& token : o->results()) {  // (split at an option's delimiter already)
+      if (token.empty()) continue;
+      errno = 0;
+      char* end = nullptr;
+      if (is_float) {
+        const double v = std::strtod(token.c_str(), &end);
+        if (end != token.c_str() && !std::isfinite(v))
+          throw CLI::ValidationError(o->get_name(), token + " is not a finite number");
+      } else {
+        if (token[0] == '-')
+          (void)std::strtoll(token.c_str(), &end, 10);
+        else
+          (void)std::strtoull(token.c_str(), &end, 10);
+        if (end != token.c_str() && errno == ERANGE)
+          throw CLI::ValidationError(o->get_name(), token + " is out of range for an integer");
       }
     }
   }

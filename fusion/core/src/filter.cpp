@@ -108,9 +108,20 @@ void initialState(const FilterConfig& c, const std::vector<std::string>& names,
 
 }  // namespace
 
-/// Hot swap: starts from the filter's initial values and copies every state of `from` that has
-/// the same name (x, y, theta always: a source without names is read as x, y, theta, ...),
-/// with the covariance among copied states; cross-covariances to other states are zero.
+std::vector<detail::InflateCap> detail::lockoutCaps(const FilterConfig& cfg, const std::vector<std::string>& names) {
+  std::vector<InflateCap> caps;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    const std::string& n = names[i];
+    const double cap = n == "x" || n == "y"  ? cfg.lockout_max_std
+                       : n == "theta"        ? kLockoutMaxHeadingStd
+                       : n == "odo_scale"    ? cfg.scale_std0
+                       : n == "steer_bias"   ? cfg.steer_bias_std0
+                                             : 0.0;  // (no other state is inflated)
+    caps.push_back({static_cast<int>(i), cap});
+  }
+  return caps;
+}
+
 std::string unusableState(const FilterState& s) {
   const auto n = s.x.size();
   if (n < 3 || s.P.rows() != n || s.P.cols() != n) return "state must have >= 3 entries and a matching P";
@@ -124,6 +135,9 @@ std::string unusableState(const FilterState& s) {
   return "";
 }
 
+/// Hot swap: starts from the filter's initial values and copies every state of `from` that has
+/// the same name (x, y, theta always: a source without names is read as x, y, theta, ...),
+/// with the covariance among copied states; cross-covariances to other states are zero.
 void detail::copyMatching(const FilterState& from, const std::vector<std::string>& names,
                   Eigen::VectorXd& x, Eigen::MatrixXd& P) {
   const auto n_from = from.x.size();
@@ -254,6 +268,7 @@ class RulerUkf final : public Filter {
         gate_(gated_ ? c.gate.threshold(2) : kInf), ukf_(c.sigma, kThetaMask) {
     names_ = {"x", "y", "theta"};
     if (N == 5) names_.insert(names_.end(), {"odo_scale", "steer_bias"});
+    book_.caps = detail::lockoutCaps(cfg_, names_);
     Eigen::VectorXd x;
     Eigen::MatrixXd P;
     initialState(cfg_, names_, x, P);

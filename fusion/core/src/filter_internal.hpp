@@ -2,10 +2,8 @@
 // Helpers shared by the filter implementations (not installed; src/ only).
 #include <algorithm>
 #include <cmath>
-#include <initializer_list>
 #include <memory>
 #include <string>
-#include <type_traits>
 #include <vector>
 
 #include "lcmloc/core/filter.hpp"
@@ -60,7 +58,7 @@ struct InflateCap {
 /// sqrt(f): D P D stays positive definite and keeps the correlations), but not beyond its cap;
 /// a variance already at or above cap^2 stays as it is.
 template <typename M>
-void inflateCapped(M& P, std::initializer_list<InflateCap> states, double f) {
+void inflateCapped(M& P, const std::vector<InflateCap>& states, double f) {
   for (const InflateCap& c : states) {
     const double g = std::min(f, c.max_std * c.max_std / P(c.index, c.index));
     if (!(g > 1.0)) continue;
@@ -70,11 +68,17 @@ void inflateCapped(M& P, std::initializer_list<InflateCap> states, double f) {
   }
 }
 
+/// The lock-out inflation caps of a filter with these state names: x, y at lockout_max_std, theta
+/// at kLockoutMaxHeadingStd, odo_scale and steer_bias (ukf_calib) at their initial sigmas.
+std::vector<InflateCap> lockoutCaps(const FilterConfig& cfg, const std::vector<std::string>& names);
+
 /// Gate decision, correction and lock-out bookkeeping of the gated UKFs (the magnetic-ruler
 /// filters and ukf_landmarks): FilterConfig::lockout_rejections consecutive rejections (gate or
-/// no candidate) declare a lock-out and inflate the covariance by lockout_inflation, again after
-/// every further lockout_rejections, until a measurement is accepted.
+/// no candidate) declare a lock-out and inflate the covariance by lockout_inflation (each state
+/// up to its cap, see lockoutCaps), again after every further lockout_rejections, until a
+/// measurement is accepted.
 struct GateBook {
+  std::vector<InflateCap> caps;  ///< lockoutCaps of the filter's states
   FilterStatus status = FilterStatus::Ok;
   int consecutive_rejections = 0;
   void reset() {
@@ -110,13 +114,8 @@ struct GateBook {
     ++consecutive_rejections;
     if (cfg.lockout_rejections > 0 && consecutive_rejections % cfg.lockout_rejections == 0) {
       status = FilterStatus::Lockout;
-      auto P = ukf.P();  // state x, y, theta (, odo_scale, steer_bias for ukf_calib)
-      const double pos = cfg.lockout_max_std;
-      if constexpr (std::decay_t<decltype(P)>::RowsAtCompileTime == 5)
-        inflateCapped(P, {{0, pos}, {1, pos}, {2, kLockoutMaxHeadingStd}, {3, cfg.scale_std0}, {4, cfg.steer_bias_std0}},
-                      cfg.lockout_inflation);
-      else
-        inflateCapped(P, {{0, pos}, {1, pos}, {2, kLockoutMaxHeadingStd}}, cfg.lockout_inflation);
+      auto P = ukf.P();
+      inflateCapped(P, caps, cfg.lockout_inflation);
       ukf.reset(ukf.x(), P);
     }
   }

@@ -30,6 +30,7 @@ class LandmarkUkf final : public Filter {
       : cfg_(c), map_(map), gated_(c.gate.enabled), gate2_(gated_ ? c.gate.threshold(2) : kInf),
         gate1_(gated_ ? c.gate.threshold(1) : kInf), ukf_(c.sigma, kThetaMask) {
     for (std::size_t i = 0; i < map_.size(); ++i) index_.emplace(map_[i].id, i);
+    book_.caps = detail::lockoutCaps(cfg_, names_);
     reset();
   }
 

@@ -40,8 +40,9 @@ struct GnssConfig {
   double gps_std = 2.9;            ///< GPS 1 sigma per axis when the fix carries none [m]
   double speed_std0 = 0.5;         ///< initial 1 sigma of the speed [m/s]
   /// Lock-out of the GPS gate: this many consecutive GPS gate rejections declare a lock-out
-  /// (status LOCKOUT) and inflate the position covariance by FilterConfig::lockout_inflation,
-  /// again after every further gps_lockout_rejections rejections, until a fix is accepted.
+  /// (status LOCKOUT) and inflate the position covariance by FilterConfig::lockout_inflation (up
+  /// to FilterConfig::lockout_max_std), again after every further gps_lockout_rejections
+  /// rejections, until a fix is accepted.
   int gps_lockout_rejections = 5;
   /// Same for the magnetometer heading gate (samples).
   int mag_lockout_rejections = 50;
@@ -107,8 +108,9 @@ struct FilterConfig {
   double reach_forward = 0.5;      ///< [m]
   double reach_lateral = 0.2;      ///< [m]
   /// Lock-out: this many consecutive rejections (gate or no candidate) declare a lock-out
-  /// (status LOCKOUT); the filter then inflates its covariance by lockout_inflation, again after
-  /// every further lockout_rejections rejections, until a marker is accepted (re-acquired).
+  /// (status LOCKOUT); the filter then inflates its covariance by lockout_inflation (each state
+  /// up to its cap, see lockout_max_std), again after every further lockout_rejections
+  /// rejections, until a marker is accepted (re-acquired).
   /// 0 disables detection.
   int lockout_rejections = 3;
   double lockout_inflation = 25.0;
@@ -125,7 +127,7 @@ struct FilterConfig {
   double scale_rw = 1e-4;          ///< random walk of k per metre travelled [1/sqrt(m)]
   double steer_bias_rw = 1e-4;     ///< random walk of b per metre travelled [rad/sqrt(m)]
   /// "tvekf" and "ukf_gps" only (they also use wheelbase, initial_pose, p0_diag, sigma, gate,
-  /// lockout_inflation).
+  /// lockout_inflation, lockout_max_std).
   GnssConfig gnss;
   /// Heading process noise per radian turned [rad^2/rad], added to every odometry step of the
   /// magnetic-ruler family (dead_reckoning, ukf, ukf_gated, ukf_calib) and ukf_landmarks:

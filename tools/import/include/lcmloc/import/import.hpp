@@ -67,7 +67,8 @@ TimeUnit detectTimeUnit(const std::vector<double>& times);
 TimeBase detectTimeBase(int64_t first_utime);
 
 /// Imports opt.dir. Throws std::runtime_error for an unreadable directory, a bad map file, two
-/// files of a kind there must be one of (odometry, gps, ground truth, map), a missing
+/// map files, two odometry or two ground-truth files that overlap in time (files that do not
+/// are joined one after the other; gps, landmarks and beacons may come from several), a missing
 /// --wheelbase for speed,steering odometry or files whose clocks disagree (absolute and
 /// relative); common::ConfigError (naming the flag) for an option config.yaml would not accept
 /// or an output file that is one of the input files. Bad rows are refused and listed, never
