@@ -5,13 +5,13 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
-#include <filesystem>
 #include <cmath>
 #include <fstream>
 #include <limits>
 #include <set>
 #include <sstream>
 
+#include "lcmloc/common/process.hpp"
 #include "lcmloc/common/yaml_reader.hpp"
 #include "config_ins.hpp"
 #include "lcmloc/core/filter.hpp"
@@ -420,14 +420,9 @@ SystemConfig parseSystemConfig(const std::string& yaml_text, const std::string& 
 }
 
 std::string readConfigFile(const std::string& path, const std::string& what) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  const auto st = fs::status(path, ec);
-  if (ec || !fs::exists(st)) throw ConfigError(path, "", "cannot open " + what + " (does it exist?)");
-  if (fs::is_directory(st)) throw ConfigError(path, "", "is a directory, not a " + what);
-  if (!fs::is_regular_file(st)) throw ConfigError(path, "", "is not a regular file (a " + what + " is)");
-  constexpr std::uintmax_t kMaxBytes = 64u << 20;
-  if (fs::file_size(path, ec) > kMaxBytes) throw ConfigError(path, "", "larger than 64 MB: not a " + what);
+  if (const std::string problem = fileProblem(path, 64u << 20); !problem.empty())
+    throw ConfigError(path, "", problem == kNoSuchFile ? "cannot open " + what + " (does it exist?)"
+                                                       : problem + ": not a " + what);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ConfigError(path, "", "cannot open " + what + ": " + std::strerror(errno));
   std::stringstream ss;

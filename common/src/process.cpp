@@ -107,6 +107,17 @@ CLI::Validator bound(const char* name, bool (*ok)(double), const char* what) {
 CLI::Validator positive() { return bound("POSITIVE", [](double v) { return v > 0.0; }, "> 0"); }
 CLI::Validator nonNegative() { return bound("NONNEGATIVE", [](double v) { return v >= 0.0; }, ">= 0"); }
 
+std::string fileProblem(const std::string& path, std::uintmax_t max_bytes) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const auto st = fs::status(path, ec);
+  if (ec || !fs::exists(st)) return kNoSuchFile;
+  if (fs::is_directory(st)) return "is a directory";
+  if (!fs::is_regular_file(st)) return "is not a regular file";
+  if (fs::file_size(path, ec) > max_bytes) return "larger than " + std::to_string(max_bytes >> 20) + " MB";
+  return "";
+}
+
 void prepareOutputDir(const std::string& dir) {
   namespace fs = std::filesystem;
   const fs::path d = dir.empty() ? fs::path(".") : fs::path(dir);

@@ -3,13 +3,13 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <stdexcept>
 #include <vector>
 
 #include "lcmloc/common/convert.hpp"
+#include "lcmloc/common/process.hpp"
 #include "lcmloc/core/filter.hpp"
 #include "lcmloc/pose_t.hpp"
 
@@ -41,12 +41,11 @@ std::string checkpointUnwritable(const std::string& path) {
 }
 
 std::optional<Checkpoint> readCheckpoint(const std::string& path) {
-  std::error_code ec;
-  const auto st = std::filesystem::status(path, ec);
-  if (ec || !std::filesystem::exists(st)) return std::nullopt;
   // (a directory, /dev/zero or /dev/full: not a checkpoint, and not to be read to the end)
-  if (!std::filesystem::is_regular_file(st) || std::filesystem::file_size(path, ec) > (1u << 20))
-    throw std::runtime_error("checkpoint '" + path + "' is not a regular file of at most 1 MB");
+  if (const std::string problem = common::fileProblem(path, 1u << 20); problem == common::kNoSuchFile)
+    return std::nullopt;
+  else if (!problem.empty())
+    throw std::runtime_error("checkpoint '" + path + "': " + problem + " (a checkpoint is a file of at most 1 MB)");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error("checkpoint '" + path + "' cannot be read: " + std::strerror(errno));
   const std::vector<char> buf((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

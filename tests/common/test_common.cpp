@@ -181,8 +181,8 @@ TEST(Config, ADirectoryOrADeviceIsNoConfigFile) {
     }
     return "(no error)";
   };
-  EXPECT_EQ(errorLoading("/tmp"), "/tmp: is a directory, not a config file");
-  EXPECT_EQ(errorLoading("/dev/zero"), "/dev/zero: is not a regular file (a config file is)");
+  EXPECT_EQ(errorLoading("/tmp"), "/tmp: is a directory: not a config file");
+  EXPECT_EQ(errorLoading("/dev/zero"), "/dev/zero: is not a regular file: not a config file");
 }
 
 TEST(Config, ChannelNamesAreNonEmptyAndTheDaemonsOutputsHaveChannelsOfTheirOwn) {

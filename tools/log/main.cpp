@@ -379,8 +379,8 @@ int main(int argc, char** argv) {
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-log", [&] {
     if (!opts.config.empty()) common::loadSystemConfig(opts.config);
-    if (!fs::exists(log_path)) throw common::ConfigError(log_path, "", "no such log file");
-    if (fs::is_directory(log_path)) throw common::ConfigError(log_path, "", "is a directory, not a log file");
+    if (const std::string problem = common::fileProblem(log_path); !problem.empty())
+      throw common::ConfigError(log_path, "", problem == common::kNoSuchFile ? "no such log file" : problem + ": not a log file");
     if (info_cmd->parsed()) return info(log_path);
     if (csv_cmd->parsed()) return toCsv(log_path, channels, output);
     return cut(log_path, output, cut_opts);

@@ -1,6 +1,5 @@
 #include "lcmloc/eval/log_reader.hpp"
 
-#include <sys/stat.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -17,6 +16,7 @@
 #include "lcmloc/gate_decision_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/magruler_t.hpp"
+#include "lcmloc/common/process.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
 
@@ -28,11 +28,11 @@ constexpr int64_t kEventHeaderBytes = 28;  // sync, event number, utime, channel
 /// Size of the regular file at path. Throws std::runtime_error when there is none: a directory
 /// or a device would otherwise read as one damaged stretch of st_size bytes.
 int64_t logFileSize(const std::string& path) {
-  struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) throw std::runtime_error("cannot open log '" + path + "': no such file");
-  if (S_ISDIR(st.st_mode)) throw std::runtime_error("cannot read log '" + path + "': it is a directory");
-  if (!S_ISREG(st.st_mode)) throw std::runtime_error("cannot read log '" + path + "': not a regular file");
-  return static_cast<int64_t>(st.st_size);
+  if (const std::string problem = common::fileProblem(path); problem == common::kNoSuchFile)
+    throw std::runtime_error("cannot open log '" + path + "': " + problem);
+  else if (!problem.empty())
+    throw std::runtime_error("cannot read log '" + path + "': it " + problem);
+  return static_cast<int64_t>(std::filesystem::file_size(path));
 }
 
 /// Decodes one payload; records an issue and returns false when it does not decode.

@@ -54,6 +54,12 @@ int stopSignal();
 CLI::Validator positive();     ///< > 0
 CLI::Validator nonNegative();  ///< >= 0
 
+/// What stops path from being read as a file of at most max_bytes ("" when nothing): it does not
+/// exist ("no such file"), "is a directory", "is not a regular file" (a device or a FIFO:
+/// /dev/zero would be read until memory runs out) or is "larger than N MB".
+std::string fileProblem(const std::string& path, std::uintmax_t max_bytes = UINTMAX_MAX);
+inline constexpr const char* kNoSuchFile = "no such file";
+
 /// Creates the output directory dir (and its parents) and checks that a file can be written in
 /// it: a long experiment finds a bad --out before it computes, not after. Throws
 /// std::runtime_error naming dir and the reason.
