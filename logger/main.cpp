@@ -104,9 +104,9 @@ int main(int argc, char** argv) {
           },
           "0 or MB in [0.001, 1e9]"));
   app.add_option("--max-file-seconds", max_seconds, "start a new file after this many seconds (overrides logger.max_file_seconds)")
-      ->check(CLI::Range(0.0, 1e9));
+      ->check(CLI::Range(common::kMaxFileSeconds.lo, common::kMaxFileSeconds.hi));
   app.add_option("--flush-period", flush_period, "fsync period in seconds (overrides logger.flush_period)")
-      ->check(CLI::Range(0.001, 3600.0));
+      ->check(CLI::Range(common::kFlushPeriod.lo, common::kFlushPeriod.hi));
   bool overwrite = false;
   app.add_flag("--overwrite", overwrite,
                "replace an existing log file (default: keep it and write NAME-001.lcmlog, the first free name)");

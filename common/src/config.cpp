@@ -36,7 +36,7 @@ void parseScenarioSection(KeyReader& root, models::ScenarioConfig& s) {
   KeyReader r(root.child("scenario"), root.file(), "scenario");
   r.get("name", s.name);
   r.get<uint64_t>("seed", s.seed);
-  r.get("realtime_factor", s.realtime_factor, 0.0, 1e6, "0 = as fast as possible");
+  r.get("realtime_factor", s.realtime_factor, kRealtimeFactor.lo, kRealtimeFactor.hi, "0 = as fast as possible");
   r.finish();
 }
 
@@ -91,9 +91,9 @@ void parseOdometry(KeyReader& root, models::OdometrySensorConfig& o) {
   KeyReader r(root.child("odometry"), root.file(), "odometry");
   r.get("rate_hz", o.rate_hz, 0.1, 10000.0);
   r.get("tick_length", o.tick_length, 1e-6, 1.0);
-  r.get("scale_error", o.scale_error, -0.5, 0.5);
+  r.get("scale_error", o.scale_error, kOdometryScaleError.lo, kOdometryScaleError.hi);
   r.get("slip_std", o.slip_std, 0.0, 1.0);
-  r.get("steering_bias", o.steering_bias, -0.5, 0.5);
+  r.get("steering_bias", o.steering_bias, kOdometrySteeringBias.lo, kOdometrySteeringBias.hi);
   r.get("steering_std", o.steering_std, 0.0, 0.5);
   r.get("steering_resolution", o.steering_resolution, 0.0, 0.5);
   r.finish();
@@ -120,7 +120,7 @@ void parseMagRuler(KeyReader& root, models::MagRulerConfig& m) {
 void parseImu(KeyReader& root, models::ImuSensorConfig& m) {
   KeyReader r(root.child("imu"), root.file(), "imu");
   r.get("enabled", m.enabled);
-  r.get("rate_hz", m.rate_hz, 0.1, 10000.0);
+  r.get("rate_hz", m.rate_hz, kImuRateHz.lo, kImuRateHz.hi);
   r.get("gravity", m.gravity, 0.0, 100.0);
   r.get("accel_std", m.accel_std, 0.0, 100.0);
   r.get("accel_bias", m.accel_bias, 0.0, 100.0);
@@ -276,8 +276,8 @@ void parseLogger(KeyReader& root, LoggerConfig& l) {
   r.get("queue_capacity", l.queue_capacity, 1, 100000000);
   r.get("queue_bytes", l.queue_bytes, int64_t{1} << 20, int64_t{1} << 40);
   r.get("max_file_bytes", l.max_file_bytes, int64_t{0}, int64_t{1} << 50);
-  r.get("max_file_seconds", l.max_file_seconds, 0.0, 1e9);
-  r.get("flush_period", l.flush_period, 0.001, 3600.0);
+  r.get("max_file_seconds", l.max_file_seconds, kMaxFileSeconds.lo, kMaxFileSeconds.hi);
+  r.get("flush_period", l.flush_period, kFlushPeriod.lo, kFlushPeriod.hi);
   r.get("status_channel", l.status_channel);
   r.get("status_period", l.status_period, 0.01, 3600.0);
   r.get("recv_buf_size", l.recv_buf_size, 65536, 1 << 30);
@@ -287,7 +287,7 @@ void parseLogger(KeyReader& root, LoggerConfig& l) {
 // `vision` section: the simulated bearing sensor (seeds/004 §III). Angles in radians.
 void parseVision(KeyReader& root, models::VisionSensorConfig& v) {
   KeyReader r(root.child("vision"), root.file(), "vision");
-  r.get("rate_hz", v.rate_hz, 1e-3, 1000.0);
+  r.get("rate_hz", v.rate_hz, kVisionRateHz.lo, kVisionRateHz.hi);
   r.get("bearing_std", v.bearing_std, 0.0, 1.0, "1 sigma [rad]");
   r.get("resolution", v.resolution, 0.0, 0.1, "quantization step [rad], 0 = none");
   r.get<uint64_t>("seed", v.seed);

@@ -25,7 +25,7 @@ void parseInsSim(KeyReader& root, models::InsSimConfig& c) {
   r.get<uint64_t>("seed", c.seed);
   r.get("rate_hz", c.rate_hz, 1.0, 10000.0);
   r.get("odometry_divider", c.odometry_divider, 1, 10000);
-  r.get("duration", c.duration, 0.01, 1e6);
+  r.get("duration", c.duration, kInsSimDuration.lo, kInsSimDuration.hi);
   r.get("profile", c.profile);
   if (c.profile != "paper" && c.profile != "custom")
     throw ConfigError(root.file(), "ins_sim.profile", "unknown profile '" + c.profile + "' (valid: paper, custom)");

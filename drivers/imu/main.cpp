@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
   common::CommonOptions opts;
   common::addCommonOptions(app, opts);
   double rate = 0.0;
-  app.add_option("--rate", rate, "override imu.rate_hz [Hz]")->check(CLI::Range(0.1, 10000.0));
+  app.add_option("--rate", rate, "override imu.rate_hz [Hz]")->check(CLI::Range(common::kImuRateHz.lo, common::kImuRateHz.hi));
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-imu", [&] {
     auto cfg = common::loadSystemConfig(opts.config);

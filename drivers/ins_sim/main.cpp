@@ -18,8 +18,8 @@ int main(int argc, char** argv) {
   double rtf = -1.0, duration = 0.0;
   uint64_t seed = 0;
   app.add_option("--realtime-factor", rtf, "override scenario.realtime_factor (0 = as fast as possible)")
-      ->check(CLI::Range(0.0, 1e6));
-  app.add_option("--duration", duration, "override ins_sim.duration [s]")->check(CLI::Range(0.01, 1e6));
+      ->check(CLI::Range(common::kRealtimeFactor.lo, common::kRealtimeFactor.hi));
+  app.add_option("--duration", duration, "override ins_sim.duration [s]")->check(CLI::Range(common::kInsSimDuration.lo, common::kInsSimDuration.hi));
   app.add_option("--seed", seed, "override ins_sim.seed");
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-ins-sim", [&] {

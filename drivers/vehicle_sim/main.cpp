@@ -15,7 +15,7 @@ int main(int argc, char** argv) {
   common::addCommonOptions(app, opts);
   double rtf = -1.0;
   app.add_option("--realtime-factor", rtf, "override scenario.realtime_factor (0 = as fast as possible)")
-      ->check(CLI::Range(0.0, 1e6));
+      ->check(CLI::Range(common::kRealtimeFactor.lo, common::kRealtimeFactor.hi));
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-sim", [&] {
     const auto cfg = common::loadSystemConfig(opts.config);

@@ -21,7 +21,7 @@ int main(int argc, char** argv) {
   common::CommonOptions opts;
   common::addCommonOptions(app, opts);
   double rate = 0.0;
-  app.add_option("--rate", rate, "override vision.rate_hz [Hz]")->check(CLI::Range(1e-3, 1000.0));
+  app.add_option("--rate", rate, "override vision.rate_hz [Hz]")->check(CLI::Range(common::kVisionRateHz.lo, common::kVisionRateHz.hi));
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-vision", [&] {
     auto cfg = common::loadSystemConfig(opts.config);

@@ -27,7 +27,7 @@ int main(int argc, char** argv) {
   ins_experiment::Options eo;
   app.add_option("--out", out, "output directory")->capture_default_str();
   app.add_option("--starts", starts, "runs: start profiles (hard, gentle, gentle_turn, gentle_stopgo, steady)")->delimiter(',')->capture_default_str();
-  app.add_option("--duration", duration, "override ins_sim.duration [s]")->check(CLI::Range(0.01, 1e6));
+  app.add_option("--duration", duration, "override ins_sim.duration [s]")->check(CLI::Range(common::kInsSimDuration.lo, common::kInsSimDuration.hi));
   app.add_option("--seed", seed, "override ins_sim.seed");
   app.add_option("--calibration-stage", eo.calibration_stage,
                  "dead reckoning freezes the scale estimate this long after the start [s]")

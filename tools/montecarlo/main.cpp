@@ -175,10 +175,11 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   app.add_option("--runs", o.runs, "number of runs")->capture_default_str()->check(lcmloc::common::positive());
   app.add_option("--seed-base", o.seed_base, "seed of the first run (default: the config's seed)");
-  app.add_option("--scale-error", o.scale_error, "odometer scale error k [-]")->capture_default_str()->check(CLI::Range(-0.5, 0.5));
+  app.add_option("--scale-error", o.scale_error, "odometer scale error k [-]")->capture_default_str()->check(CLI::Range(lcmloc::common::kOdometryScaleError.lo, lcmloc::common::kOdometryScaleError.hi));
   app.add_option("--steering-bias-deg", o.steering_bias_deg, "steering-encoder bias [deg]")
       ->capture_default_str()
-      ->check(CLI::Range(-28.0, 28.0));
+      ->check(CLI::Range(lcmloc::common::kOdometrySteeringBias.lo * 180.0 / M_PI,
+                                lcmloc::common::kOdometrySteeringBias.hi * 180.0 / M_PI));
   app.add_flag("--no-faults", o.no_faults, "run without the configured fault markers");
   app.add_option("--filters", o.filters, "comma-separated filter types")->capture_default_str();
   app.add_option("--out", o.out, "JSON report path")->capture_default_str();

@@ -21,6 +21,20 @@ class ConfigError : public std::runtime_error {
   ConfigError(const std::string& file, const std::string& key, const std::string& reason);
 };
 
+/// The range [lo, hi] of a configuration key that a command-line option overrides too: one
+/// definition for the config reader and the option's check.
+struct Bounds {
+  double lo, hi;
+};
+inline constexpr Bounds kImuRateHz{0.1, 10000.0};         ///< imu.rate_hz, lcmloc-imu --rate
+inline constexpr Bounds kVisionRateHz{1e-3, 1000.0};      ///< vision.rate_hz, lcmloc-vision --rate
+inline constexpr Bounds kRealtimeFactor{0.0, 1e6};        ///< scenario.realtime_factor, --realtime-factor
+inline constexpr Bounds kInsSimDuration{0.01, 1e6};       ///< ins_sim.duration [s], --duration
+inline constexpr Bounds kFlushPeriod{0.001, 3600.0};      ///< logger.flush_period [s], --flush-period
+inline constexpr Bounds kMaxFileSeconds{0.0, 1e9};        ///< logger.max_file_seconds, --max-file-seconds
+inline constexpr Bounds kOdometryScaleError{-0.5, 0.5};   ///< odometry.scale_error, montecarlo --scale-error
+inline constexpr Bounds kOdometrySteeringBias{-0.5, 0.5}; ///< odometry.steering_bias [rad]
+
 /// Channel names (defaults follow docs/ and the design guide).
 struct ChannelConfig {
   std::string ground_truth = "GROUND_TRUTH";
