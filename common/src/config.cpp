@@ -6,6 +6,7 @@
 #include <cerrno>
 #include <cstring>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <set>
@@ -428,6 +429,16 @@ std::string readConfigFile(const std::string& path, const std::string& what) {
   std::stringstream ss;
   ss << in.rdbuf();
   return ss.str();
+}
+
+void refuseOutputOverInputs(const std::string& flag, const std::string& output,
+                            const std::vector<std::string>& inputs, const std::string& what) {
+  for (const auto& in : inputs) {
+    std::error_code ec;  // either missing: not the same file
+    if (std::filesystem::equivalent(in, output, ec) && !ec)
+      throw ConfigError(flag, "", "'" + output + "' is the " + what + " '" + in +
+                                      "': writing it would destroy the input, choose another output");
+  }
 }
 
 SystemConfig loadSystemConfig(const std::string& path) { return parseSystemConfig(readConfigFile(path), path); }

@@ -330,7 +330,7 @@ TEST_F(ReplayTest, OutputOverTheInputIsRefusedAndTheInputKept) {
   EXPECT_EQ(slurp(log_), before);  // not truncated
 
   Child exe(LCMLOC_REPLAY, {log_, "-o", link, "--config", LCMLOC_PAPER_YAML}, path("same.out"));
-  EXPECT_EQ(exe.wait(30s).value_or(-1), 1) << exe.output();
+  EXPECT_EQ(exe.wait(30s).value_or(-1), 2) << exe.output();  // a bad argument
   EXPECT_NE(exe.output().find("is the input log"), std::string::npos) << exe.output();
   EXPECT_EQ(slurp(log_), before);
 }

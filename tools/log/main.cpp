@@ -89,13 +89,6 @@ bool noFingerprint(const eval::RawEvent& ev) {
 
 /// Refuses an output that is the log itself (the same file, also through a link), before it is
 /// opened for writing: that would truncate the log before it is read. A bad argument: exit 2.
-void refuseOutputOverLog(const std::string& log, const std::string& output) {
-  try {
-    eval::refuseOutputOverInput(log, output);
-  } catch (const std::runtime_error& e) {
-    throw common::ConfigError("--output", "", e.what());
-  }
-}
 
 std::regex channelRegex(const std::vector<std::string>& regexes) {
   std::string r;
@@ -204,7 +197,7 @@ struct Columns {
 
 int toCsv(const std::string& path, const std::vector<std::string>& channel_regexes, const std::string& output) {
   const bool to_stdout = output.empty() || output == "-";
-  if (!to_stdout) refuseOutputOverLog(path, output);
+  if (!to_stdout) common::refuseOutputOverInputs("--output", output, {path}, "input log");
   const std::regex re = channelRegex(channel_regexes);
   std::map<std::string, Columns> columns;
   std::map<std::string, int64_t> undecodable, unknown;
@@ -232,7 +225,7 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
   std::map<std::string, std::unique_ptr<std::ofstream>> files;
   std::ostream* single = &std::cout;
   if (to_dir) {
-    for (const auto& kv : columns) refuseOutputOverLog(path, (fs::path(output) / (kv.first + ".csv")).string());
+    for (const auto& kv : columns) common::refuseOutputOverInputs("--output", (fs::path(output) / (kv.first + ".csv")).string(), {path}, "input log");
     fs::create_directories(output);
   } else if (!to_stdout) {
     auto f = std::make_unique<std::ofstream>(output);
@@ -310,7 +303,7 @@ int64_t saturatingSub(int64_t a, int64_t b) {
 }
 
 int cut(const std::string& path, const std::string& output, const CutOptions& o) {
-  refuseOutputOverLog(path, output);
+  common::refuseOutputOverInputs("--output", output, {path}, "input log");
   std::optional<int64_t> from, to;
   if (o.from) from = boundMicros("--from", *o.from);
   if (o.to) to = boundMicros("--to", *o.to);

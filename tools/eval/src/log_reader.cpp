@@ -296,11 +296,6 @@ LogData readLog(const std::string& path, const common::ChannelConfig& channels,
   return out;
 }
 
-void refuseOutputOverInput(const std::string& input, const std::string& output) {
-  std::error_code ec;  // either missing: not the same file
-  if (std::filesystem::equivalent(input, output, ec) && !ec)
-    throw std::runtime_error("output '" + output + "' is the input log '" + input + "': choose another output file");
-}
 
 std::string LogIssue::describe() const {
   if (event_index < 0) return "whole log: " + what;

@@ -80,16 +80,6 @@ std::string timeOrderReason(const std::vector<std::optional<int64_t>>& t, std::s
   return "";
 }
 
-void refuseOutputOverInputs(const std::string& flag, const std::string& output,
-                            const std::vector<std::string>& inputs) {
-  for (const auto& in : inputs) {
-    std::error_code ec;  // either missing: not the same file
-    if (std::filesystem::equivalent(in, output, ec) && !ec)
-      throw common::ConfigError(flag, "", fmt::format("'{}' is the input file '{}': writing it would destroy the input, "
-                                                      "choose another output",
-                                                      output, in));
-  }
-}
 
 void checkFilterValue(const std::string& flag, const std::string& key, const std::string& value) {
   common::parseSystemConfig("fusion:\n  filter:\n    " + key + ": " + value + "\n", flag);

@@ -183,7 +183,7 @@ ImportResult importDirectory(const ImportOptions& opt) {
   if (!opt.out_dir.empty()) {
     const std::vector<std::string> inputs(paths.begin(), paths.end());
     for (const char* name : {"run.lcmlog", "map.csv", "config.yaml"})
-      refuseOutputOverInputs("--output", (fs::path(opt.out_dir) / name).string(), inputs);
+      common::refuseOutputOverInputs("--output", (fs::path(opt.out_dir) / name).string(), inputs);
   }
 
   auto refuse = [&](FileReport& f, int64_t line, const std::string& why) {

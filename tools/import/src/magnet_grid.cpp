@@ -78,7 +78,7 @@ MagnetGridImport importMagnetGrid(const MagnetGridOptions& opt) {
     throw common::ConfigError("--grid-angle", "", fmt::format("{} is not an angle [rad]", opt.grid_angle));
   if (!opt.out_dir.empty())
     for (const char* name : {"run.lcmlog", "map.csv", "config.yaml"})
-      refuseOutputOverInputs("--output", (fs::path(opt.out_dir) / name).string(), {opt.input});
+      common::refuseOutputOverInputs("--output", (fs::path(opt.out_dir) / name).string(), {opt.input});
   std::ifstream in(opt.input);
   if (!in) throw std::runtime_error("cannot open '" + opt.input + "'");
   MagnetGridImport r;

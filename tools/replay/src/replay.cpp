@@ -26,7 +26,7 @@ ReplayResult replayLog(const common::SystemConfig& cfg, const ReplayOptions& opt
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   ReplayResult r;
-  if (!opts.output.empty()) eval::refuseOutputOverInput(opts.input, opts.output);
+  if (!opts.output.empty()) common::refuseOutputOverInputs("--output", opts.output, {opts.input}, "input log");
   eval::LogScanner scanner(opts.input, &r.issues);
   r.file_size = scanner.fileSize();
   LogBus bus(opts.output);

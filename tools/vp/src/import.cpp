@@ -68,7 +68,7 @@ ImportResult importVictoriaPark(const ImportOptions& opt) {
     throw std::invalid_argument("wheelbase must be > 0 and the encoder offset finite");
   if (opt.holdout_every < 0 || (opt.holdout_every > 0 && (opt.holdout_phase < 0 || opt.holdout_phase >= opt.holdout_every)))
     throw std::invalid_argument("holdout: every must be >= 0 and phase in [0, every)");
-  if (!opt.output.empty()) import::refuseOutputOverInputs("--output", opt.output, {opt.odometry_csv, opt.gps_csv});
+  if (!opt.output.empty()) common::refuseOutputOverInputs("--output", opt.output, {opt.odometry_csv, opt.gps_csv});
   ImportResult r;
   import::EventLog events;
   const common::LocalFrame frame(opt.datum);

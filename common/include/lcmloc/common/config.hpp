@@ -107,6 +107,12 @@ struct SystemConfig {
 
 /// Reads a system config file. Missing sections take defaults; throws ConfigError.
 SystemConfig loadSystemConfig(const std::string& path);
+/// Throws ConfigError naming flag when output is one of inputs (what: "input log", "input file"):
+/// the same file by device and inode, so also under another path, through a symbolic link or as
+/// a hard link. Checked before anything is written: writing would destroy the input.
+void refuseOutputOverInputs(const std::string& flag, const std::string& output,
+                            const std::vector<std::string>& inputs, const std::string& what = "input file");
+
 /// The text of a configuration file (what: "config file", "system file", ...): ConfigError when
 /// it does not exist, is a directory or another non-regular file (/dev/zero was read until memory
 /// ran out), is larger than 64 MB or cannot be read.

@@ -151,10 +151,6 @@ struct ScanSummary {
 ScanSummary scanLog(const std::string& path, const std::function<void(const RawEvent&)>& on_event,
                     const std::atomic<bool>* stop = nullptr);
 
-/// Throws std::runtime_error when output names the file input names (also through a link):
-/// opening it for writing would truncate the log before it is read.
-void refuseOutputOverInput(const std::string& input, const std::string& output);
-
 /// Reads the log at path. Throws std::runtime_error when the file cannot be opened.
 /// stop (optional) is polled between events; when set, reading ends early.
 LogData readLog(const std::string& path, const common::ChannelConfig& channels,

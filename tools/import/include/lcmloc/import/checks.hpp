@@ -41,12 +41,6 @@ std::vector<TimeVerdict> checkTimeOrder(const std::vector<std::optional<int64_t>
 std::string timeOrderReason(const std::vector<std::optional<int64_t>>& utimes, std::size_t i, const TimeVerdict& v,
                             bool strict, const std::function<std::string(std::size_t)>& text);
 
-/// Throws common::ConfigError naming flag when output is one of inputs: the same file by device
-/// and inode, so also under another path, through a symbolic link or as a hard link. Checked
-/// before anything is written (writing would destroy the input before or while it is read).
-void refuseOutputOverInputs(const std::string& flag, const std::string& output,
-                            const std::vector<std::string>& inputs);
-
 /// Throws common::ConfigError naming flag when value (YAML, e.g. "[1e-5, 2e-3]") is not what a
 /// system config accepts for fusion.filter.<key>: a command-line value bound for a generated
 /// config.yaml is refused with the flag's name, not later by the replay naming the file.
