@@ -28,7 +28,7 @@ int main(int argc, char** argv) {
   CLI::App app{
       "lcmloc-replay: replays an LCM log offline (no network) through the fusion daemon's code and writes the "
       "daemon's outputs (POSE, POSE_<TYPE>, GATE, FUSION_STATUS) to an output log, byte-identical to what the "
-      "daemon publishes live. Exit: 0 ok, 1 error, 2 bad config, 3 input log damaged (replayed up to and past "
+      "daemon publishes live. Exit: 0 ok, 1 error, 2 bad config or arguments, 3 input log damaged (replayed up to and past "
       "the damage, each damaged place reported)."};
   common::CommonOptions opts;
   common::addCommonOptions(app, opts);
