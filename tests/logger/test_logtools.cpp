@@ -200,6 +200,14 @@ TEST_F(LogTools, ToCsvOneChannelHeaderNamedAfterFieldsArraysExpanded) {
                   "covariance_1_2,covariance_2_0,covariance_2_1,covariance_2_2");
   EXPECT_EQ(l[2], std::to_string(kT0 + 100000) + "," + std::to_string(kT0 + 100000) +
                       ",1,\"ukf, v2\",0,3,10,2,0.5,x,y,theta,1,0,0,0,2,0,0,0,3");
+
+  // -c before the log: one regex per -c (the log path used to be taken as a second regex,
+  // "log is required")
+  r = tool("to-csv -c POSE " + log + " -o " + path("pose2.csv"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(slurp(path("pose2.csv")), slurp(path("pose.csv")));
+  r = tool("cut -c POSE " + log + " -o " + path("pose.lcmlog"));
+  EXPECT_EQ(r.rc, 0) << r.err;
 }
 
 TEST_F(LogTools, ToCsvAllChannelsWritesOneFilePerDecodableChannel) {

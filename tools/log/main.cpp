@@ -355,14 +355,16 @@ int main(int argc, char** argv) {
 
   auto* csv_cmd = app.add_subcommand("to-csv", "decode one channel (or all) to CSV, header row named after the fields");
   csv_cmd->add_option("log", log_path, "LCM log file")->required();
-  csv_cmd->add_option("--channel,-c", channels, "channel regex (repeatable; default: every channel)");
+  csv_cmd->add_option("--channel,-c", channels, "channel regex (repeatable; default: every channel)")
+      ->allow_extra_args(false);  // one regex per -c: the log path after it is no regex
   csv_cmd->add_option("--output,-o", output,
                       "CSV file ('-' or none: stdout) for one channel; a directory (one CHANNEL.csv each) for several");
 
   auto* cut_cmd = app.add_subcommand("cut", "copy a time window and/or a channel subset into a new log");
   cut_cmd->add_option("log", log_path, "LCM log file")->required();
   cut_cmd->add_option("--output,-o", output, "new log file")->required();
-  cut_cmd->add_option("--channel,-c", cut_opts.channels, "channel regex to keep (repeatable; default: all)");
+  cut_cmd->add_option("--channel,-c", cut_opts.channels, "channel regex to keep (repeatable; default: all)")
+      ->allow_extra_args(false);  // one regex per -c: the log path after it is no regex
   cut_cmd->add_option("--from", cut_opts.from, "keep from this many seconds after the first event")
       ->check(lcmloc::common::nonNegative());
   cut_cmd->add_option("--to", cut_opts.to, "keep up to this many seconds after the first event")
