@@ -266,6 +266,13 @@ void parseFusion(KeyReader& root, FusionConfig& f) {
   }
   r.get("output_every", f.output_every, 1, 1000000);
   ins_config::parseLandmarks(r, f.landmarks);
+  {
+    KeyReader x(r.child("landmark_fix"), root.file(), "fusion.landmark_fix");
+    x.get("gate_probability", f.fix_gate.probability, 0.0, 1.0 - 1e-12, "0 = no gate");
+    x.get("lockout_rejections", f.fix_gate.lockout_rejections, 0, 1000000);
+    x.get("max_condition", f.fix.max_condition, 1.0, 1e12);
+    x.finish();
+  }
   r.finish();
 }
 

@@ -34,6 +34,8 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
   ec.reorder_window_us = static_cast<int64_t>(std::llround(cfg.fusion.reorder_window * 1e6));
   ec.output_every = cfg.fusion.output_every;
   ec.landmarks = cfg.fusion.landmarks;
+  ec.fix = cfg.fusion.fix;
+  ec.fix_gate = cfg.fusion.fix_gate;
   ec.max_time_jump_us = max_jump_us_ = static_cast<int64_t>(std::llround(cfg.fusion.max_time_jump * 1e6));
   core::EngineOutputs out;
   out.on_state = [this](const std::string& f, bool active, const core::FilterState& s) { publishState(f, active, s); };

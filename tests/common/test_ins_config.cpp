@@ -20,6 +20,16 @@ TEST(InsConfig, PaperFileLoads) {
   ASSERT_EQ(cfg.fusion.landmarks.size(), 3u);
   EXPECT_DOUBLE_EQ(cfg.fusion.landmarks.at(2).x(), -500.0);
   EXPECT_EQ(cfg.channels.vision, "VISION");
+  EXPECT_DOUBLE_EQ(cfg.fusion.fix_gate.probability, 0.9999);
+  EXPECT_EQ(cfg.fusion.fix_gate.lockout_rejections, 2);
+  EXPECT_DOUBLE_EQ(cfg.fusion.fix.max_condition, 100.0);
+  // The paper's vision run re-initializes with every fix (no gate).
+  EXPECT_DOUBLE_EQ(common::loadSystemConfig(LCMLOC_INS_VISION_YAML).fusion.fix_gate.probability, 0.0);
+  const auto set = common::parseSystemConfig(
+      "fusion: {landmark_fix: {gate_probability: 0.99, lockout_rejections: 0, max_condition: 1000}}\n", "t.yaml");
+  EXPECT_DOUBLE_EQ(set.fusion.fix_gate.probability, 0.99);
+  EXPECT_EQ(set.fusion.fix_gate.lockout_rejections, 0);
+  EXPECT_DOUBLE_EQ(set.fusion.fix.max_condition, 1000.0);
 }
 
 TEST(InsConfig, ErrorsNameTheKey) {
@@ -35,6 +45,10 @@ TEST(InsConfig, ErrorsNameTheKey) {
   expectError("fusion: {filter: {ins: {max_imu_gap: 0}}}\n", "fusion.filter.ins.max_imu_gap");
   expectError("fusion: {landmarks: [{id: 1, x: 0, y: 0}, {id: 1, x: 5, y: 5}]}\n", "fusion.landmarks[1].id");
   expectError("fusion: {landmarks: {id: 1}}\n", "fusion.landmarks");
+  expectError("fusion: {landmark_fix: {gate_probability: 1}}\n", "fusion.landmark_fix.gate_probability");
+  expectError("fusion: {landmark_fix: {gate: 0.99}}\n", "fusion.landmark_fix");
+  expectError("fusion: {landmark_fix: {lockout_rejections: -1}}\n", "fusion.landmark_fix.lockout_rejections");
+  expectError("fusion: {landmark_fix: {max_condition: 0.5}}\n", "fusion.landmark_fix.max_condition");
   expectError("ins_sim: {profile: custom}\n", "ins_sim.segments");
   expectError("ins_sim: {segments: [{duration: 1, accel: 0, yawrate: 1}]}\n", "ins_sim.segments[0]");
   expectError("ins_sim: {imu_dropouts: [{start: -1, duration: 1}]}\n", "ins_sim.imu_dropouts[0].start");

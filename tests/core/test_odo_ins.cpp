@@ -284,6 +284,7 @@ TEST(OdoInsFilter, LandmarkFixThroughTheEngineReinitializes) {
   ec.filter.initial_pose = Vec3(p_true.x() - 500.0, p_true.y() + 500.0, M_PI / 2);
   ec.reorder_window_us = 0;
   ec.landmarks = map;
+  ec.fix_gate.probability = 0;  // as seeds/004: every fix re-initializes (the default gate refuses this one)
   FusionEngine e(ec, {}, rec.outputs());
   int64_t seq = 0;
   stand(e, 1000000, 100, M_PI / 2, &seq);
@@ -321,6 +322,110 @@ EngineConfig landmarkEngineConfig(const std::map<int, Vec2>& map) {
   ec.reorder_window_us = 0;
   ec.landmarks = map;
   return ec;
+}
+
+TEST(OdoInsFilter, LandmarkFixGateRefusesAFixFarFromEachFilterUntilTheLockOut) {
+  // Both filters stand at the origin heading north, 5 cm sigma. A fix of another place (the
+  // bearings as seen 40 m east: a wrong association) is refused by each filter's gate and leaves
+  // them where they are; a good fix is taken and clears the count; after two refused fixes in a
+  // row the third is taken (the filters, not the landmarks, are then taken to be lost).
+  const auto map = triangle(1000.0);
+  Recorder rec;
+  std::vector<std::pair<std::string, GateDecision>> all;
+  EngineOutputs out = rec.outputs();
+  auto active_decision = out.on_decision;
+  out.on_decision = [&](const std::string& f, bool active, const GateDecision& d) {
+    active_decision(f, active, d);
+    all.emplace_back(f, d);
+  };
+  EngineConfig ec = landmarkEngineConfig(map);
+  ec.filter.p0_diag = Vec3(0.05 * 0.05, 0.05 * 0.05, 1e-6);
+  ec.shadow = {"odo_ins_uncal"};
+  ASSERT_EQ(ec.fix_gate.lockout_rejections, 2);
+  FusionEngine e(ec, {}, out);
+  int64_t seq = 0, vision_seq = 0;
+  stand(e, 1000000, 50, M_PI / 2, &seq);
+  const Vec2 elsewhere(40.0, 0.0);
+  auto fixAt = [&](const Vec2& p, int64_t utime) {
+    all.clear();
+    rec.events.clear();
+    e.push(input("VISION", vision_seq++, utime, bearingsFrom(p, M_PI / 2, map, utime)));
+    e.flush();
+  };
+  auto reasons = [&] {
+    std::string r;
+    for (const auto& [f, d] : all) r += f + ":" + d.reason + (d.accepted ? "+ " : "- ");
+    return r;
+  };
+
+  fixAt(elsewhere, 1500000);
+  EXPECT_EQ(reasons(), "odo_ins:gate- odo_ins_uncal:gate- ");
+  for (const auto& [f, d] : all) {
+    EXPECT_GT(d.mahalanobis, d.gate) << f;
+    EXPECT_NEAR(d.gate, 21.108, 1e-3);  // chi-square 3 dof, 0.9999
+    EXPECT_NEAR(d.innovation[0], 40.0, 0.01) << f;
+  }
+  EXPECT_TRUE(rec.hasEvent("refused"));
+  EXPECT_FALSE(rec.hasEvent("fix"));
+  EXPECT_LT(e.activeState().x.head<2>().norm(), 0.01);
+
+  fixAt(Vec2(0.0, 0.0), 1600000);  // the truth: taken
+  EXPECT_EQ(reasons(), "odo_ins:fix+ odo_ins_uncal:fix+ ");
+  EXPECT_TRUE(rec.hasEvent("fix"));
+  fixAt(elsewhere, 1700000);
+  EXPECT_EQ(reasons(), "odo_ins:gate- odo_ins_uncal:gate- ");  // the good fix cleared the count
+  fixAt(elsewhere, 1800000);
+  EXPECT_EQ(reasons(), "odo_ins:gate- odo_ins_uncal:gate- ");
+  EXPECT_LT(e.activeState().x.head<2>().norm(), 0.01);
+  fixAt(elsewhere, 1900000);
+  EXPECT_EQ(reasons(), "odo_ins:fix_lockout+ odo_ins_uncal:fix_lockout+ ");
+  EXPECT_TRUE(rec.hasEvent("lockout"));
+  EXPECT_TRUE(rec.hasEvent("fix"));
+  EXPECT_NEAR(e.activeState().x[0], 40.0, 1e-3);
+  fixAt(elsewhere, 2000000);  // now consistent with the filters
+  EXPECT_EQ(reasons(), "odo_ins:fix+ odo_ins_uncal:fix+ ");
+}
+
+TEST(OdoInsFilter, LandmarkFixGateOffTakesEveryFixLockOutOffRefusesForever) {
+  const auto map = triangle(1000.0);
+  const Vec2 elsewhere(40.0, 0.0);
+  for (const double probability : {0.0, 0.9999}) {
+    std::vector<std::pair<std::string, GateDecision>> all;
+    EngineOutputs out;
+    out.on_decision = [&](const std::string& f, bool, const GateDecision& d) { all.emplace_back(f, d); };
+    EngineConfig ec = landmarkEngineConfig(map);
+    ec.filter.p0_diag = Vec3(0.05 * 0.05, 0.05 * 0.05, 1e-6);
+    ec.fix_gate.probability = probability;
+    ec.fix_gate.lockout_rejections = 0;  // never: a filter the fixes disagree with keeps refusing
+    FusionEngine e(ec, {}, out);
+    int64_t seq = 0;
+    stand(e, 1000000, 50, M_PI / 2, &seq);
+    for (int k = 0; k < 5; ++k) {
+      all.clear();
+      const int64_t t = 1500000 + k * 100000;
+      e.push(input("VISION", k, t, bearingsFrom(k == 0 ? elsewhere : Vec2(0.0, 0.0), M_PI / 2, map, t)));
+      e.flush();
+      ASSERT_EQ(all.size(), 1u);
+      // gate off: the first fix moves the filter 40 m, the others (of the origin) move it back.
+      EXPECT_EQ(all[0].second.reason, probability == 0 || k > 0 ? "fix" : "gate") << probability << " " << k;
+      EXPECT_EQ(std::isinf(all[0].second.gate), probability == 0);
+      if (k == 0) EXPECT_NEAR(e.activeState().x[0], probability == 0 ? 40.0 : 0.0, 0.01);
+    }
+    FusionEngine lost(ec, {}, out);  // only ever sees fixes of another place
+    stand(lost, 1000000, 50, M_PI / 2, &seq);
+    all.clear();
+    for (int k = 0; k < 6; ++k) {
+      const int64_t t = 1500000 + k * 100000;
+      lost.push(input("VISION", k, t, bearingsFrom(elsewhere, M_PI / 2, map, t)));
+    }
+    lost.flush();
+    ASSERT_EQ(all.size(), 6u);
+    for (const auto& [f, d] : all) EXPECT_EQ(d.reason, probability == 0 ? "fix" : "gate");
+  }
+  // A probability outside [0, 1) is a configuration error.
+  EngineConfig bad = landmarkEngineConfig(map);
+  bad.fix_gate.probability = 1.0;
+  EXPECT_THROW(FusionEngine(bad, {}, EngineOutputs{}), std::invalid_argument);
 }
 
 TEST(OdoInsFilter, LandmarkFixRefusals) {

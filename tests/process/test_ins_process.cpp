@@ -81,10 +81,11 @@ TEST_F(InsProcess, FusionRunsOdoInsOnImuAndOdometryAndTakesALandmarkFix) {
     return false;
   }, 5s)) << fusion.output();
 
-  // A three-landmark fix (landmarks of config/ins_paper.yaml) from a pose 40 m off the filter's.
+  // Three-landmark fixes (landmarks of config/ins_paper.yaml) from a pose 40 m off the filter's:
+  // the gate (fusion.landmark_fix) refuses the first two, the lock-out takes the third.
   const double lm[3][2] = {{0.0, 577.35}, {-500.0, -288.68}, {500.0, -288.68}};
   const double fx = p.state[0] + 30.0, fy = p.state[1] - 25.0, fth = p.state[2] + 0.01;
-  for (int k = 0; k < 2; ++k) {  // the second pushes the first out of the reorder window
+  for (int k = 0; k < 4; ++k) {  // the fourth pushes the third out of the reorder window
     lcmloc::landmark_bearings_t b;
     b.utime = p.utime + 1000000 + k * 1000000;
     b.seq = k;
@@ -98,13 +99,18 @@ TEST_F(InsProcess, FusionRunsOdoInsOnImuAndOdometryAndTakesALandmarkFix) {
   }
   ASSERT_TRUE(waitFor(bus, [&] {
     for (const auto& d : decisions)
-      if (d.reason == "fix") return true;
+      if (d.reason == "fix_lockout") return true;
     return false;
   }, 5s)) << fusion.output();
-  ASSERT_TRUE(waitFor(bus, [&] { return poses.back().utime >= p.utime + 1000000; }, 5s));
+  std::vector<std::string> reasons;
+  for (const auto& d : decisions)
+    if (d.sensor == "VISION" && std::string(d.filter) == "odo_ins") reasons.push_back(d.reason + (d.accepted ? "+" : "-"));
+  EXPECT_EQ(reasons, (std::vector<std::string>{"gate-", "gate-", "fix_lockout+"}));
+  const int64_t t_fix = p.utime + 3000000;
+  ASSERT_TRUE(waitFor(bus, [&] { return poses.back().utime >= t_fix; }, 5s));
   const lcmloc::pose_t* after = nullptr;
   for (const auto& q : poses)
-    if (q.utime == p.utime + 1000000) after = &q;
+    if (q.utime == t_fix) after = &q;
   ASSERT_NE(after, nullptr);
   // Standing still after the fix: the pose is where the fix put it.
   EXPECT_NEAR(after->state[0], fx, 0.05);

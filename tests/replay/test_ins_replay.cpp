@@ -25,7 +25,8 @@ TEST(InsReplay, OdoInsAndLandmarkFixFromALog) {
   const std::string in = (dir / "in.lcmlog").string(), out = (dir / "out.lcmlog").string();
   auto cfg = common::parseSystemConfig(
       "fusion:\n  filter: {type: odo_ins}\n  landmarks:\n"
-      "    - {id: 1, x: 0.0, y: 577.35}\n    - {id: 2, x: -500.0, y: -288.68}\n    - {id: 3, x: 500.0, y: -288.68}\n",
+      "    - {id: 1, x: 0.0, y: 577.35}\n    - {id: 2, x: -500.0, y: -288.68}\n    - {id: 3, x: 500.0, y: -288.68}\n"
+      "  landmark_fix: {gate_probability: 0}\n",  // a fix 50 m off is taken (no gate)
       "test.yaml");
   models::InsSimConfig sc;
   sc.duration = 4.0;  // standing 2 s, then the hard start

@@ -37,6 +37,8 @@ RunResult run(const std::string& name, const models::InsSimConfig& cfg, const co
   std::optional<models::VisionSensor> vision;
   if (opt.fixes) {
     ec.landmarks = models::landmarkMap(opt.landmarks);
+    ec.fix = opt.fix;
+    ec.fix_gate = opt.fix_gate;
     vision.emplace(opt.vision, opt.landmarks, opt.vision_seed);
   }
   std::map<std::string, core::FilterState> latest;

@@ -48,6 +48,8 @@ int main(int argc, char** argv) {
         throw common::ConfigError(cfg.file, "landmarks", "--fixes needs a landmark map (list of {id, x, y})");
       eo.vision = cfg.scenario.vision;
       eo.landmarks = cfg.scenario.landmarks;
+      eo.fix = cfg.fusion.fix;
+      eo.fix_gate = cfg.fusion.fix_gate;
       eo.vision_seed = cfg.scenario.vision.seed ? cfg.scenario.vision.seed
                                                 : models::componentSeed(cfg.scenario.seed, "vision");
     }

@@ -11,6 +11,7 @@
 
 #include "filter_internal.hpp"
 #include "lcmloc/core/angles.hpp"
+#include "lcmloc/core/chi2.hpp"
 #include "lcmloc/core/text.hpp"
 
 namespace lcmloc::core {
@@ -68,6 +69,10 @@ struct FusionEngine::Impl {
   Impl(EngineConfig c, MarkerMap m, EngineOutputs o)
       : cfg(std::move(c)), map(std::move(m)), out(std::move(o)), buffer(cfg.reorder_window_us),
         active_cfg(cfg.filter) {
+    const LandmarkFixGate& g = cfg.fix_gate;
+    if (!(g.probability >= 0.0 && g.probability < 1.0) || g.lockout_rejections < 0)
+      throw std::invalid_argument("fix gate: probability must be in [0, 1) and lockout_rejections >= 0");
+    if (g.probability > 0.0) fix_gate = chi2Quantile(g.probability, 3);
     active = makeFilter(active_cfg, map);
     last_status = active->state().status;
     for (const auto& type : cfg.shadow) {
@@ -121,6 +126,7 @@ struct FusionEngine::Impl {
     odometry_since_output = 0;
     accumulated = unpublished = imu_saturating = false;
     imu_saturated = 0;
+    refused_fixes.clear();
     event("time_jump",
           at + "time went back " + std::to_string(secondsApart(newest, first.utime)) + " s (utime " +
               std::to_string(first.utime) + " after " + std::to_string(newest) + ", " + n +
@@ -292,6 +298,7 @@ struct FusionEngine::Impl {
     const std::string old = active->name();
     active = std::move(next);
     active_cfg = c.config;
+    refused_fixes.erase(filterKey(*active, true));
     event("ack", "switched " + old + " -> " + active->name() + note, utime);
   }
 
@@ -324,10 +331,17 @@ struct FusionEngine::Impl {
 
   void control(int64_t utime, const ResetFilter&) {
     forEachFilter([&](Filter& f, bool is_active) { startFresh(f, configOf(f, is_active), utime); });
+    refused_fixes.clear();
     event("ack", "reset " + active->name(), utime);
   }
 
   void landmarkFix(const EngineInput& in, const BearingsInput& b);
+  /// Consecutive landmark fixes each filter refused (EngineConfig::fix_lockout_rejections), by
+  /// filterKey; cleared when the filters start over.
+  std::map<std::string, int> refused_fixes;
+  /// The fix gate's threshold (EngineConfig::fix_gate; +inf = none).
+  double fix_gate = std::numeric_limits<double>::infinity();
+  static std::string filterKey(const Filter& f, bool is_active) { return (is_active ? "active " : "shadow ") + f.name(); }
 
   void control(int64_t utime, const SetPose& c) {
     if (!c.pose.allFinite() || !c.stddev.allFinite() || !(c.stddev.array() > 0).all()) {
@@ -342,6 +356,7 @@ struct FusionEngine::Impl {
     fix.cov = c.stddev.array().square().matrix().asDiagonal();
     fix.source = "set_pose";
     forEachFilter([&](Filter& f, bool is_active) { applyFixTo(f, is_active, fix); });
+    refused_fixes.clear();
     event("ack", "set_pose", utime);
   }
 };
@@ -389,25 +404,51 @@ void FusionEngine::Impl::landmarkFix(const EngineInput& in, const BearingsInput&
   J(2, 2) = -1.0;
   fix.cov = J * r.covariance * J.transpose();
   fix.source = in.channel;
-  d.innovation = fix.pose - prior.x.head<3>();
-  d.innovation[2] = wrapAngle(d.innovation[2]);
-  const Mat3 S = prior.P.topLeftCorner<3, 3>() + fix.cov;
-  d.mahalanobis = d.innovation.dot(S.ldlt().solve(Eigen::VectorXd(d.innovation)));
-  d.reason = "fix";
+  d.gate = fix_gate;
+  const std::string at = in.channel + " seq " + std::to_string(in.seq) + ": ";
+  bool applied = false;
   forEachFilter([&](Filter& f, bool is_active) {
     GateDecision fd = d;
+    const FilterState s = is_active ? prior : f.state();
+    Vec3 v = fix.pose - s.x.head<3>();
+    v[2] = wrapAngle(v[2]);
+    const Mat3 S = s.P.topLeftCorner<3, 3>() + fix.cov;
+    fd.innovation = v;
+    fd.mahalanobis = v.dot(S.ldlt().solve(v));
+    int& refused = refused_fixes[filterKey(f, is_active)];
+    const bool outside = !(fd.mahalanobis <= fix_gate);  // (NaN: a broken state, outside)
+    const bool lockout = outside && cfg.fix_gate.lockout_rejections > 0 && refused >= cfg.fix_gate.lockout_rejections;
+    if (outside && !lockout) {
+      ++refused;
+      fd.reason = "gate";
+      if (is_active) ++counters.rejected;
+      if (out.on_decision) out.on_decision(f.name(), is_active, fd);
+      char why[160];
+      std::snprintf(why, sizeof why, "landmark fix refused by %s's gate (Mahalanobis distance %.1f > %.1f, %d in a row)",
+                    f.name().c_str(), fd.mahalanobis, fix_gate, refused);
+      event("refused", at + why, in.utime);
+      return;
+    }
+    fd.reason = lockout ? "fix_lockout" : "fix";
     fd.accepted = applyFixTo(f, is_active, fix);
     if (!fd.accepted) fd.reason = "bad_input";
+    refused = 0;
+    applied = true;
     if (is_active) ++(fd.accepted ? counters.accepted : counters.rejected);
     if (out.on_decision) out.on_decision(f.name(), is_active, fd);
     emitState(f, is_active);
+    if (lockout) event("lockout", at + f.name() + " takes the landmark fix after " +
+                                      std::to_string(cfg.fix_gate.lockout_rejections) + " refused in a row", in.utime);
   });
+  if (!applied) return;
+  d.innovation = fix.pose - prior.x.head<3>();
+  d.innovation[2] = wrapAngle(d.innovation[2]);
   char detail[200];
   std::snprintf(detail, sizeof detail,
                 "landmark fix (x %.3f, y %.3f, theta %.6f), moved by (%.3f, %.3f, %.6f), condition %.1f",
                 fix.pose[0], fix.pose[1], fix.pose[2], d.innovation[0], d.innovation[1], d.innovation[2],
                 r.condition);
-  event("fix", in.channel + " seq " + std::to_string(in.seq) + ": " + detail, in.utime);
+  event("fix", at + detail, in.utime);
 }
 
 FusionEngine::FusionEngine(EngineConfig cfg, MarkerMap map, EngineOutputs out)

@@ -10,6 +10,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "lcmloc/common/geodesy.hpp"
+#include "lcmloc/core/engine.hpp"
 #include "lcmloc/core/filter.hpp"
 #include "lcmloc/models/ins_sim.hpp"
 #include "lcmloc/models/scenario_config.hpp"
@@ -79,6 +80,10 @@ struct FusionConfig {
   /// Landmark map for the three-landmark fix (`fusion.landmarks: [{id, x, y}, ...]`, local
   /// metres, x east, y north). Empty in the file: the top-level `landmarks` (lcmloc-vision's).
   std::map<int, core::Vec2> landmarks;
+  /// The three-landmark fix (`fusion.landmark_fix`): its gate and its condition limit
+  /// (max_condition; the other FixOptions keep their defaults).
+  core::LandmarkFixGate fix_gate;
+  core::landmark::FixOptions fix;
 };
 
 struct LoggerConfig {

@@ -3,6 +3,7 @@
 // commands. Middleware-free; the daemon feeds it from LCM, the offline replay from a log file,
 // and both therefore compute the same outputs for the same input messages in the same order.
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -67,6 +68,18 @@ struct EngineOutputs {
   std::function<void(const std::string& event, const std::string& detail, int64_t utime)> on_event;
 };
 
+/// Gate on the three-landmark fix (fusion.landmark_fix): each filter refuses a fix whose
+/// Mahalanobis distance to its own pose, (fix - pose)' (P + R)^-1 (fix - pose) over (x, y, theta),
+/// exceeds the chi-square (3 dof) quantile at `probability` (decision reason "gate", event
+/// "refused"): a wrong landmark association, a fix of another place. After `lockout_rejections`
+/// consecutive refused fixes a filter takes the next one whatever its distance (decision reason
+/// "fix_lockout", event "lockout"): fixes that keep disagreeing with a filter say the filter is
+/// the one that is lost.
+struct LandmarkFixGate {
+  double probability = 0.9999;  ///< in (0, 1) (0.9999 -> 21.1); 0 = no gate, every fix taken (seeds/004)
+  int lockout_rejections = 2;   ///< 0 = never
+};
+
 struct EngineConfig {
   FilterConfig filter;                 ///< initial active filter
   std::vector<std::string> shadow;     ///< shadow filter types (same parameters otherwise)
@@ -84,12 +97,14 @@ struct EngineConfig {
   /// Landmark map (id -> x east, y north [m]) for three-landmark fixes from BearingsInput, and
   /// the fix's options (bearing noise default, condition limit). A BearingsInput is turned into
   /// a pose fix by damped least squares started from the active filter's pose and handed to
-  /// every filter's applyFix; refused (decision reason "bad_input" or "geometry", event
-  /// "bad_input" or "refused") on unknown ids, NaN, more than three bearings or the danger circle;
+  /// every filter's applyFix through each filter's gate (fix_gate); refused (decision reason
+  /// "bad_input" or "geometry", event "bad_input" or "refused") on unknown ids, NaN, more than
+  /// three bearings or the danger circle;
   /// fewer than three bearings (landmarks out of view) give decision reason "too_few_landmarks"
   /// and no event.
   std::map<int, Vec2> landmarks;
   landmark::FixOptions fix;
+  LandmarkFixGate fix_gate;
   /// Time-jump guard (fusion.max_time_jump; 0 = off): an input whose utime is more than this
   /// ahead of, or behind, the newest input taken so far is held as suspect. kTimeJumpConfirm
   /// consecutive suspects on the same side within this of each other confirm a new time base

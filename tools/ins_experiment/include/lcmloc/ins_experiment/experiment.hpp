@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "lcmloc/core/engine.hpp"
 #include "lcmloc/core/filter.hpp"
 #include "lcmloc/models/ins_sim.hpp"
 #include "lcmloc/models/vision_sensor.hpp"
@@ -26,6 +27,8 @@ struct Options {
   models::VisionSensorConfig vision;
   std::vector<models::Landmark> landmarks;
   uint64_t vision_seed = 5;
+  core::landmark::FixOptions fix;  ///< the engine's fix options and gate (`fusion.landmark_fix`)
+  core::LandmarkFixGate fix_gate;
 };
 
 /// One three-landmark fix: position errors just before and just after it.
