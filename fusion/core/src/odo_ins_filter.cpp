@@ -117,6 +117,9 @@ class OdoInsAdapter : public Filter {
       for (int b = 0; b < kExtra; ++b)
         if (src[a] >= 0 && src[b] >= 0) P(kExtraStates[a].index, kExtraStates[b].index) = from.P(src[a], src[b]);
     if (src[0] < 0 && src[1] < 0) startVelocity(from, speed);
+    // A state that was never run (a filter's configured start: reset, a restart after a broken
+    // state, a hand-over from a filter that had not started) says nothing about the velocity.
+    velocity_unknown_ = from.status == FilterStatus::Uninitialized || (src[0] < 0 && src[1] < 0 && speed < 0);
     kf_.setBiases(gb, ab);
     placeAt(from.x.head<2>(), from.utime);  // with the new velocity
     utime_ = std::max(utime_, from.utime);
@@ -327,6 +330,24 @@ class OdoInsAdapter : public Filter {
     }
   }
 
+  /// The first odometer increment of a filter that does not know its velocity (a cold start, a
+  /// reset, a hand-over without one) sets the INS velocity: the calibrated odometer speed along
+  /// the INS heading, with the odometer's variance. Taken as a measurement against the configured
+  /// start (0 m/s, init_vel_std 0.01 m/s) instead, the speed of a vehicle already moving went into
+  /// the scale error: started at 19 m/s, odo_ins settled at a scale error of +123 % and 8.6 m/s.
+  void velocityFromOdometer(double raw_speed) {
+    velocity_unknown_ = false;
+    ins::InsState& s = kf_.mutableState();
+    s.v.head<2>() = kf_.calibratedOdometerVelocity(raw_speed).head<2>();
+    const double sd = cfg_.ins.meas_vel_std, white = cfg_.ins.odo_white * raw_speed;
+    StateMat& P = kf_.mutableCovariance();
+    for (int i : {ins::kDvE, ins::kDvN}) {
+      P.row(i).setZero();
+      P.col(i).setZero();
+      P(i, i) = sd * sd + white * white;
+    }
+  }
+
   void applyPending() {
     while (!pending_.empty() && pending_.front().utime <= ins_utime_) {
       const OdometryInput o = pending_.front();
@@ -335,6 +356,12 @@ class OdoInsAdapter : public Filter {
       if (dt <= 0) continue;
       last_odo_utime_ = o.utime;
       const double raw_speed = o.delta_s / dt;
+      if (velocity_unknown_) {
+        velocityFromOdometer(raw_speed);
+        v_sum_.setZero();
+        t_sum_ = 0.0;
+        continue;
+      }
       const ins::Vec3 v_mean = t_sum_ > 0.5 * dt ? ins::Vec3(v_sum_ / t_sum_) : kf_.state().v;
       kf_.updateOdometerMean(raw_speed, v_mean);
       v_sum_.setZero();
@@ -351,6 +378,7 @@ class OdoInsAdapter : public Filter {
   std::vector<std::string> names_;
   int64_t utime_ = 0, ins_utime_ = 0, last_imu_utime_ = 0, last_odo_utime_ = INT64_MIN, coast_started_ = 0;
   bool have_imu_ = false;
+  bool velocity_unknown_ = true;  ///< set by the next odometer increment (velocityFromOdometer)
   ins::Vec3 last_gyro_ = ins::Vec3::Zero(), last_accel_ = ins::Vec3::Zero();
   ins::Vec3 v_sum_ = ins::Vec3::Zero();
   double t_sum_ = 0.0;
