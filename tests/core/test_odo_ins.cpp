@@ -72,11 +72,14 @@ EngineInput input(const std::string& ch, int64_t seq, int64_t utime, decltype(En
 }
 
 /// Feeds n standing IMU samples and zero odometry at 100 Hz from utime t0.
-void stand(FusionEngine& e, int64_t t0, int n, double theta, int64_t* seq) {
+/// n steps of 10 ms at heading theta, standing (speed 0) or driving straight at a constant speed
+/// (the IMU reads the same).
+void stand(FusionEngine& e, int64_t t0, int n, double theta, int64_t* seq, double speed = 0.0) {
   for (int k = 0; k < n; ++k) {
     const int64_t t = t0 + k * 10000;
     OdometryInput o;
     o.utime = t;
+    o.delta_s = speed * 0.01;
     e.push(input("ODOMETRY", (*seq), t, o));
     e.push(input("IMU", (*seq)++, t, standingImu(t, theta)));
   }
@@ -247,6 +250,35 @@ TEST(OdoInsFilter, ImuDropoutCoastsOnOdometryAndIsReported) {
   EXPECT_EQ(s.status, FilterStatus::Ok);
   EXPECT_LT(std::hypot(s.x[0], s.x[1]), 0.05);
   EXPECT_TRUE(s.x.allFinite());
+}
+
+TEST(OdoInsFilter, ATimeJumpOfHoursIsNotBridgedStepByStep) {
+  // Driving north at 10 m/s, then every input jumps 3 hours ahead (a clock set from relative to
+  // absolute time, or corrupt stamps the time-jump guard takes after three in a row). Bridging
+  // such a gap in 20 ms steps took CPU time in proportion (hours for years; SIGTERM waited). The
+  // INS now moves its time across the gap with the state held and takes the speed from the next
+  // odometer increment: the pose stays where it was and the drive goes on at 10 m/s.
+  for (const int64_t jump : {int64_t{10800} * 1000000, int64_t{86400} * 1000000 * 365}) {
+    Recorder rec;
+    EngineConfig ec;
+    ec.filter = insConfig(M_PI / 2);
+    ec.reorder_window_us = 0;
+    FusionEngine e(ec, {}, rec.outputs());
+    int64_t seq = 0;
+    stand(e, 1000000, 200, M_PI / 2, &seq, 10.0);
+    e.flush();
+    const FilterState before = e.activeState();
+    EXPECT_NEAR(before.x[1], 19.8, 0.1);  // 1.98 s at 10 m/s
+    stand(e, 3000000 + jump, 100, M_PI / 2, &seq, 10.0);
+    e.flush();
+    const FilterState after = e.activeState();
+    ASSERT_TRUE(after.x.allFinite());
+    EXPECT_TRUE(rec.hasEvent("time_jump"));
+    EXPECT_NEAR(after.x[0], before.x[0], 0.05) << jump;
+    EXPECT_NEAR(after.x[1] - before.x[1], 10.0, 0.2) << jump;  // the second after the gap, at 10 m/s
+    EXPECT_NEAR(std::hypot(after.x[4], after.x[5]), 10.0, 0.05) << jump;
+    EXPECT_LT(std::abs(after.x[3]), 0.01) << jump;  // the scale estimate undisturbed
+  }
 }
 
 namespace {

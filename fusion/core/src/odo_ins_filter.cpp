@@ -14,6 +14,7 @@
 #include "filter_internal.hpp"
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/ins.hpp"
+#include "lcmloc/core/time_guard.hpp"
 
 namespace lcmloc::core {
 namespace {
@@ -23,6 +24,9 @@ using ins::StateMat;
 constexpr double kDeg = M_PI / 180.0;
 constexpr double kG = 9.78;  ///< g of the sensor grade (as ins::ImuGrade)
 constexpr int64_t kMaxStepUs = 20000;  ///< longest INS step while bridging a gap [us]
+/// Longest gap the INS bridges step by step [us]: 3000 steps. Beyond, the held samples say
+/// nothing (a forward time jump of hours took hours of CPU to bridge in 20 ms steps).
+constexpr int64_t kMaxBridgeUs = 60000000;
 constexpr std::size_t kMaxPending = 10000;
 
 /// The states published after x, y, theta, odo_scale_error, each with the error state whose
@@ -144,7 +148,7 @@ class OdoInsAdapter : public Filter {
       return;
     }
     // IMU missing for longer than max_imu_gap: coast on the last sample and keep correcting.
-    if (odo.utime - ins_utime_ > gapUs()) {
+    if (apartBy(odo.utime, ins_utime_, gapUs())) {
       if (status_ != FilterStatus::DeadReckoning) coast_started_ = ins_utime_;
       status_ = FilterStatus::DeadReckoning;
       advanceTo(odo.utime, last_gyro_, last_accel_, coast_started_ + maxCoastUs());
@@ -183,7 +187,7 @@ class OdoInsAdapter : public Filter {
       d.reason = "bad_input";  // time does not advance
       return d;
     }
-    const bool gap = m.utime - last_imu_utime_ > gapUs();
+    const bool gap = apartBy(m.utime, last_imu_utime_, gapUs());
     const int64_t gap_from = status_ == FilterStatus::DeadReckoning ? coast_started_ : last_imu_utime_;
     if (m.utime > ins_utime_) advanceTo(m.utime, w, f, gap ? gap_from + maxCoastUs() : INT64_MAX);
     last_imu_utime_ = m.utime;
@@ -195,7 +199,7 @@ class OdoInsAdapter : public Filter {
     ++gaps_;
     d.reason = "imu_gap";
     d.accepted = true;  // used, after coasting over the gap
-    d.innovation = Eigen::VectorXd::Constant(1, (m.utime - gap_from) * 1e-6);  // gap length [s]
+    d.innovation = Eigen::VectorXd::Constant(1, (static_cast<double>(m.utime) - static_cast<double>(gap_from)) * 1e-6);  // gap [s]
     return d;
   }
 
@@ -312,6 +316,7 @@ class OdoInsAdapter : public Filter {
   /// on a vehicle neither turning nor accelerating), so that a yaw rate held from the last sample
   /// does not turn the estimate in circles, nor a held acceleration run it away, over a long gap.
   void advanceTo(int64_t t, const ins::Vec3& w, const ins::Vec3& f, int64_t hold_until = INT64_MAX) {
+    if (apartBy(t, ins_utime_, kMaxBridgeUs)) return skipTo(t);
     while (ins_utime_ < t) {
       int64_t next = std::min(t, ins_utime_ + kMaxStepUs);
       if (!pending_.empty() && pending_.front().utime > ins_utime_ && pending_.front().utime < next)
@@ -346,6 +351,19 @@ class OdoInsAdapter : public Filter {
       P.col(i).setZero();
       P(i, i) = sd * sd + white * white;
     }
+  }
+
+  /// A gap too long to bridge (kMaxBridgeUs): the INS time moves to t with position, attitude
+  /// and velocity as they were (what happened meanwhile is unknown); the odometer increments up
+  /// to t are dropped (one spanning the gap would read as a standstill) and the next one sets
+  /// the velocity (velocityFromOdometer).
+  void skipTo(int64_t t) {
+    ins_utime_ = t;
+    while (!pending_.empty() && pending_.front().utime <= t) pending_.pop_front();
+    last_odo_utime_ = std::max(last_odo_utime_, t);
+    v_sum_.setZero();
+    t_sum_ = 0.0;
+    velocity_unknown_ = true;
   }
 
   void applyPending() {
