@@ -483,6 +483,26 @@ TEST(Transport, CorruptLengthsInAMessageFailTheDecodeInsteadOfCrashing) {
     putInt32(bad, 36, dim);
     EXPECT_LT(dp.decode(bad.data(), 0, static_cast<int>(bad.size())), 0) << dim;
   }
+
+  // A well-formed message above 1 MiB is refused before it is read (300,000 counters: 4.2 MB on
+  // the wire; a hostile 16 MB one took 548 MB of memory to fail). Under the bound it decodes.
+  lcmloc::heartbeat_t h{};
+  h.process = "p";
+  h.state = "ok";
+  for (const int n : {1000, 300000}) {
+    h.num_counters = n;
+    h.counter_names.assign(static_cast<std::size_t>(n), "c");
+    h.counters.assign(static_cast<std::size_t>(n), 0);
+    const auto big = encoded(h);
+    lcmloc::heartbeat_t dh;
+    const int got = dh.decode(big.data(), 0, static_cast<int>(big.size()));
+    if (big.size() <= 1048576) {
+      EXPECT_EQ(got, static_cast<int>(big.size())) << n;
+    } else {
+      EXPECT_LT(got, 0) << n;
+      EXPECT_TRUE(dh.counter_names.empty());
+    }
+  }
 }
 
 TEST(LogThrottle, FirstFivePerKeyThenOneInAThousand) {
