@@ -4,9 +4,12 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <set>
 #include <sstream>
 
 #include <lcm/lcm-cpp.hpp>
@@ -15,6 +18,7 @@
 #include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/logger/event_file.hpp"
 #include "lcmloc/logger/log_writer.hpp"
+#include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
 
@@ -47,6 +51,29 @@ std::vector<std::string> words(const std::string& line) {
   std::vector<std::string> v;
   std::istringstream in(line);
   for (std::string w; in >> w;) v.push_back(w);
+  return v;
+}
+
+template <class Msg>
+std::vector<uint8_t> enc(const Msg& m) {
+  std::vector<uint8_t> b(static_cast<std::size_t>(m.getEncodedSize()));
+  m.encode(b.data(), 0, static_cast<int>(b.size()));
+  return b;
+}
+
+/// An odometry message with seq and utime t.
+std::vector<uint8_t> odometry(int64_t seq, int64_t t) {
+  lcmloc::odometry_t o{};
+  o.utime = t;
+  o.seq = seq;
+  return enc(o);
+}
+
+/// Every regular file under dir, recursively.
+std::set<fs::path> filesUnder(const fs::path& dir) {
+  std::set<fs::path> v;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.is_regular_file()) v.insert(e.path());
   return v;
 }
 
@@ -89,11 +116,6 @@ class LogTools : public ::testing::Test {
       ev.datalen = static_cast<int32_t>(data.size());
       ev.data = const_cast<uint8_t*>(data.data());
       ASSERT_EQ(log.writeEvent(&ev), 0);
-    };
-    auto enc = [](const auto& m) {
-      std::vector<uint8_t> b(static_cast<std::size_t>(m.getEncodedSize()));
-      m.encode(b.data(), 0, static_cast<int>(b.size()));
-      return b;
     };
     for (int i = 0; i < 100; ++i) {
       const int64_t t = kT0 + i * 10000;
@@ -226,6 +248,121 @@ TEST_F(LogTools, ToCsvAllChannelsWritesOneFilePerDecodableChannel) {
   const ToolRun bad = tool("to-csv " + log);
   EXPECT_EQ(bad.rc, 1);
   EXPECT_NE(bad.err.find("give --output DIR"), std::string::npos) << bad.err;
+}
+
+TEST_F(LogTools, ToCsvChannelNamesNeverWriteOutsideTheDirectory) {
+  // Channel names are whatever a publisher sent: "../x" and an absolute path used to become
+  // DIR/../x.csv and /abs/x.csv.
+  const std::string log = path("traversal.lcmlog"), out = path("out/csv");
+  const std::string abs = path("escape_abs");  // an absolute channel name
+  {
+    lcmloc::logger::EventFile f(log);
+    const std::vector<std::string> chans{"../escape_rel", abs, "..", "ODOMETRY"};
+    for (int i = 0; i < 20; ++i) {
+      const auto& ch = chans[static_cast<std::size_t>(std::min(i, 3))];
+      const auto d = odometry(i, kT0 + i * 10000);
+      ASSERT_EQ(f.append(kT0 + i * 10000, ch, d.data(), d.size()), 0);
+    }
+    ASSERT_EQ(f.close(), 0);
+  }
+  const ToolRun r = tool("to-csv " + log + " -o " + out);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  std::set<fs::path> written;
+  for (const auto& p : filesUnder(dir_))
+    if (p.parent_path() == dir_ && (p.filename() == "traversal.lcmlog" || p.filename().string().rfind("tool.", 0) == 0))
+      continue;  // the log and the captured output
+    else
+      written.insert(p);
+  EXPECT_EQ(written.size(), 4u);
+  int64_t rows = 0;
+  for (const auto& p : written) {
+    EXPECT_EQ(p.parent_path(), fs::path(out)) << p << " is outside " << out;
+    const auto l = lines(slurp(p.string()));
+    ASSERT_FALSE(l.empty()) << p;
+    EXPECT_EQ(l[0].rfind("log_utime,utime,seq,", 0), 0u) << p;
+    rows += static_cast<int64_t>(l.size()) - 1;
+  }
+  EXPECT_EQ(rows, 20) << "every row of every channel in some file";
+  EXPECT_EQ(lines(slurp(out + "/ODOMETRY.csv")).size(), 18u) << "a plain channel name keeps CHANNEL.csv";
+  EXPECT_TRUE(fs::exists(out + "/_._escape_rel.csv"));
+  EXPECT_NE(r.err.find("../escape_rel: 1 rows, 8 columns -> " + out + "/_._escape_rel.csv"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(path("out/escape_rel.csv")));
+  EXPECT_FALSE(fs::exists(abs + ".csv"));
+}
+
+TEST_F(LogTools, ToCsvChannelsWhoseFileNamesCollideGetDistinctFiles) {
+  // ODOMETRY and ./ODOMETRY used to open the same file: half of the rows lost, exit 0.
+  // channel -> file: plain names keep theirs, the others a free sanitized name
+  const std::map<std::string, std::string> expected{
+      {"ODOMETRY", "ODOMETRY.csv"}, {"./ODOMETRY", "__ODOMETRY.csv"}, {"a_b", "a_b.csv"},
+      {"a/b", "a_b_2.csv"}, {"a:b", "a_b_3.csv"}};
+  for (const std::vector<std::string> chans : {std::vector<std::string>{"ODOMETRY", "./ODOMETRY"},
+                                               std::vector<std::string>{"ODOMETRY", "./ODOMETRY", "a_b", "a/b", "a:b"}}) {
+    const std::string log = path("alias.lcmlog"), out = path("csv" + std::to_string(chans.size()));
+    {
+      lcmloc::logger::EventFile f(log);
+      for (std::size_t i = 0; i < 10 * chans.size(); ++i) {
+        const auto d = odometry(static_cast<int64_t>(i), kT0 + static_cast<int64_t>(i) * 10000);
+        ASSERT_EQ(f.append(kT0 + static_cast<int64_t>(i) * 10000, chans[i % chans.size()], d.data(), d.size()), 0);
+      }
+      ASSERT_EQ(f.close(), 0);
+    }
+    const ToolRun r = tool("to-csv " + log + " -o " + out);
+    EXPECT_EQ(r.rc, 0) << r.err;
+    EXPECT_EQ(filesUnder(out).size(), chans.size());
+    for (std::size_t c = 0; c < chans.size(); ++c) {
+      const std::string file = out + "/" + expected.at(chans[c]);
+      EXPECT_NE(r.err.find(chans[c] + ": 10 rows, 8 columns -> " + file), std::string::npos) << r.err;
+      const auto l = lines(slurp(file));
+      ASSERT_EQ(l.size(), 11u) << file;
+      for (std::size_t k = 1; k < l.size(); ++k) {  // the rows of this channel: c, c + n, c + 2n, ...
+        const auto i = static_cast<int64_t>(c + chans.size() * (k - 1));
+        EXPECT_EQ(l[k].rfind(std::to_string(kT0 + i * 10000) + ",", 0), 0u) << file << ": " << l[k];
+      }
+    }
+  }
+}
+
+TEST_F(LogTools, ToCsvColumnsAreTheUnionInMessageOrderAndAHugeArrayIsRefused) {
+  const std::string log = path("wide.lcmlog");
+  auto ruler = [](int64_t seq, int n) {
+    lcmloc::magruler_t m{};
+    m.seq = seq;
+    m.num_sensors = n;
+    m.readings.assign(static_cast<std::size_t>(n), 0.5);
+    return enc(m);
+  };
+  auto write = [&](const std::vector<int>& sizes) {
+    lcmloc::logger::EventFile f(log);
+    for (std::size_t i = 0; i < sizes.size(); ++i) {
+      const auto d = ruler(static_cast<int64_t>(i), sizes[i]);
+      ASSERT_EQ(f.append(kT0 + static_cast<int64_t>(i), "MAGRULER", d.data(), d.size()), 0);
+    }
+    ASSERT_EQ(f.close(), 0);
+  };
+  // A longer array widens the table in place: readings_2 right after readings_1.
+  write({2, 3, 1});
+  ToolRun r = tool("to-csv " + log + " -o " + path("m.csv"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  auto l = lines(slurp(path("m.csv")));
+  ASSERT_EQ(l.size(), 4u);
+  EXPECT_EQ(l[0], "log_utime,utime,seq,num_sensors,readings_0,readings_1,readings_2,detected,lateral_offset,quality");
+  EXPECT_EQ(l[1], std::to_string(kT0) + ",0,0,2,0.5,0.5,,0,0,0");
+  EXPECT_EQ(l[3], std::to_string(kT0 + 2) + ",0,2,1,0.5,,,0,0,0");
+  // 9,994 readings (10,000 columns): written; one more: refused, nothing written.
+  write({13, 9994, 13});
+  r = tool("to-csv " + log + " -o " + path("w.csv"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  l = lines(slurp(path("w.csv")));
+  ASSERT_EQ(l.size(), 4u);
+  EXPECT_EQ(std::count(l[0].begin(), l[0].end(), ','), 10000);
+  write({13, 9995, 13});
+  r = tool("to-csv " + log + " -o " + path("x.csv"));
+  EXPECT_EQ(r.rc, 1) << r.err;
+  EXPECT_NE(r.err.find("MAGRULER: more than 10000 columns (widest message: 10001 fields)"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(path("x.csv"))) << "nothing written";
 }
 
 TEST_F(LogTools, CutKeepsTheTimeWindowAndChannelsAndLcmReadsTheResult) {

@@ -1,9 +1,11 @@
 // lcmloc-import (CSV directory -> log, map, config) and the magnet-grid import and replay.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <optional>
@@ -361,6 +363,46 @@ TEST(Import, BadRowsAreRefusedWithFileLineAndReason) {
   EXPECT_EQ(file(r, "landmarks.csv")->written, 2);
   EXPECT_EQ(r.messages, 2 + 2 + 1 + 1);
   EXPECT_TRUE(r.usable());
+}
+
+TEST(Import, TheSummaryListsAtMostShowRefusedRowsAndTheOptionRefusesANegativeCount) {
+  const auto d = tempDir("show_refused");
+  write(d / "odometry.csv", "time,delta_s,delta_theta\n1.0,0.1,0\n1.1,x,0\n1.2,y,0\n1.3,z,0\n1.4,0.1,0\n");
+  import::ImportOptions o;
+  o.dir = d.string();
+  const auto r = import::importDirectory(o);
+  ASSERT_EQ(r.refusals.size(), 3u);
+  auto count = [](const std::string& text, const std::string& what) {
+    std::size_t n = 0;
+    for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+    return n;
+  };
+  std::string s = import::importSummary(r, 2);
+  EXPECT_EQ(count(s, "\nrefused "), 2u) << s;
+  EXPECT_NE(s.find("... and 1 more refused rows"), std::string::npos) << s;
+  s = import::importSummary(r, 3);
+  EXPECT_EQ(count(s, "\nrefused "), 3u) << s;
+  EXPECT_EQ(s.find("more refused rows"), std::string::npos) << s;
+  for (int max : {0, -1, std::numeric_limits<int>::min()}) {  // -1 used to wrap: "... and 4 more"
+    s = import::importSummary(r, max);
+    EXPECT_EQ(count(s, "\nrefused "), 0u) << max << "\n" << s;
+    EXPECT_NE(s.find("... and 3 more refused rows"), std::string::npos) << max << "\n" << s;
+  }
+  // The command line refuses a negative count (exit 2, the option named); 0 lists none.
+  const std::string log = (d / "cli.log").string();
+  auto run = [&](const std::string& n) {
+    const int st = std::system((std::string(LCMLOC_IMPORT_BIN) + " " + d.string() + " --show-refused " + n + " > " +
+                                log + " 2>&1").c_str());
+    std::ifstream in(log);
+    return std::make_pair(WEXITSTATUS(st), std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()));
+  };
+  auto [code, text] = run("-1");
+  EXPECT_EQ(code, 2) << text;
+  EXPECT_NE(text.find("--show-refused"), std::string::npos) << text;
+  std::tie(code, text) = run("0");
+  EXPECT_EQ(code, 0) << text;
+  EXPECT_NE(text.find("... and 3 more refused rows"), std::string::npos) << text;
+  fs::remove_all(d);
 }
 
 TEST(Import, NothingUsableMixedClocksAndBadMapAreErrors) {

@@ -33,7 +33,9 @@ int main(int argc, char** argv) {
   app.add_option("--filter", io.filter, "filter type written into config.yaml (default: from the data)");
   app.add_option("--initial-pose", pose, "x y theta [m m rad] (default: first ground-truth row, else 0 0 0)")
       ->expected(3);
-  app.add_option("--show-refused", show, "list at most this many refused rows")->capture_default_str();
+  app.add_option("--show-refused", show, "list at most this many refused rows")
+      ->capture_default_str()
+      ->check(lcmloc::common::nonNegative());
   app.footer("The datum (lat/lon origin of the local frame, for GPS) and the channel names come from --config.");
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-import", [&]() -> int {

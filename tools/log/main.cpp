@@ -11,10 +11,12 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <list>
 #include <limits>
 #include <optional>
 #include <regex>
 #include <set>
+#include <unordered_map>
 
 #include <spdlog/spdlog.h>
 
@@ -177,23 +179,74 @@ std::string csvCell(const logger::Field& f) {
   return q + "\"";
 }
 
+/// At most this many columns per channel (log_utime aside). Real messages have tens to hundreds
+/// of fields; every row of a channel is as wide as its widest message, so one message with a
+/// huge array (a corrupt or hostile log) would make the CSV rows x width cells. Beyond this the
+/// channel is refused rather than written.
+constexpr std::size_t kMaxColumns = 10000;
+
 /// Columns of one channel: the ordered union of every message's field names (arrays of
-/// different lengths widen the table; missing cells stay empty).
+/// different lengths widen the table; missing cells stay empty). A new name goes right after the
+/// previous field of the same message (before all others when none precedes it). Linear in the fields: the order
+/// is a linked list until finish() numbers the columns.
 struct Columns {
-  std::vector<std::string> names;
-  std::map<std::string, std::size_t> index;
+  std::vector<std::string> names;                      ///< in column order, after finish()
+  std::unordered_map<std::string, std::size_t> index;  ///< name -> column, after finish()
+  std::size_t widest = 0;                              ///< fields of the widest message
+  std::size_t size() const { return order_.size() + names.size(); }  ///< columns so far
   void merge(const logger::Fields& fields) {
-    std::size_t at = 0;  // insert new names after the previous field of the same message
+    widest = std::max(widest, fields.size());
+    auto at = order_.begin();  // insert new names after the previous field of the same message
     for (const auto& f : fields) {
-      auto it = index.find(f.name);
-      if (it != index.end()) { at = it->second + 1; continue; }
-      names.insert(names.begin() + static_cast<std::ptrdiff_t>(at), f.name);
-      for (auto& kv : index)
-        if (kv.second >= at) ++kv.second;
-      index[f.name] = at++;
+      if (order_.size() > kMaxColumns) return;  // too wide: refused, no need to grow further
+      auto it = where_.find(f.name);
+      if (it != where_.end()) { at = std::next(it->second); continue; }
+      where_.emplace(f.name, order_.insert(at, f.name));
     }
   }
+  void finish() {
+    names.assign(order_.begin(), order_.end());
+    for (std::size_t i = 0; i < names.size(); ++i) index[names[i]] = i;
+    order_.clear();
+    where_.clear();
+  }
+
+ private:
+  std::list<std::string> order_;
+  std::unordered_map<std::string, std::list<std::string>::iterator> where_;
 };
+
+/// A plain file name for a channel's CSV inside the output directory: characters other than
+/// [A-Za-z0-9_.-] and a leading '.' become '_' (no '/', no "..", no hidden file), at most 200
+/// characters before ".csv".
+std::string csvFileName(const std::string& channel) {
+  std::string s = channel.substr(0, 200);
+  for (auto& c : s)
+    if (!((c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-' ||
+          c == '.'))
+      c = '_';
+  if (s.empty()) s = "_";
+  if (s[0] == '.') s[0] = '_';
+  return s;
+}
+
+/// The CSV file (name in the output directory) of every channel, all distinct: a channel whose
+/// name is a plain file name keeps it (CHANNEL.csv); the others get csvFileName, with _2, _3, ...
+/// when that is taken (ODOMETRY and ./ODOMETRY, a/b and a_b).
+std::map<std::string, std::string> csvFileNames(const std::map<std::string, Columns>& channels) {
+  std::map<std::string, std::string> files;
+  std::set<std::string> taken;
+  for (const auto& kv : channels)
+    if (csvFileName(kv.first) == kv.first) taken.insert(files[kv.first] = kv.first + ".csv");
+  for (const auto& kv : channels) {
+    if (files.count(kv.first)) continue;
+    const std::string base = csvFileName(kv.first);
+    std::string name = base + ".csv";
+    for (int i = 2; !taken.insert(name).second; ++i) name = base + "_" + std::to_string(i) + ".csv";
+    files[kv.first] = name;
+  }
+  return files;
+}
 
 int toCsv(const std::string& path, const std::vector<std::string>& channel_regexes, const std::string& output) {
   const bool to_stdout = output.empty() || output == "-";
@@ -218,14 +271,23 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
     spdlog::error("no decodable events on channels matching '{}' in {}", fmt::join(channel_regexes, "|"), path);
     return common::kExitRuntimeError;
   }
+  for (auto& [ch, cols] : columns) {
+    if (cols.size() > kMaxColumns)
+      throw std::runtime_error(fmt::format(
+          "{}: more than {} columns (widest message: {} fields): too wide for a CSV, nothing written; select the "
+          "other channels with -c", ch, kMaxColumns, cols.widest));
+    cols.finish();
+  }
   const bool to_dir = columns.size() > 1;
   if (to_dir && to_stdout)
     throw std::runtime_error(fmt::format("{} channels match: give --output DIR to get one CSV per channel",
                                          columns.size()));
+  std::map<std::string, std::string> paths;  // channel -> its CSV file, with -o DIR
   std::map<std::string, std::unique_ptr<std::ofstream>> files;
   std::ostream* single = &std::cout;
   if (to_dir) {
-    for (const auto& kv : columns) common::refuseOutputOverInputs("--output", (fs::path(output) / (kv.first + ".csv")).string(), {path}, "input log");
+    for (const auto& [ch, name] : csvFileNames(columns)) paths[ch] = (fs::path(output) / name).string();
+    for (const auto& kv : paths) common::refuseOutputOverInputs("--output", kv.second, {path}, "input log");
     fs::create_directories(output);
   } else if (!to_stdout) {
     auto f = std::make_unique<std::ofstream>(output);
@@ -237,7 +299,7 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
     if (!to_dir) return *single;
     auto& f = files[ch];
     if (!f) {
-      const std::string p = (fs::path(output) / (ch + ".csv")).string();
+      const std::string& p = paths.at(ch);
       f = std::make_unique<std::ofstream>(p);
       if (!*f) throw std::runtime_error("cannot write '" + p + "'");
     }
@@ -268,7 +330,7 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
   });
   for (const auto& [ch, n] : rows)
     spdlog::info("{}: {} rows, {} columns{}", ch, n, columns[ch].names.size() + 1,
-                 to_dir ? " -> " + (fs::path(output) / (ch + ".csv")).string()
+                 to_dir ? " -> " + paths.at(ch)
                         : (to_stdout ? "" : " -> " + output));
   for (auto& [ch, f] : files) {
     f->flush();

@@ -36,7 +36,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--max-rows", io.max_rows, "a slice: the first N odometry rows and the GPS rows of their time span (0 = all)")
       ->capture_default_str();
-  app.add_option("--show-refused", show, "list at most this many refused rows")->capture_default_str();
+  app.add_option("--show-refused", show, "list at most this many refused rows")
+      ->capture_default_str()
+      ->check(lcmloc::common::nonNegative());
   app.footer("The datum (lat/lon of the local frame's origin) and the channel names come from --config.");
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-import-vp", [&]() -> int {

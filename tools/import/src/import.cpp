@@ -567,14 +567,10 @@ std::string importSummary(const ImportResult& r, int max_refusals) {
   s += fmt::format("total: {} messages, time span {:.3f} s .. {:.3f} s ({:.3f} s), {} rows refused\n", r.messages,
                    r.first_utime * 1e-6, r.last_utime * 1e-6, (r.last_utime - r.first_utime) * 1e-6,
                    r.refusals.size());
-  int n = 0;
-  for (const auto& f : r.refusals) {
-    if (n++ >= max_refusals) {
-      s += fmt::format("... and {} more refused rows\n", r.refusals.size() - static_cast<std::size_t>(max_refusals));
-      break;
-    }
-    s += fmt::format("refused {}:{}: {}\n", f.file, f.line, f.reason);
-  }
+  const std::size_t shown = std::min(r.refusals.size(), static_cast<std::size_t>(std::max(max_refusals, 0)));
+  for (std::size_t i = 0; i < shown; ++i)
+    s += fmt::format("refused {}:{}: {}\n", r.refusals[i].file, r.refusals[i].line, r.refusals[i].reason);
+  if (shown < r.refusals.size()) s += fmt::format("... and {} more refused rows\n", r.refusals.size() - shown);
   if (!r.log_path.empty())
     s += fmt::format("wrote {}{}, {} (filter {})\n", r.log_path, r.map_path.empty() ? "" : ", " + r.map_path,
                      r.config_path, r.filter);

@@ -75,7 +75,8 @@ TimeBase detectTimeBase(int64_t first_utime);
 /// fatal; the time column follows the time-order rule of checkTimeOrder (import/checks.hpp).
 ImportResult importDirectory(const ImportOptions& opt);
 
-/// Human report: per file rows read / refused / written and time span, the refused rows.
+/// Human report: per file rows read / refused / written and time span, the first max_refusals
+/// refused rows (none when max_refusals <= 0) and how many more there are.
 std::string importSummary(const ImportResult& r, int max_refusals = 30);
 
 std::string toString(TimeUnit u);
