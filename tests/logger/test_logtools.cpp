@@ -284,8 +284,8 @@ TEST_F(LogTools, ToCsvChannelNamesNeverWriteOutsideTheDirectory) {
   }
   EXPECT_EQ(rows, 20) << "every row of every channel in some file";
   EXPECT_EQ(lines(slurp(out + "/ODOMETRY.csv")).size(), 18u) << "a plain channel name keeps CHANNEL.csv";
-  EXPECT_TRUE(fs::exists(out + "/_._escape_rel.csv"));
-  EXPECT_NE(r.err.find("../escape_rel: 1 rows, 8 columns -> " + out + "/_._escape_rel.csv"), std::string::npos)
+  EXPECT_TRUE(fs::exists(out + "/___escape_rel.csv"));
+  EXPECT_NE(r.err.find("../escape_rel: 1 rows, 8 columns -> " + out + "/___escape_rel.csv"), std::string::npos)
       << r.err;
   EXPECT_FALSE(fs::exists(path("out/escape_rel.csv")));
   EXPECT_FALSE(fs::exists(abs + ".csv"));

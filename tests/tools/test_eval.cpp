@@ -8,7 +8,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -18,6 +20,7 @@
 
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/eval/evaluate.hpp"
+#include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/report.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/fault_event_t.hpp"
@@ -65,16 +68,25 @@ lcmloc::magruler_t ruler(int64_t utime, int64_t seq, double offset) {
   return m;
 }
 
+/// What writeRun may change (for the tests of hostile logs).
+struct RunOptions {
+  std::string fault_kind;                      ///< kind of every fault (empty: the detection's own)
+  std::string live_filter = "ukf_gated";       ///< filter named by the live POSE messages
+  int64_t truth_shift_us = 0;                  ///< ground truth's utimes moved by this
+  std::function<void(LogWriter&)> first;       ///< writes events before the run
+};
+
 /// Writes the whole run; with_live adds POSE (x off by kLiveOffsetX) and GATE messages.
-LogLayout writeRun(const std::string& path, bool with_live) {
+LogLayout writeRun(const std::string& path, bool with_live, const RunOptions& o = {}) {
   LogWriter w(path);
+  if (o.first) o.first(w);
   int64_t pose_seq = 0, gate_seq = 0, fault_seq = 0;
   size_t next_det = 0;
   for (int k = 0; k <= kSteps; ++k) {
     const int64_t t = kT0 + k * kDt;
     const double y = 0.01 * k;
     lcmloc::ground_truth_t gt{};
-    gt.utime = t; gt.seq = k; gt.x = 0.0; gt.y = y; gt.heading = M_PI / 2; gt.speed = 1.0;
+    gt.utime = t + o.truth_shift_us; gt.seq = k; gt.x = 0.0; gt.y = y; gt.heading = M_PI / 2; gt.speed = 1.0;
     gt.distance = y;
     w.add("GROUND_TRUTH", gt, t);
     if (k > 0) {
@@ -87,7 +99,7 @@ LogLayout writeRun(const std::string& path, bool with_live) {
       w.add(d.channel, ruler(t, d.seq, d.offset), t);
       if (d.fault) {
         lcmloc::fault_event_t f{};
-        f.utime = t; f.seq = fault_seq++; f.kind = d.fault; f.channel = d.channel;
+        f.utime = t; f.seq = fault_seq++; f.kind = o.fault_kind.empty() ? d.fault : o.fault_kind; f.channel = d.channel;
         f.measurement_seq = d.seq; f.x = 0.0; f.y = y; f.lateral_offset = d.offset;
         w.add("FAULT_EVENTS", f, t);
       }
@@ -102,7 +114,7 @@ LogLayout writeRun(const std::string& path, bool with_live) {
     }
     if (with_live && k > 0 && k % 10 == 0) {
       lcmloc::pose_t p{};
-      p.utime = t; p.seq = pose_seq++; p.filter = "ukf_gated"; p.status = 0; p.dim = 3;
+      p.utime = t; p.seq = pose_seq++; p.filter = o.live_filter; p.status = 0; p.dim = 3;
       p.state = {kLiveOffsetX, y, M_PI / 2};
       p.state_names = {"x", "y", "theta"};
       p.covariance.assign(3, std::vector<double>(3, 0.0));
@@ -338,10 +350,184 @@ TEST(TruthAt, InterpolatesInsideAndRefusesFarOutside) {
   EXPECT_FALSE(eval::truthAt({}, 0).has_value());
 }
 
+TEST(TruthAt, ExtremeUtimesNeitherOverflowNorHideTheTruth) {
+  constexpr int64_t kMin = std::numeric_limits<int64_t>::min(), kMax = std::numeric_limits<int64_t>::max();
+  const std::vector<eval::TruthSample> low{{kMin, 0.0, 0.0, 0.0, 0.0}, {0, 2.0, 0.0, 0.0, 0.0}};
+  auto at = eval::truthAt(low, 0);
+  ASSERT_TRUE(at.has_value());
+  EXPECT_DOUBLE_EQ(at->x, 2.0);
+  at = eval::truthAt(low, kMin / 2);  // halfway between the two samples
+  ASSERT_TRUE(at.has_value());
+  EXPECT_DOUBLE_EQ(at->x, 1.0);
+  const std::vector<eval::TruthSample> high{{0, 0.0, 0.0, 0.0, 0.0}, {kMax, 2.0, 0.0, 0.0, 0.0}};
+  at = eval::truthAt(high, 50000);
+  ASSERT_TRUE(at.has_value());
+  EXPECT_NEAR(at->x, 0.0, 1e-9);
+  EXPECT_FALSE(eval::truthAt({{kMax, 0.0, 0.0, 0.0, 0.0}}, kMin).has_value());
+  EXPECT_FALSE(eval::truthAt({{kMin, 0.0, 0.0, 0.0, 0.0}}, kMax).has_value());
+  EXPECT_TRUE(eval::truthAt({{kMax, 0.0, 0.0, 0.0, 0.0}}, kMax).has_value());
+}
+
+TEST(GnuplotQuote, DoublesQuotesAndReplacesControlCharacters) {
+  EXPECT_EQ(eval::gnuplotQuote("ukf gated"), "'ukf gated'");
+  EXPECT_EQ(eval::gnuplotQuote("it's"), "'it''s'");
+  EXPECT_EQ(eval::gnuplotQuote("x'\nsystem 'touch X'\r\n'"), "'x''?system ''touch X''?" "?'''");
+  EXPECT_EQ(eval::gnuplotQuote(std::string("a\0\x01\x1f\t\x7f" "b", 7)), "'a?????b'");
+  // Taken literally inside single quotes: backquotes, macros, backslashes; other bytes kept.
+  EXPECT_EQ(eval::gnuplotQuote("`touch X` @cmd \\n \\' \xc3\xa9"), "'`touch X` @cmd \\n \\'' \xc3\xa9'");
+  EXPECT_EQ(eval::gnuplotQuote(""), "''");
+  EXPECT_EQ(eval::withoutControlCharacters("a\nb\x7f"), "a?b?");
+}
+
+/// Contents of a file ("" when missing).
+std::string slurp(const std::string& path) {
+  std::ifstream f(path);
+  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+}
+
+TEST(GnuplotQuote, GnuplotPrintsTheTextAndRunsNothing) {
+  if (!eval::findInPath("gnuplot")) GTEST_SKIP() << "gnuplot not installed";
+  const fs::path dir = fs::temp_directory_path() / ("lcmloc_test_quote_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::vector<std::string> texts{"x'\nsystem 'touch X1'\n'", "x'\rsystem 'touch X2'\r'", "x'`touch X3`'",
+                                       "`touch X4`", "x' . @cmd . 'y", "a\\'b\\\\", "it's"};
+  {
+    std::ofstream gp(dir / "q.gp");
+    gp << "cmd = \"system('touch X5')\"\n";
+    for (const auto& t : texts) gp << "print " << eval::gnuplotQuote(t) << "\n";
+  }
+  ASSERT_EQ(eval::runGnuplot(dir.string(), "q.gp"), 0) << slurp((dir / "gnuplot.log").string());
+  std::string expected;
+  for (const auto& t : texts) expected += eval::withoutControlCharacters(t) + "\n";
+  EXPECT_EQ(slurp((dir / "gnuplot.log").string()), expected);
+  for (const char* x : {"X1", "X2", "X3", "X4", "X5"}) EXPECT_FALSE(fs::exists(dir / x)) << x;
+  fs::remove_all(dir);
+}
+
+TEST(UniqueStems, SafeDistinctFileNames) {
+  // A name that is a stem already keeps it, even when an earlier name would map onto it.
+  EXPECT_EQ(eval::uniqueStems({"POSE_A.B", "POSE_A_B", "POSE_A:B"}),
+            (std::vector<std::string>{"POSE_A_B_2", "POSE_A_B", "POSE_A_B_3"}));
+  EXPECT_EQ(eval::uniqueStems({"live:ukf_gated", "ukf", "ukf"}),
+            (std::vector<std::string>{"live_ukf_gated", "ukf", "ukf_2"}));
+  EXPECT_EQ(eval::uniqueStems({"../x'\n`y`", ""}), (std::vector<std::string>{"___x___y_", "_"}));
+}
+
 /// Runs a command; returns its exit status.
 int shell(const std::string& cmd) {
   const int rc = std::system(cmd.c_str());
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+TEST_F(EvalTest, MessagesWithAbsurdUtimesAreSkippedCountedAndReported) {
+  constexpr int64_t kMin = std::numeric_limits<int64_t>::min(), kMax = std::numeric_limits<int64_t>::max();
+  RunOptions o;
+  o.first = [&](LogWriter& w) {
+    lcmloc::ground_truth_t gt{};
+    gt.utime = kMin;
+    gt.x = 100.0;
+    w.add("GROUND_TRUTH", gt, kT0);
+    lcmloc::pose_t p{};
+    p.utime = kMax;
+    p.filter = "ukf_gated";
+    p.dim = 3;
+    p.state = {0.0, 0.0, 0.0};
+    p.state_names = {"x", "y", "theta"};
+    p.covariance.assign(3, std::vector<double>(3, 0.0));
+    w.add("POSE", p, kT0);
+    lcmloc::odometry_t od{};
+    od.utime = kMax - 1;
+    od.delta_s = 0.01;
+    od.ticks = 10;
+    od.has_steering = true;
+    w.add("ODOMETRY", od, kT0);
+    lcmloc::fault_event_t f{};
+    f.utime = eval::kUtimeLimit;  // the first utime refused
+    f.kind = "phantom_marker";
+    f.channel = "MAGRULER";
+    f.measurement_seq = 99;
+    w.add("FAULT_EVENTS", f, kT0);
+  };
+  writeRun(file("run.lcmlog"), true, o);
+  const auto data = eval::readLog(file("run.lcmlog"), cfg_.channels);
+  EXPECT_EQ(data.bad_utime, 4);
+  ASSERT_EQ(data.issues.size(), 4u);
+  for (size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(data.issues[i].event_index, static_cast<int64_t>(i));
+    EXPECT_NE(data.issues[i].what.find("skipped: |utime| >= 2^62 us"), std::string::npos) << data.issues[i].what;
+  }
+  EXPECT_EQ(data.truth.size(), static_cast<size_t>(kSteps + 1));
+  EXPECT_EQ(data.inputs.size(), static_cast<size_t>(kSteps + 6));
+  EXPECT_EQ(data.faults.size(), 2u);
+  EXPECT_EQ(data.live_poses.size(), static_cast<size_t>(kSteps / 10));
+  const auto ev = eval::evaluate(data, setup_);  // scored as without the absurd messages
+  EXPECT_GE(run(ev, "dead_reckoning").metrics.samples, kSteps);
+  EXPECT_LT(run(ev, "dead_reckoning").metrics.rmse_m, 1e-9);
+  EXPECT_EQ(run(ev, "ukf_gated").metrics.faults_rejected, 2);
+  EXPECT_EQ(ev.live->run.metrics.samples, kSteps / 10);
+
+  const std::string out = file("out");
+  ASSERT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") + " --config " LCMLOC_TEST_DATA_DIR
+                  "/eval_straight.yaml --out " + out + " > " + file("stdout.txt") + " 2>&1"), 0);
+  const std::string text = slurp(file("stdout.txt"));
+  EXPECT_NE(text.find("warning: 4 message(s) skipped for |utime| >= 2^62 us"), std::string::npos) << text;
+  std::ifstream f(out + "/report.json");
+  const auto j = nlohmann::json::parse(f);
+  EXPECT_EQ(j["log"].value("bad_utime", -1), 4);
+  EXPECT_EQ(j["log"]["issues"].size(), 4u);
+  EXPECT_LT(j["filters"]["dead_reckoning"]["rmse_m"].get<double>(), 1e-9);
+  EXPECT_NEAR(j["live"]["rmse_m"].get<double>(), kLiveOffsetX, 1e-9);
+}
+
+TEST_F(EvalTest, FilterWithoutAScoredEstimateHasNoErrorRatherThanZero) {
+  RunOptions o;
+  o.truth_shift_us = int64_t{1000} * 1000000;  // the truth 1000 s after the run: nothing to score
+  writeRun(file("run.lcmlog"), true, o);
+  const std::string out = file("out");
+  ASSERT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") + " --config " LCMLOC_TEST_DATA_DIR
+                  "/eval_straight.yaml --no-plots --out " + out + " > " + file("stdout.txt") + " 2>&1"), 0);
+  const std::string text = slurp(file("stdout.txt"));
+  for (const std::string name : {"dead_reckoning", "ukf", "ukf_gated", "live:ukf_gated"}) {
+    const auto row = text.find("\n" + name + " ");
+    ASSERT_NE(row, std::string::npos) << name << "\n" << text;
+    EXPECT_EQ(text.compare(row + 23, 28, "        -        -         -"), 0) << name << "\n" << text;
+    EXPECT_NE(text.find("warning: " + name + ": no estimate within 0.1 s of the ground truth"), std::string::npos)
+        << name << "\n" << text;
+  }
+  std::ifstream f(out + "/report.json");
+  const auto j = nlohmann::json::parse(f);
+  for (const char* name : {"dead_reckoning", "ukf", "ukf_gated"}) {
+    EXPECT_EQ(j["filters"][name]["samples"], 0) << name;
+    for (const char* key : {"rmse_m", "max_error_m", "final_error_m"})
+      EXPECT_TRUE(j["filters"][name][key].is_null()) << name << "." << key;
+  }
+  EXPECT_TRUE(j["live"]["rmse_m"].is_null());
+}
+
+TEST_F(EvalTest, StringsFromTheLogRunNoCommandInGnuplot) {
+  if (shell("command -v gnuplot > /dev/null") != 0) GTEST_SKIP() << "gnuplot not installed";
+  // A fault kind and a live filter name that end the script's string and start a command:
+  // on a new line, and in backquotes (command substitution outside quotes).
+  const std::string kind_nl = file("PWNED_kind_nl"), live_nl = file("PWNED_live_nl");
+  const std::string kind_bq = file("PWNED_kind_bq"), live_bq = file("PWNED_live_bq");
+  const std::vector<std::pair<std::string, std::string>> variants{
+      {"x'\nsystem 'touch " + kind_nl + "'\n'", "y'\nsystem 'touch " + live_nl + "'\n'"},
+      {"x'`touch " + kind_bq + "`'", "y'`touch " + live_bq + "`'"}};
+  for (size_t v = 0; v < variants.size(); ++v) {
+    RunOptions o;
+    o.fault_kind = variants[v].first;
+    o.live_filter = variants[v].second;
+    writeRun(file("run.lcmlog"), true, o);
+    const std::string out = file("out" + std::to_string(v));
+    ASSERT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") + " --config " LCMLOC_TEST_DATA_DIR
+                    "/eval_straight.yaml --out " + out + " > " + file("stdout.txt") + " 2>&1"), 0);
+    // The script ran through without an error (every figure drawn) and ran nothing else.
+    EXPECT_NE(slurp(file("stdout.txt")).find("figures: "), std::string::npos) << slurp(out + "/gnuplot.log");
+    for (const char* png : {"trajectories.png", "trajectories_faults.png", "innovation.png", "error_x.png"})
+      EXPECT_TRUE(fs::exists(out + "/" + png)) << png;
+  }
+  for (const auto& x : {kind_nl, live_nl, kind_bq, live_bq}) EXPECT_FALSE(fs::exists(x)) << x;
 }
 
 TEST_F(EvalTest, CommandLineWritesReportAndFigures) {

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <sstream>
 #include <string>
@@ -586,6 +587,114 @@ TEST_F(EvaluateTest, DamagedLogIsReportedAndTheRestUsed) {
   EXPECT_EQ(j["truth"]["samples"], 200);                // 201 minus the damaged one
   EXPECT_EQ(j["tracks"][0]["estimates"], 200);          // 201 minus the cut last one
   EXPECT_NEAR(j["tracks"][0]["position_error_m"]["rmse"].get<double>(), 0.1, 1e-9);
+}
+
+TEST(InterpolateTruth, ExtremeUtimesDoNotOverflow) {
+  constexpr int64_t kMin = std::numeric_limits<int64_t>::min(), kMax = std::numeric_limits<int64_t>::max();
+  const std::vector<eval::TruthPose> truth{{kMin, 0.0, 0.0, 0.0, true}, {0, 2.0, 0.0, 0.0, true},
+                                           {kMax, 4.0, 0.0, 0.0, true}};
+  auto t = eval::interpolateTruth(truth, kMin / 2, 0);
+  ASSERT_TRUE(t.has_value());
+  EXPECT_DOUBLE_EQ(t->x, 1.0);
+  t = eval::interpolateTruth(truth, -1, 0);
+  ASSERT_TRUE(t.has_value());
+  EXPECT_NEAR(t->x, 2.0, 1e-9);
+  t = eval::interpolateTruth(truth, kMax / 2, 0);
+  ASSERT_TRUE(t.has_value());
+  EXPECT_NEAR(t->x, 3.0, 1e-9);
+  eval::TruthMiss why = eval::TruthMiss::kNone;
+  EXPECT_FALSE(eval::interpolateTruth(truth, -1, 1000000, &why).has_value());  // a gap of 2^63 us
+  EXPECT_EQ(why, eval::TruthMiss::kGap);
+}
+
+TEST_F(EvaluateTest, AbsurdUtimesAreSkippedCountedAndReported) {
+  constexpr int64_t kMin = std::numeric_limits<int64_t>::min(), kMax = std::numeric_limits<int64_t>::max();
+  {
+    LogWriter w(file("run.lcmlog"));
+    w.add("GROUND_TRUTH", truthMsg(kMin, 100.0, 0.0, 0.0), kT0);
+    w.add("POSE", poseMsg(kMax, 0.0, 0.0, 0.0, Eigen::Matrix3d::Identity()), kT0);
+    gate_decision_t g = gateMsg("ukf_gated", "MAGRULER", 2, 1.0, true, "accepted");
+    g.utime = -eval::kUtimeLimit;  // the first negative utime refused
+    w.add("GATE", g, kT0);
+    for (int i = 0; i <= 200; ++i) {
+      const int64_t t = kT0 + i * 10000;
+      w.add("GROUND_TRUTH", truthMsg(t, 0.01 * i, 0.0, 0.0), t);
+      w.add("POSE", poseMsg(t, 0.01 * i + 0.1, 0.0, 0.0, Eigen::Matrix3d::Identity()), t);
+    }
+  }
+  ASSERT_EQ(evaluate(file("run.lcmlog") + " -o " + file("out")), 0) << output_;
+  EXPECT_NE(output_.find("warning: 3 message(s) skipped for |utime| >= 2^62 us"), std::string::npos) << output_;
+  EXPECT_NE(output_.find("GROUND_TRUTH message with utime -9223372036854775808 skipped"), std::string::npos)
+      << output_;
+  const auto j = report(file("out"));
+  EXPECT_EQ(j["log"].value("bad_utime", -1), 3);
+  EXPECT_EQ(j["log"]["issues"].size(), 3u);
+  EXPECT_EQ(j["truth"]["samples"], 201);
+  EXPECT_EQ(j["truth"]["first_utime"], kT0);
+  EXPECT_EQ(j["gate"]["decisions"], 0);
+  EXPECT_EQ(j["tracks"][0]["estimates"], 201);
+  EXPECT_EQ(j["tracks"][0]["scored"], 201);
+  EXPECT_NEAR(j["tracks"][0]["position_error_m"]["rmse"].get<double>(), 0.1, 1e-9);
+}
+
+TEST_F(EvaluateTest, ChannelsWhoseStemsCollideGetFilesOfTheirOwn) {
+  {
+    LogWriter w(file("run.lcmlog"));
+    for (int i = 0; i <= 200; ++i) {
+      const int64_t t = kT0 + i * 10000;
+      w.add("GROUND_TRUTH", truthMsg(t, 0.01 * i, 0.0, 0.0), t);
+      w.add("POSE", poseMsg(t, 0.01 * i, 0.1, 0.0, Eigen::Matrix3d::Identity()), t);
+      w.add("POSE_A.B", poseMsg(t, 0.01 * i, 0.2, 0.0, Eigen::Matrix3d::Identity()), t);
+      w.add("POSE_A_B", poseMsg(t, 0.01 * i, 0.3, 0.0, Eigen::Matrix3d::Identity()), t);
+    }
+  }
+  ASSERT_EQ(evaluate(file("run.lcmlog") + " --all-poses -o " + file("out") + " --tum-dir " + file("tum")), 0)
+      << output_;
+  // TUM files too: one per channel, none over another.
+  for (const char* tum : {"estimate.tum", "estimate_POSE_A_B.tum", "estimate_POSE_A_B_2.tum"})
+    EXPECT_TRUE(fs::exists(file("tum/") + tum)) << tum;
+  // The position error (column 5) tells whose track a file holds.
+  auto error = [&](const std::string& name) {
+    std::ifstream f(file("out/" + name));
+    std::string line;
+    std::getline(f, line);  // header
+    std::getline(f, line);
+    std::istringstream s(line);
+    double v[5] = {-1, -1, -1, -1, -1};
+    for (double& x : v) s >> x;
+    return v[4];
+  };
+  EXPECT_NEAR(error("track_POSE.dat"), 0.1, 1e-9);
+  EXPECT_NEAR(error("track_POSE_A_B.dat"), 0.3, 1e-9);    // POSE_A_B keeps its own name
+  EXPECT_NEAR(error("track_POSE_A_B_2.dat"), 0.2, 1e-9);  // POSE_A.B
+  EXPECT_TRUE(fs::exists(file("out/ellipses_POSE_A_B_2.dat")));
+  if (std::system("command -v gnuplot > /dev/null") == 0) {
+    for (const char* png : {"trajectory_POSE_A_B.png", "trajectory_POSE_A_B_2.png", "errors_POSE_A_B_2.png",
+                            "nees_POSE_A_B_2.png"})
+      EXPECT_GT(fs::file_size(file("out/") + png), 1000u) << png;
+  }
+}
+
+TEST_F(EvaluateTest, ChannelNamesRunNoCommandInGnuplot) {
+  if (std::system("command -v gnuplot > /dev/null") != 0) GTEST_SKIP() << "gnuplot not installed";
+  // Channel names that end the script's string and start a command: on a new line, and in
+  // backquotes (command substitution outside quotes).
+  const std::string nl = file("PWNED_nl"), bq = file("PWNED_bq");
+  {
+    LogWriter w(file("run.lcmlog"));
+    for (int i = 0; i <= 200; ++i) {
+      const int64_t t = kT0 + i * 10000;
+      w.add("GROUND_TRUTH", truthMsg(t, 0.01 * i, 0.0, 0.0), t);
+      w.add("POSE", poseMsg(t, 0.01 * i, 0.1, 0.0, Eigen::Matrix3d::Identity()), t);
+      w.add("POSE_x'\nsystem 'touch " + nl + "'\n'", poseMsg(t, 0.01 * i, 0.2, 0.0, Eigen::Matrix3d::Identity()), t);
+      w.add("POSE_y'`touch " + bq + "`'", poseMsg(t, 0.01 * i, 0.3, 0.0, Eigen::Matrix3d::Identity()), t);
+    }
+  }
+  ASSERT_EQ(evaluate(file("run.lcmlog") + " --all-poses -o " + file("out")), 0) << output_;
+  EXPECT_NE(output_.find("figures: "), std::string::npos) << output_;  // the script ran through
+  EXPECT_EQ(report(file("out"))["tracks"].size(), 3u);
+  EXPECT_FALSE(fs::exists(nl));
+  EXPECT_FALSE(fs::exists(bq));
 }
 
 }  // namespace

@@ -156,8 +156,12 @@ int main(int argc, char** argv) {
     if (!tum_dir.empty()) {
       try {
         std::filesystem::create_directories(tum_dir);
-        for (const auto& t : tracks) {
-          const std::string name = t.channel == lo.pose_channel ? "estimate" : "estimate_" + t.channel;
+        std::vector<std::string> channels;
+        for (const auto& t : tracks) channels.push_back(t.channel);
+        const auto stems = eval::uniqueStems(channels);  // a channel name is no path
+        for (std::size_t i = 0; i < tracks.size(); ++i) {
+          const auto& t = tracks[i];
+          const std::string name = t.channel == lo.pose_channel ? "estimate" : "estimate_" + stems[i];
           const std::string file = tum_dir + "/" + name + ".tum";
           const auto n = eval::writeTum(file, t.poses);
           std::cout << "TUM: " << file << " (" << n << " poses";

@@ -216,38 +216,6 @@ struct Columns {
   std::unordered_map<std::string, std::list<std::string>::iterator> where_;
 };
 
-/// A plain file name for a channel's CSV inside the output directory: characters other than
-/// [A-Za-z0-9_.-] and a leading '.' become '_' (no '/', no "..", no hidden file), at most 200
-/// characters before ".csv".
-std::string csvFileName(const std::string& channel) {
-  std::string s = channel.substr(0, 200);
-  for (auto& c : s)
-    if (!((c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-' ||
-          c == '.'))
-      c = '_';
-  if (s.empty()) s = "_";
-  if (s[0] == '.') s[0] = '_';
-  return s;
-}
-
-/// The CSV file (name in the output directory) of every channel, all distinct: a channel whose
-/// name is a plain file name keeps it (CHANNEL.csv); the others get csvFileName, with _2, _3, ...
-/// when that is taken (ODOMETRY and ./ODOMETRY, a/b and a_b).
-std::map<std::string, std::string> csvFileNames(const std::map<std::string, Columns>& channels) {
-  std::map<std::string, std::string> files;
-  std::set<std::string> taken;
-  for (const auto& kv : channels)
-    if (csvFileName(kv.first) == kv.first) taken.insert(files[kv.first] = kv.first + ".csv");
-  for (const auto& kv : channels) {
-    if (files.count(kv.first)) continue;
-    const std::string base = csvFileName(kv.first);
-    std::string name = base + ".csv";
-    for (int i = 2; !taken.insert(name).second; ++i) name = base + "_" + std::to_string(i) + ".csv";
-    files[kv.first] = name;
-  }
-  return files;
-}
-
 int toCsv(const std::string& path, const std::vector<std::string>& channel_regexes, const std::string& output) {
   const bool to_stdout = output.empty() || output == "-";
   if (!to_stdout) common::refuseOutputOverInputs("--output", output, {path}, "input log");
@@ -286,7 +254,10 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
   std::map<std::string, std::unique_ptr<std::ofstream>> files;
   std::ostream* single = &std::cout;
   if (to_dir) {
-    for (const auto& [ch, name] : csvFileNames(columns)) paths[ch] = (fs::path(output) / name).string();
+    std::vector<std::string> channels;
+    for (const auto& kv : columns) channels.push_back(kv.first);
+    const auto stems = eval::uniqueStems(channels);  // ../x -> ___x, ./ODOMETRY next to ODOMETRY -> __ODOMETRY
+    for (std::size_t i = 0; i < channels.size(); ++i) paths[channels[i]] = (fs::path(output) / (stems[i] + ".csv")).string();
     for (const auto& kv : paths) common::refuseOutputOverInputs("--output", kv.second, {path}, "input log");
     fs::create_directories(output);
   } else if (!to_stdout) {

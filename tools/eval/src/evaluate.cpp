@@ -12,7 +12,7 @@
 namespace lcmloc::eval {
 namespace {
 
-constexpr int64_t kTruthToleranceUs = 100000;  // accept estimates this close to the truth span
+constexpr uint64_t kTruthToleranceUs = 100000;  // accept estimates this close to the truth span
 
 using FaultKey = std::pair<std::string, int64_t>;  // (channel, measurement_seq)
 
@@ -123,7 +123,9 @@ void compareWithReplay(LiveRun& live, const std::vector<FilterRun>& runs) {
 
 std::optional<TruthSample> truthAt(const std::vector<TruthSample>& truth, int64_t utime) {
   if (truth.empty()) return std::nullopt;
-  if (utime < truth.front().utime - kTruthToleranceUs || utime > truth.back().utime + kTruthToleranceUs)
+  // Distances as utimeSpan: no overflow whatever the utimes.
+  if ((utime < truth.front().utime && utimeSpan(utime, truth.front().utime) > kTruthToleranceUs) ||
+      (utime > truth.back().utime && utimeSpan(truth.back().utime, utime) > kTruthToleranceUs))
     return std::nullopt;
   auto hi = std::lower_bound(truth.begin(), truth.end(), utime,
                              [](const TruthSample& s, int64_t t) { return s.utime < t; });
@@ -131,7 +133,7 @@ std::optional<TruthSample> truthAt(const std::vector<TruthSample>& truth, int64_
   if (hi->utime == utime || hi == truth.begin()) return *hi;
   const TruthSample& a = *(hi - 1);
   const TruthSample& b = *hi;
-  const double w = static_cast<double>(utime - a.utime) / static_cast<double>(b.utime - a.utime);
+  const double w = static_cast<double>(utimeSpan(a.utime, utime)) / static_cast<double>(utimeSpan(a.utime, b.utime));
   TruthSample s;
   s.utime = utime;
   s.x = a.x + w * (b.x - a.x);

@@ -64,15 +64,23 @@ class Decoder {
   void invalid(int64_t offset, const std::string& what) {
     out_.issues.push_back({out_.events_read - 1, offset, what});
   }
+  /// False, counted and reported, for |utime| >= kUtimeLimit.
+  bool usable(const lcm::LogEvent& ev, int64_t utime, int64_t offset) {
+    if (usableUtime(utime)) return true;
+    ++out_.bad_utime;
+    invalid(offset, badUtimeIssue(ev.channel, utime));
+    return false;
+  }
   void truth(const lcm::LogEvent& ev, int64_t offset) {
     lcmloc::ground_truth_t m{};
-    if (!decode(ev, m, out_, offset)) return;
+    if (!decode(ev, m, out_, offset) || !usable(ev, m.utime, offset)) return;
     out_.truth.push_back({m.utime, m.x, m.y, m.heading, m.distance});
   }
   void odometry(const lcm::LogEvent& ev, int64_t offset) {
     lcmloc::odometry_t m{};
     if (!decode(ev, m, out_, offset)) return;
     ++out_.odometry_messages;
+    if (!usable(ev, m.utime, offset)) return;
     std::string why;
     auto in = common::toCore(m, &why);
     if (!in) return invalid(offset, "invalid " + ev.channel + " seq " + std::to_string(m.seq) + ": " + why);
@@ -82,6 +90,7 @@ class Decoder {
     lcmloc::magruler_t m{};
     if (!decode(ev, m, out_, offset)) return;
     ++out_.ruler_messages;
+    if (!usable(ev, m.utime, offset)) return;
     std::string why;
     auto det = common::toCore(m, ev.channel, &why);
     if (!det) {
@@ -94,19 +103,19 @@ class Decoder {
   }
   void fault(const lcm::LogEvent& ev, int64_t offset) {
     lcmloc::fault_event_t m{};
-    if (!decode(ev, m, out_, offset)) return;
+    if (!decode(ev, m, out_, offset) || !usable(ev, m.utime, offset)) return;
     out_.faults.push_back({m.utime, m.kind, m.channel, m.measurement_seq, m.x, m.y, m.lateral_offset});
   }
   void pose(const lcm::LogEvent& ev, int64_t offset) {
     lcmloc::pose_t m{};
-    if (!decode(ev, m, out_, offset)) return;
+    if (!decode(ev, m, out_, offset) || !usable(ev, m.utime, offset)) return;
     if (m.dim < 3 || static_cast<int>(m.state.size()) < 3)
       return invalid(offset, "pose with fewer than 3 states");
     out_.live_poses.push_back({m.utime, m.filter, m.state[0], m.state[1], m.state[2], m.status});
   }
   void gate(const lcm::LogEvent& ev, int64_t offset) {
     lcmloc::gate_decision_t m{};
-    if (!decode(ev, m, out_, offset)) return;
+    if (!decode(ev, m, out_, offset) || !usable(ev, m.utime, offset)) return;
     core::GateDecision d;
     d.utime = m.utime;
     d.sensor = m.sensor;
@@ -297,6 +306,10 @@ LogData readLog(const std::string& path, const common::ChannelConfig& channels,
 }
 
 
+std::string badUtimeIssue(const std::string& channel, int64_t utime) {
+  return channel + " message with utime " + std::to_string(utime) + " skipped: |utime| >= 2^62 us";
+}
+
 std::string LogIssue::describe() const {
   if (event_index < 0) return "whole log: " + what;
   return "event " + std::to_string(event_index) + " at byte " + std::to_string(byte_offset) + ": " + what;
@@ -305,6 +318,32 @@ std::string LogIssue::describe() const {
 void printIssues(std::ostream& os, const std::vector<LogIssue>& issues, std::size_t shown) {
   for (std::size_t k = 0; k < issues.size() && k < shown; ++k) os << "  " << issues[k].describe() << "\n";
   if (issues.size() > shown) os << "  ... and " << issues.size() - shown << " more (see report.json)\n";
+}
+
+void printBadUtime(std::ostream& os, int64_t skipped) {
+  if (skipped > 0)
+    os << "warning: " << skipped << " message(s) skipped for |utime| >= 2^62 us: not evaluated (see the issues)\n";
+}
+
+std::vector<std::string> uniqueStems(const std::vector<std::string>& names) {
+  auto safe = [](std::string s) {
+    if (s.size() > 200) s.resize(200);
+    for (auto& c : s)
+      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-') c = '_';
+    return s.empty() ? std::string("_") : s;
+  };
+  std::vector<std::string> stems(names.size());
+  std::set<std::string> taken;
+  for (std::size_t i = 0; i < names.size(); ++i)  // names that are stems already keep them
+    if (safe(names[i]) == names[i] && taken.insert(names[i]).second) stems[i] = names[i];
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (!stems[i].empty()) continue;
+    const std::string base = safe(names[i]);
+    std::string s = base;
+    for (int k = 2; !taken.insert(s).second; ++k) s = base + "_" + std::to_string(k);
+    stems[i] = s;
+  }
+  return stems;
 }
 
 }  // namespace lcmloc::eval

@@ -4,18 +4,35 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <iomanip>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/report.hpp"
 
 namespace lcmloc::eval {
+
+std::string withoutControlCharacters(std::string text) {
+  for (auto& c : text)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
+  return text;
+}
+
+std::string gnuplotQuote(const std::string& text) {
+  std::string out = "'";
+  for (char c : withoutControlCharacters(text)) {
+    out += c;
+    if (c == '\'') out += c;  // '' is a quote inside a single-quoted string
+  }
+  return out + "'";
+}
 
 bool findInPath(const std::string& exe) {
   const char* path = std::getenv("PATH");
@@ -74,22 +91,17 @@ std::string colour(const std::string& name) {
   auto it = kColours.find(name);
   return it == kColours.end() ? "#0072b2" : it->second;
 }
-std::string title(std::string name) {
+/// The legend title of a run, quoted for the script.
+std::string title(std::string name, const std::string& suffix = "") {
   for (auto& c : name) if (c == '_') c = ' ';
-  return name;
+  return gnuplotQuote(name + suffix);
 }
-std::string fileStem(std::string name) {
-  for (auto& c : name) if (c == ':') c = '_';
-  return name;
-}
-
-double seconds(int64_t utime, int64_t t0) { return static_cast<double>(utime - t0) * 1e-6; }
 
 void writeTrack(const std::string& path, const FilterRun& run, int64_t t0) {
   std::ofstream f(path);
   f << "# t[s] x[m] y[m] err_x[m] err_y[m] err[m]\n" << std::setprecision(9);
   for (const auto& p : run.track) {
-    f << seconds(p.utime, t0) << ' ' << p.x << ' ' << p.y << ' ';
+    f << secondsSince(p.utime, t0) << ' ' << p.x << ' ' << p.y << ' ';
     if (p.scored) f << p.err_x << ' ' << p.err_y << ' ' << p.err << '\n';
     else f << "? ? ?\n";
   }
@@ -103,7 +115,7 @@ bool writeDecisions(const std::string& path, const FilterRun& run, int64_t t0) {
   for (const auto& r : run.decisions) {
     const double m = r.decision.mahalanobis;
     if (!(m > 0) || !std::isfinite(m)) continue;
-    f << seconds(r.decision.utime, t0) << ' ' << m << ' ' << (r.decision.accepted ? 1 : 0) << ' '
+    f << secondsSince(r.decision.utime, t0) << ' ' << m << ' ' << (r.decision.accepted ? 1 : 0) << ' '
       << (r.is_fault ? 1 : 0) << '\n';
     any = true;
   }
@@ -115,8 +127,8 @@ struct Series { std::string name, stem; bool live; };
 void trajectorySeries(std::ostream& gp, const std::vector<Series>& series, bool faults) {
   gp << "plot 'truth.dat' u 2:3 w l lw 4 lc rgb '#000000' t 'ground truth'";
   for (const auto& s : series)
-    gp << ", \\\n  'track_" << s.stem << ".dat' u 2:3 w l lw 2 " << (s.live ? "dt 2 " : "")
-       << "lc rgb '" << colour(s.live ? "" : s.name) << "' t '" << title(s.name) << "'";
+    gp << ", \\\n  " << gnuplotQuote("track_" + s.stem + ".dat") << " u 2:3 w l lw 2 " << (s.live ? "dt 2 " : "")
+       << "lc rgb '" << colour(s.live ? "" : s.name) << "' t " << title(s.name);
   gp << ", \\\n  'markers.dat' u 1:2 w p pt 7 ps 1.2 lc rgb '#7f7f7f' t 'markers'";
   if (faults) gp << ", \\\n  'faults.dat' u 1:2 w p pt 2 ps 2.5 lw 3 lc rgb '#d55e00' t 'fault markers'";
   gp << "\n";
@@ -145,8 +157,9 @@ void faultZoomPlot(std::ostream& gp, const std::vector<Series>& series,
         "set xlabel 'X [m]'\nset ylabel 'Y [m]'\n";
   for (std::size_t i = 0; i < n; ++i) {
     const auto& f = *located[i];
-    gp << "set title '" << f.fault.kind << " (" << f.fault.channel << " seq "
-       << f.fault.measurement_seq << ")'\n"
+    gp << "set title "
+       << gnuplotQuote(f.fault.kind + " (" + f.fault.channel + " seq " + std::to_string(f.fault.measurement_seq) + ")")
+       << "\n"
        << "set xrange [" << f.marker_x - 1.5 << ":" << f.marker_x + 1.5 << "]\n"
        << "set yrange [" << f.marker_y - 1.5 << ":" << f.marker_y + 1.5 << "]\n";
     trajectorySeries(gp, series, true);
@@ -165,9 +178,9 @@ void errorPlot(std::ostream& gp, const std::vector<Series>& series, const std::s
        << ", graph 1 nohead dt 3 lw 1.5 lc rgb '#d55e00'\n";
   gp << "plot ";
   for (std::size_t i = 0; i < series.size(); ++i)
-    gp << (i ? ", \\\n  " : "") << "'track_" << series[i].stem << ".dat' u 1:" << column
+    gp << (i ? ", \\\n  " : "") << gnuplotQuote("track_" + series[i].stem + ".dat") << " u 1:" << column
        << " w l lw 2 " << (series[i].live ? "dt 2 " : "") << "lc rgb '"
-       << colour(series[i].live ? "" : series[i].name) << "' t '" << title(series[i].name) << "'";
+       << colour(series[i].live ? "" : series[i].name) << "' t " << title(series[i].name);
   if (!fault_times.empty()) gp << ", \\\n  NaN w l dt 3 lw 1.5 lc rgb '#d55e00' t 'fault injected'";
   gp << "\nunset arrow\n";
 }
@@ -180,15 +193,15 @@ void innovationPlot(std::ostream& gp, const std::vector<Series>& with_decisions,
         "plot "
      << gate << " w l lw 2 dt 2 lc rgb '#d55e00' t sprintf('gate %.3f', " << gate << ")";
   for (const auto& s : with_decisions) {
-    const std::string file = "'decisions_" + s.stem + ".dat'";
+    const std::string file = gnuplotQuote("decisions_" + s.stem + ".dat");
     gp << ", \\\n  " << file << " u 1:($3==1?$2:1/0) w p pt 7 ps 1.3 lc rgb '" << colour(s.name)
-       << "' t '" << title(s.name) << " accepted'"
+       << "' t " << title(s.name, " accepted")
        << ", \\\n  " << file << " u 1:($3==0?$2:1/0) w p pt 5 ps 1.3 lc rgb '" << colour(s.name)
-       << "' t '" << title(s.name) << " rejected'";
+       << "' t " << title(s.name, " rejected");
   }
   if (!with_decisions.empty())
-    gp << ", \\\n  'decisions_" << with_decisions.back().stem
-       << ".dat' u 1:($4==1?$2:1/0) w p pt 6 ps 3 lw 2 lc rgb '#d55e00' t 'fault measurement'";
+    gp << ", \\\n  " << gnuplotQuote("decisions_" + with_decisions.back().stem + ".dat")
+       << " u 1:($4==1?$2:1/0) w p pt 6 ps 3 lw 2 lc rgb '#d55e00' t 'fault measurement'";
   gp << "\nunset logscale y\n";
 }
 
@@ -201,7 +214,7 @@ PlotResult writePlots(const LogData& data, const Evaluation& ev, const core::Mar
   {
     std::ofstream f(dir + "/truth.dat");
     f << "# t[s] x[m] y[m] heading[rad]\n" << std::setprecision(9);
-    for (const auto& t : data.truth) f << seconds(t.utime, t0) << ' ' << t.x << ' ' << t.y << ' ' << t.heading << '\n';
+    for (const auto& t : data.truth) f << secondsSince(t.utime, t0) << ' ' << t.x << ' ' << t.y << ' ' << t.heading << '\n';
     std::ofstream m(dir + "/markers.dat");
     m << "# x[m] y[m] id\n";
     for (const auto& k : map) m << k.x << ' ' << k.y << ' ' << k.id << '\n';
@@ -212,22 +225,26 @@ PlotResult writePlots(const LogData& data, const Evaluation& ev, const core::Mar
     std::ofstream f(dir + "/faults.dat");
     f << "# marker_x[m] marker_y[m] t[s] kind\n";
     for (const auto& mark : ev.faults) {
-      fault_times.push_back(seconds(mark.fault.utime, t0));
+      fault_times.push_back(secondsSince(mark.fault.utime, t0));
       if (!mark.located) continue;
       located_faults = true;
-      f << mark.marker_x << ' ' << mark.marker_y << ' ' << fault_times.back() << ' ' << mark.fault.kind << '\n';
+      f << mark.marker_x << ' ' << mark.marker_y << ' ' << fault_times.back() << ' '
+        << withoutControlCharacters(mark.fault.kind) << '\n';
     }
   }
+  std::vector<const FilterRun*> runs;
+  for (const auto& run : ev.filters) runs.push_back(&run);
+  if (ev.live) runs.push_back(&ev.live->run);
+  std::vector<std::string> names;
+  for (const auto* run : runs) names.push_back(run->name);
+  const auto stems = uniqueStems(names);  // "live:ukf_gated" -> live_ukf_gated
   std::vector<Series> series, with_decisions;
-  for (const auto& run : ev.filters) {
-    series.push_back({run.name, fileStem(run.name), false});
-    writeTrack(dir + "/track_" + series.back().stem + ".dat", run, t0);
-    if (writeDecisions(dir + "/decisions_" + series.back().stem + ".dat", run, t0))
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const bool live = ev.live && runs[i] == &ev.live->run;
+    series.push_back({runs[i]->name, stems[i], live});
+    writeTrack(dir + "/track_" + stems[i] + ".dat", *runs[i], t0);
+    if (!live && writeDecisions(dir + "/decisions_" + stems[i] + ".dat", *runs[i], t0))
       with_decisions.push_back(series.back());
-  }
-  if (ev.live) {
-    series.push_back({ev.live->run.name, fileStem(ev.live->run.name), true});
-    writeTrack(dir + "/track_" + series.back().stem + ".dat", ev.live->run, t0);
   }
 
   {

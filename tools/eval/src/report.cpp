@@ -14,9 +14,10 @@ using nlohmann::json;
 json number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
 json metricsJson(const Metrics& m) {
-  return {{"rmse_m", m.rmse_m},
-          {"max_error_m", m.max_error_m},
-          {"final_error_m", m.final_error_m},
+  const bool scored = m.samples > 0;  // no error is not a perfect score
+  return {{"rmse_m", scored ? json(m.rmse_m) : json(nullptr)},
+          {"max_error_m", scored ? json(m.max_error_m) : json(nullptr)},
+          {"final_error_m", scored ? json(m.final_error_m) : json(nullptr)},
           {"samples", m.samples},
           {"accepted", m.accepted},
           {"rejected", m.rejected},
@@ -33,7 +34,7 @@ json measurementsJson(const FilterRun& run, int64_t t0) {
   for (const auto& r : run.decisions) {
     const auto& d = r.decision;
     list.push_back({{"utime", d.utime},
-                    {"t_s", static_cast<double>(d.utime - t0) * 1e-6},
+                    {"t_s", secondsSince(d.utime, t0)},
                     {"sensor", d.sensor},
                     {"measurement_seq", d.measurement_seq},
                     {"innovation_distance", number(d.mahalanobis)},
@@ -67,12 +68,13 @@ json logJson(const LogData& data) {
           {"ruler_messages", data.ruler_messages},
           {"ruler_detections", data.ruler_detections},
           {"truth_samples", data.truth.size()},
+          {"bad_utime", data.bad_utime},
           {"issues", issues}};
 }
 
-void row(std::ostream& os, const std::string& name, const Metrics& m, bool scored) {
+void row(std::ostream& os, const std::string& name, const Metrics& m) {
   os << std::left << std::setw(22) << name << std::right << std::fixed << std::setprecision(3);
-  if (scored)
+  if (m.samples > 0)
     os << std::setw(9) << m.rmse_m << std::setw(9) << m.max_error_m << std::setw(10) << m.final_error_m;
   else
     os << std::setw(9) << "-" << std::setw(9) << "-" << std::setw(10) << "-";
@@ -132,24 +134,31 @@ void writeJson(const json& report, const std::string& path) {
 }
 
 void printSummary(std::ostream& os, const LogData& data, const Evaluation& ev) {
-  const bool scored = !data.truth.empty();
   os << std::left << std::setw(22) << "filter" << std::right << std::setw(9) << "RMSE[m]"
      << std::setw(9) << "max[m]" << std::setw(10) << "final[m]" << std::setw(10) << "accepted"
      << std::setw(10) << "rejected" << std::setw(8) << "faults" << std::setw(11) << "valid_rej"
      << "\n";
-  for (const auto& run : ev.filters) row(os, run.name, run.metrics, scored);
-  if (ev.live) row(os, ev.live->run.name, ev.live->run.metrics, scored);
+  std::vector<const FilterRun*> runs;
+  for (const auto& run : ev.filters) runs.push_back(&run);
+  if (ev.live) runs.push_back(&ev.live->run);
+  for (const auto* run : runs) row(os, run->name, run->metrics);
   os << "faults = rejected/total (- = filter does not use the ruler); gate threshold " << std::setprecision(3) << ev.gate_threshold
      << " (innovation distance, 2-dof chi-square)\n";
   if (ev.live && ev.live->max_diff_to_replay_m >= 0)
     os << "live " << ev.live->filter << " vs offline replay: max position difference "
        << std::scientific << std::setprecision(2) << ev.live->max_diff_to_replay_m << " m over "
        << ev.live->matched_poses << " poses\n" << std::fixed;
-  if (!scored) os << "no ground truth in the log: errors not computed\n";
+  if (data.truth.empty()) os << "no ground truth in the log: errors not computed\n";
+  else
+    for (const auto* run : runs)
+      if (run->metrics.samples == 0)
+        os << "warning: " << run->name << ": no estimate within 0.1 s of the ground truth's time span: errors not "
+              "computed\n";
   os << "log: " << data.events_read << " events, " << data.file_size << " bytes";
   if (data.damaged) os << ", DAMAGED (" << data.bytes_unreadable << " bytes unreadable)";
   os << ", " << data.issues.size() << " issue(s)\n";
   printIssues(os, data.issues);
+  printBadUtime(os, data.bad_utime);
 }
 
 }  // namespace lcmloc::eval

@@ -27,8 +27,9 @@ std::optional<TruthPose> interpolateTruth(const std::vector<TruthPose>& truth, i
   if (hi->utime == utime) return *hi;
   const TruthPose& a = *(hi - 1);
   const TruthPose& b = *hi;
-  if (max_gap_us > 0 && b.utime - a.utime > max_gap_us) return miss(TruthMiss::kGap);
-  const double w = static_cast<double>(utime - a.utime) / static_cast<double>(b.utime - a.utime);
+  const uint64_t span = utimeSpan(a.utime, b.utime);  // no overflow whatever the utimes
+  if (max_gap_us > 0 && span > static_cast<uint64_t>(max_gap_us)) return miss(TruthMiss::kGap);
+  const double w = static_cast<double>(utimeSpan(a.utime, utime)) / static_cast<double>(span);
   TruthPose s;
   s.utime = utime;
   s.x = a.x + w * (b.x - a.x);

@@ -58,6 +58,13 @@ class TrajectoryDecoder {
  private:
   void issue(const std::string& what, int64_t index, int64_t offset) { out_.issues.push_back({index, offset, what}); }
   void issue(const std::string& what) { issue(what, index_, offset_); }
+  /// False, counted and reported, for |utime| >= kUtimeLimit.
+  bool usable(const lcm::LogEvent& ev, int64_t utime) {
+    if (usableUtime(utime)) return true;
+    ++out_.bad_utime;
+    issue(badUtimeIssue(ev.channel, utime));
+    return false;
+  }
 
   template <typename T>
   bool decode(const lcm::LogEvent& ev, T& msg, bool report = true) {
@@ -77,7 +84,7 @@ class TrajectoryDecoder {
 
   void pose(const lcm::LogEvent& ev, std::size_t k) {
     lcmloc::pose_t m{};
-    if (!decode(ev, m)) return;
+    if (!decode(ev, m) || !usable(ev, m.utime)) return;
     if (m.dim < 3 || m.state.size() < 3) return issue(ev.channel + " seq " + std::to_string(m.seq) + ": fewer than 3 states");
     if (!finite(m.state[0]) || !finite(m.state[1]) || !finite(m.state[2]))
       return issue(ev.channel + " seq " + std::to_string(m.seq) + ": non-finite state");
@@ -104,6 +111,7 @@ class TrajectoryDecoder {
   void truth(const lcm::LogEvent& ev) {
     lcmloc::ground_truth_t g{};
     if (decode(ev, g, false)) {
+      if (!usable(ev, g.utime)) return;
       if (!finite(g.x) || !finite(g.y) || !finite(g.heading))
         return issue("truth seq " + std::to_string(g.seq) + ": non-finite pose");
       noteTruthType("ground_truth_t");
@@ -125,6 +133,7 @@ class TrajectoryDecoder {
     }
     if (f.fix_type < 2 || !finite(f.latitude) || !finite(f.longitude))
       return issue("truth fix seq " + std::to_string(f.seq) + ": no position fix");
+    if (!usable(ev, f.utime)) return;
     if (!frame_) frame_ = std::make_unique<common::LocalFrame>(*opt_.datum);
     double x = 0, y = 0, z = 0;
     frame_->toLocal(f.latitude, f.longitude, finite(f.altitude) ? f.altitude : 0.0, x, y, z);
@@ -143,7 +152,7 @@ class TrajectoryDecoder {
 
   void gate(const lcm::LogEvent& ev) {
     lcmloc::gate_decision_t m{};
-    if (!decode(ev, m)) return;
+    if (!decode(ev, m) || !usable(ev, m.utime)) return;
     out_.gates.push_back({m.utime, m.filter, m.sensor, m.reason, m.dim, m.mahalanobis, m.accepted != 0});
   }
 

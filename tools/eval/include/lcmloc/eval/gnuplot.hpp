@@ -1,10 +1,22 @@
 #pragma once
 // Running gnuplot for the evaluation figures.
 #include <string>
+#include <vector>
 
 #include "lcmloc/eval/report.hpp"
 
 namespace lcmloc::eval {
+
+/// text as a gnuplot single-quoted string literal, quotes included. Every string that comes from
+/// a log or the command line (titles, labels, file names) goes into a script through this: every
+/// ' is doubled and every control character (bytes below 0x20 and 0x7f, newline and carriage
+/// return included) becomes '?', so the literal cannot end early and no new command line can
+/// start. Inside single quotes gnuplot expands neither `backquotes` nor @macros and takes
+/// backslashes literally.
+std::string gnuplotQuote(const std::string& text);
+
+/// text with every control character (bytes below 0x20 and 0x7f) replaced by '?'.
+std::string withoutControlCharacters(std::string text);
 
 /// True when an executable named exe is in PATH.
 bool findInPath(const std::string& exe);

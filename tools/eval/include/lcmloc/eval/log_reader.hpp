@@ -22,6 +22,23 @@ struct LogEvent;
 
 namespace lcmloc::eval {
 
+/// Messages with |utime| >= kUtimeLimit (2^62 us, about 146,000 years) are skipped by the
+/// readers, counted and reported as issues: the difference of any two utimes below it, and such
+/// a utime plus or minus a tolerance, fits in int64.
+constexpr int64_t kUtimeLimit = int64_t{1} << 62;
+inline bool usableUtime(int64_t utime) { return utime > -kUtimeLimit && utime < kUtimeLimit; }
+/// The issue recorded for a message of channel skipped for its utime.
+std::string badUtimeIssue(const std::string& channel, int64_t utime);
+
+/// to - from for from <= to, exact for any two int64 (the difference always fits in uint64).
+inline uint64_t utimeSpan(int64_t from, int64_t to) { return static_cast<uint64_t>(to) - static_cast<uint64_t>(from); }
+
+/// (utime - t0) in seconds without integer overflow, for any two utimes.
+inline double secondsSince(int64_t utime, int64_t t0) {
+  return utime >= t0 ? static_cast<double>(utimeSpan(t0, utime)) * 1e-6
+                     : -(static_cast<double>(utimeSpan(utime, t0)) * 1e-6);
+}
+
 struct TruthSample {
   int64_t utime = 0;
   double x = 0, y = 0, heading = 0, distance = 0;
@@ -62,6 +79,8 @@ struct LogIssue {
 
 /// The first `shown` issues, one indented line each, then how many more (in report.json).
 void printIssues(std::ostream& os, const std::vector<LogIssue>& issues, std::size_t shown = 10);
+/// A warning line when skipped (messages dropped for their utime, see kUtimeLimit) is not 0.
+void printBadUtime(std::ostream& os, int64_t skipped);
 
 struct LogData {
   std::string path;
@@ -78,10 +97,17 @@ struct LogData {
   std::vector<LivePose> live_poses;
   std::vector<LiveDecision> live_decisions;
   std::vector<LogIssue> issues;              ///< file damage first noticed, then bad messages
+  int64_t bad_utime = 0;                     ///< messages skipped for |utime| >= kUtimeLimit (also in issues)
 
   /// Something to evaluate: at least one sensor input.
   bool usable() const { return !inputs.empty(); }
 };
+
+/// One file-name stem per name, all different: letters, digits, '_' and '-' are kept, any other
+/// byte becomes '_'. A name that is already such a stem keeps it; a stem taken by an earlier
+/// name or by a name that is kept as it is gets "_2", "_3", ... (POSE_A.B next to POSE_A_B
+/// gives POSE_A_B_2). At most 200 bytes before any suffix (file names end at 255).
+std::vector<std::string> uniqueStems(const std::vector<std::string>& names);
 
 /// Streams the intact events of any LCM log (ours, lcm-logger's) one at a time, in file order,
 /// without the network. The format is parsed here rather than with lcm::LogFile: LCM 1.3.1's

@@ -71,6 +71,7 @@ struct TrajectoryLog {
   std::string truth_type;            ///< "ground_truth_t", "gps_fix_t" or "" (none decoded)
   std::vector<GateRecord> gates;     ///< in log order
   std::vector<LogIssue> issues;      ///< damage and undecodable/invalid messages, in file order
+  int64_t bad_utime = 0;             ///< messages skipped for |utime| >= kUtimeLimit (also in issues)
 };
 
 /// Reads the log at path. Throws std::runtime_error when it cannot be opened. Damage and bad
