@@ -236,7 +236,10 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
   for (const auto& [ch, n] : undecodable) spdlog::warn("{}: {} undecodable event(s) skipped", ch, n);
   reportDamage(s, path, nullptr);
   if (columns.empty()) {
-    spdlog::error("no decodable events on channels matching '{}' in {}", fmt::join(channel_regexes, "|"), path);
+    if (channel_regexes.empty())
+      spdlog::error("no decodable events of lcmloc's types in {}", path);
+    else
+      spdlog::error("no decodable events on channels matching '{}' in {}", fmt::join(channel_regexes, "|"), path);
     return common::kExitRuntimeError;
   }
   for (auto& [ch, cols] : columns) {
