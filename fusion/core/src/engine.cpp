@@ -336,10 +336,10 @@ struct FusionEngine::Impl {
   }
 
   void landmarkFix(const EngineInput& in, const BearingsInput& b);
-  /// Consecutive landmark fixes each filter refused (EngineConfig::fix_lockout_rejections), by
+  /// Consecutive landmark fixes each filter's gate refused (EngineConfig::fix_gate), by
   /// filterKey; cleared when the filters start over.
   std::map<std::string, int> refused_fixes;
-  /// The fix gate's threshold (EngineConfig::fix_gate; +inf = none).
+  /// The fix gate's threshold: chi-square (3 dof) at EngineConfig::fix_gate.probability; +inf = none.
   double fix_gate = std::numeric_limits<double>::infinity();
   static std::string filterKey(const Filter& f, bool is_active) { return (is_active ? "active " : "shadow ") + f.name(); }
 
@@ -406,7 +406,7 @@ void FusionEngine::Impl::landmarkFix(const EngineInput& in, const BearingsInput&
   fix.source = in.channel;
   d.gate = fix_gate;
   const std::string at = in.channel + " seq " + std::to_string(in.seq) + ": ";
-  bool applied = false;
+  bool active_took_it = false;
   forEachFilter([&](Filter& f, bool is_active) {
     GateDecision fd = d;
     const FilterState s = is_active ? prior : f.state();
@@ -433,14 +433,14 @@ void FusionEngine::Impl::landmarkFix(const EngineInput& in, const BearingsInput&
     fd.accepted = applyFixTo(f, is_active, fix);
     if (!fd.accepted) fd.reason = "bad_input";
     refused = 0;
-    applied = true;
+    if (is_active) active_took_it = fd.accepted;
     if (is_active) ++(fd.accepted ? counters.accepted : counters.rejected);
     if (out.on_decision) out.on_decision(f.name(), is_active, fd);
     emitState(f, is_active);
     if (lockout) event("lockout", at + f.name() + " takes the landmark fix after " +
                                       std::to_string(cfg.fix_gate.lockout_rejections) + " refused in a row", in.utime);
   });
-  if (!applied) return;
+  if (!active_took_it) return;  // (the shadows' decisions are on GATE)
   d.innovation = fix.pose - prior.x.head<3>();
   d.innovation[2] = wrapAngle(d.innovation[2]);
   char detail[200];
