@@ -131,12 +131,8 @@ TEST(InsReplay, SwitchFromDeadReckoningToOdoInsAtSpeedDrivesOn) {
     }
     if (st.odometry) engine.push(core::EngineInput{"ODOMETRY", seq++, st.odometry->input.utime, st.odometry->input});
     if (st.imu) {
-      core::ImuInput m;
-      m.utime = st.imu->utime;
-      m.accel = st.imu->accel;
-      m.gyro = st.imu->gyro;
-      m.mag = st.imu->mag;
-      engine.push(core::EngineInput{"IMU", seq++, m.utime, m});
+      engine.push(core::EngineInput{"IMU", seq, st.imu->utime, st.imu->input("IMU", seq)});
+      ++seq;
     }
     engine.flush();
     const double err = std::hypot(last.x[0] - st.truth.x, last.x[1] - st.truth.y);

@@ -157,20 +157,7 @@ MidDrive joinWhileMoving(double t_join, bool reset) {
       in.payload = st.odometry->input;
       e->push(std::move(in));
     }
-    if (st.imu) {
-      core::ImuInput m;
-      m.utime = st.imu->utime;
-      m.accel = st.imu->accel;
-      m.gyro = st.imu->gyro;
-      m.mag = st.imu->mag;
-      m.seq = seq;
-      core::EngineInput in;
-      in.channel = "IMU";
-      in.seq = seq;
-      in.utime = m.utime;
-      in.payload = m;
-      e->push(std::move(in));
-    }
+    if (st.imu) e->push(core::EngineInput{"IMU", seq, st.imu->utime, st.imu->input("IMU", seq)});
     ++seq;
     r.truth_end = st.truth;
   }

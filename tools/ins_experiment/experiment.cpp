@@ -107,13 +107,7 @@ RunResult run(const std::string& name, const models::InsSimConfig& cfg, const co
       in.channel = "IMU";
       in.seq = imu_seq++;
       in.utime = st.imu->utime;
-      core::ImuInput m;
-      m.utime = st.imu->utime;
-      m.accel = st.imu->accel;
-      m.gyro = st.imu->gyro;
-      m.mag = st.imu->mag;
-      m.seq = in.seq;
-      in.payload = m;
+      in.payload = st.imu->input(in.channel, in.seq);
       engine.push(std::move(in));
     }
     engine.flush();  // the state of this step (compared with this step's truth)

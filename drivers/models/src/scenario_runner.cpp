@@ -139,8 +139,7 @@ ScenarioResult runScenario(const ScenarioConfig& sc, const std::vector<core::Fil
     if (sc.imu.enabled)
       if (auto m = imu.sample(t)) {
         const int64_t seq = imu_seq++;
-        feed({kImuChannel, seq, m->utime,
-              core::ImuInput{m->utime, m->accel, m->gyro, m->mag, kImuChannel, seq}});
+        feed({kImuChannel, seq, m->utime, m->input(kImuChannel, seq)});
       }
     if (sc.gps.enabled)
       if (auto g = gps.sample(t)) {

@@ -61,6 +61,8 @@ struct GpsSensorConfig {
 struct ImuSample {
   int64_t utime = 0;
   core::Vec3 accel, gyro, mag;
+  /// The engine's input of this sample, as received on `sensor` with this seq.
+  core::ImuInput input(const std::string& sensor, int64_t seq) const { return {utime, accel, gyro, mag, sensor, seq}; }
 };
 
 class ImuSensor {
