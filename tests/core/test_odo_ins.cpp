@@ -397,7 +397,7 @@ TEST(OdoInsFilter, LandmarkFixGateRefusesAFixFarFromEachFilterUntilTheLockOut) {
     EXPECT_NEAR(d.gate, 21.108, 1e-3);  // chi-square 3 dof, 0.9999
     EXPECT_NEAR(d.innovation[0], 40.0, 0.01) << f;
   }
-  EXPECT_TRUE(rec.hasEvent("refused"));
+  EXPECT_TRUE(rec.hasEvent("fix_refused"));
   EXPECT_FALSE(rec.hasEvent("fix"));
   EXPECT_LT(e.activeState().x.head<2>().norm(), 0.01);
 
@@ -411,7 +411,7 @@ TEST(OdoInsFilter, LandmarkFixGateRefusesAFixFarFromEachFilterUntilTheLockOut) {
   EXPECT_LT(e.activeState().x.head<2>().norm(), 0.01);
   fixAt(elsewhere, 1900000);
   EXPECT_EQ(reasons(), "odo_ins:fix_lockout+ odo_ins_uncal:fix_lockout+ ");
-  EXPECT_TRUE(rec.hasEvent("lockout"));
+  EXPECT_TRUE(rec.hasEvent("fix_lockout"));
   EXPECT_TRUE(rec.hasEvent("fix"));
   EXPECT_NEAR(e.activeState().x[0], 40.0, 1e-3);
   fixAt(elsewhere, 2000000);  // now consistent with the filters
@@ -492,7 +492,7 @@ TEST(OdoInsFilter, LandmarkFixRefusals) {
   e2.push(input("VISION", 3, 1600000, bearingsFrom(on_circle, M_PI / 2, map, 1600000)));
   e2.flush();
   EXPECT_EQ(rec.decisions.back().reason, "geometry");
-  EXPECT_TRUE(rec.hasEvent("refused"));
+  EXPECT_TRUE(rec.hasEvent("fix_refused"));
   EXPECT_EQ(e.activeState().x, before.x);
 }
 
@@ -512,7 +512,7 @@ TEST(OdoInsFilter, FewerThanThreeLandmarksInViewIsADecisionWithoutAnEvent) {
   EXPECT_EQ(rec.decisions.back().reason, "too_few_landmarks");
   EXPECT_FALSE(rec.decisions.back().accepted);
   EXPECT_FALSE(rec.hasEvent("bad_input"));
-  EXPECT_FALSE(rec.hasEvent("refused"));
+  EXPECT_FALSE(rec.hasEvent("fix_refused"));
   EXPECT_EQ(e.activeState().x, before.x);
 }
 

@@ -111,11 +111,12 @@ struct MidDrive {
   core::FilterState end;
   models::TruthState join, truth_end;
 };
-MidDrive joinWhileMoving(double t_join, bool reset) {
+MidDrive joinWhileMoving(double t_join, bool reset, int odometry_divider = 1) {
   models::InsSimConfig c;
   c.seed = 6;
   c.duration = t_join + 20.0;
   c.start = "hard";
+  c.odometry_divider = odometry_divider;
   models::InsSim sim(c, 1000000);
   core::EngineConfig ec;
   ec.filter.type = "odo_ins";
@@ -173,8 +174,13 @@ TEST(InsScenario, StartedOrResetOnAMovingVehicleTakesItsSpeedFromTheOdometer) {
   // error, not observable at a constant speed), the scale error estimate stays small, and the
   // distance covered since the join matches the truth's. (Taking the configured 0 m/s as known
   // put the whole speed into the scale error: +123 %, less than half the speed.)
-  for (const bool reset : {false, true}) {
-    const MidDrive r = joinWhileMoving(40.0, reset);
+  // Also joined between two odometer messages (10 Hz odometry, 100 Hz IMU, 0.05 s into an
+  // interval): the first increment's interval began unseen and only gives the time (taken as a
+  // speed over the 0.05 s seen, it doubled the speed: 24 m/s, 478 m).
+  struct Join { double t; bool reset; int divider; };
+  for (const Join j : {Join{40.0, false, 1}, Join{40.0, true, 1}, Join{40.05, false, 10}, Join{40.05, true, 10}}) {
+    const bool reset = j.reset;
+    const MidDrive r = joinWhileMoving(j.t, reset, j.divider);
     ASSERT_GT(r.join.speed, 5.0);
     ASSERT_GE(r.end.x.size(), 6);
     const double speed = std::hypot(r.end.x[4], r.end.x[5]);

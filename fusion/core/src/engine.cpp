@@ -396,7 +396,7 @@ void FusionEngine::Impl::landmarkFix(const EngineInput& in, const BearingsInput&
   const double psi_prior = wrapAngle(M_PI / 2 - prior.x[2]);
   const landmark::FixResult r =
       landmark::leastSquaresFix(cfg.landmarks, bs, prior.x.head<2>(), psi_prior, o);
-  if (!r.ok) return refuse("geometry", "refused", r.error);
+  if (!r.ok) return refuse("geometry", "fix_refused", r.error);
   PoseFix fix;
   fix.utime = in.utime;
   fix.pose = Vec3(r.position.x(), r.position.y(), wrapAngle(M_PI / 2 - r.heading));
@@ -416,7 +416,8 @@ void FusionEngine::Impl::landmarkFix(const EngineInput& in, const BearingsInput&
     fd.innovation = v;
     fd.mahalanobis = v.dot(S.ldlt().solve(v));
     int& refused = refused_fixes[filterKey(f, is_active)];
-    const bool outside = !(fd.mahalanobis <= fix_gate);  // (NaN: a broken state, outside)
+    // A NaN distance (a broken state) is not outside: the fix repairs the filter (applyFixTo).
+    const bool outside = fd.mahalanobis > fix_gate;
     const bool lockout = outside && cfg.fix_gate.lockout_rejections > 0 && refused >= cfg.fix_gate.lockout_rejections;
     if (outside && !lockout) {
       ++refused;
@@ -426,18 +427,18 @@ void FusionEngine::Impl::landmarkFix(const EngineInput& in, const BearingsInput&
       char why[160];
       std::snprintf(why, sizeof why, "landmark fix refused by %s's gate (Mahalanobis distance %.1f > %.1f, %d in a row)",
                     f.name().c_str(), fd.mahalanobis, fix_gate, refused);
-      event("refused", at + why, in.utime);
+      event("fix_refused", at + why, in.utime);
       return;
     }
     fd.reason = lockout ? "fix_lockout" : "fix";
     fd.accepted = applyFixTo(f, is_active, fix);
     if (!fd.accepted) fd.reason = "bad_input";
-    refused = 0;
+    if (fd.accepted) refused = 0;
     if (is_active) active_took_it = fd.accepted;
     if (is_active) ++(fd.accepted ? counters.accepted : counters.rejected);
     if (out.on_decision) out.on_decision(f.name(), is_active, fd);
     emitState(f, is_active);
-    if (lockout) event("lockout", at + f.name() + " takes the landmark fix after " +
+    if (lockout && fd.accepted) event("fix_lockout", at + f.name() + " takes the landmark fix after " +
                                       std::to_string(cfg.fix_gate.lockout_rejections) + " refused in a row", in.utime);
   });
   if (!active_took_it) return;  // (the shadows' decisions are on GATE)

@@ -139,6 +139,7 @@ class OdoInsAdapter : public Filter {
   void predict(const OdometryInput& odo) override {
     if (!std::isfinite(odo.delta_s)) return;
     utime_ = std::max(utime_, odo.utime);
+    last_odo_seen_ = std::max(last_odo_seen_, odo.utime);
     if (!have_imu_) return;  // the INS has not started: nothing to compare the odometer with
     if (odo.utime <= last_odo_utime_) return;
     pending_.push_back(odo);
@@ -176,6 +177,7 @@ class OdoInsAdapter : public Filter {
       }
       ins_utime_ = last_imu_utime_ = m.utime;
       last_odo_utime_ = std::max(last_odo_utime_, m.utime);
+      odo_interval_known_ = last_odo_seen_ == m.utime;  // else the next increment began unseen
       while (!pending_.empty() && pending_.front().utime <= m.utime) pending_.pop_front();
       last_gyro_ = w;
       last_accel_ = f;
@@ -354,13 +356,16 @@ class OdoInsAdapter : public Filter {
   }
 
   /// A gap too long to bridge (kMaxBridgeUs): the INS time moves to t with position, attitude
-  /// and velocity as they were (what happened meanwhile is unknown); the odometer increments up
-  /// to t are dropped (one spanning the gap would read as a standstill) and the next one sets
-  /// the velocity (velocityFromOdometer).
+  /// and velocity as they were (what happened meanwhile is unknown: a clock set forward, or an
+  /// outage); the covariance is not grown (the INS error model is one of small errors: inflated
+  /// by the distance the held speed could have gone, the odometer updates moved the position by
+  /// tens of metres through it). The odometer increments up to t are dropped (one spanning the
+  /// gap would read as a standstill) and the next one sets the velocity (velocityFromOdometer).
   void skipTo(int64_t t) {
     ins_utime_ = t;
     while (!pending_.empty() && pending_.front().utime <= t) pending_.pop_front();
     last_odo_utime_ = std::max(last_odo_utime_, t);
+    odo_interval_known_ = last_odo_seen_ == t;
     v_sum_.setZero();
     t_sum_ = 0.0;
     velocity_unknown_ = true;
@@ -373,6 +378,15 @@ class OdoInsAdapter : public Filter {
       const double dt = (o.utime - last_odo_utime_) * 1e-6;
       if (dt <= 0) continue;
       last_odo_utime_ = o.utime;
+      if (!odo_interval_known_) {
+        // Its interval began at an odometer message before the INS started (or before a skipped
+        // gap), at a time not known here: the distance over (last_odo_utime_, o.utime] would read
+        // as a wrong speed (twice the truth, 0.05 s into a 0.1 s interval). From here on it is known.
+        odo_interval_known_ = true;
+        v_sum_.setZero();
+        t_sum_ = 0.0;
+        continue;
+      }
       const double raw_speed = o.delta_s / dt;
       if (velocity_unknown_) {
         velocityFromOdometer(raw_speed);
@@ -397,6 +411,8 @@ class OdoInsAdapter : public Filter {
   int64_t utime_ = 0, ins_utime_ = 0, last_imu_utime_ = 0, last_odo_utime_ = INT64_MIN, coast_started_ = 0;
   bool have_imu_ = false;
   bool velocity_unknown_ = true;  ///< set by the next odometer increment (velocityFromOdometer)
+  int64_t last_odo_seen_ = INT64_MIN;  ///< latest odometer message received (also before the INS ran)
+  bool odo_interval_known_ = false;    ///< last_odo_utime_ is an odometer message's time
   ins::Vec3 last_gyro_ = ins::Vec3::Zero(), last_accel_ = ins::Vec3::Zero();
   ins::Vec3 v_sum_ = ins::Vec3::Zero();
   double t_sum_ = 0.0;

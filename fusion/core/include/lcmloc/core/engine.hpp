@@ -63,7 +63,7 @@ struct EngineOutputs {
   std::function<void(const std::string& filter, bool is_active, const FilterState&)> on_state;
   std::function<void(const std::string& filter, bool is_active, const GateDecision&)> on_decision;
   /// Events worth a human's attention: ("ack"|"refused"|"lockout"|"recovered"|"too_old"|
-  /// "too_new"|"time_jump"|"fix"|"imu_saturated"|"bad_input", detail). "bad_input": an odometry increment, IMU sample or GPS fix (with a fix) with a NaN/Inf field
+  /// "too_new"|"time_jump"|"fix"|"fix_refused"|"fix_lockout"|"imu_saturated"|"bad_input", detail). "bad_input": an odometry increment, IMU sample or GPS fix (with a fix) with a NaN/Inf field
   /// (skipped).
   std::function<void(const std::string& event, const std::string& detail, int64_t utime)> on_event;
 };
@@ -71,9 +71,9 @@ struct EngineOutputs {
 /// Gate on the three-landmark fix (fusion.landmark_fix): each filter refuses a fix whose
 /// Mahalanobis distance to its own pose, (fix - pose)' (P + R)^-1 (fix - pose) over (x, y, theta),
 /// exceeds the chi-square (3 dof) quantile at `probability` (decision reason "gate", event
-/// "refused"): a wrong landmark association, a fix of another place. After `lockout_rejections`
+/// "fix_refused"): a wrong landmark association, a fix of another place. After `lockout_rejections`
 /// consecutive refused fixes a filter takes the next one whatever its distance (decision reason
-/// "fix_lockout", event "lockout"): fixes that keep disagreeing with a filter say the filter is
+/// "fix_lockout", event "fix_lockout"): fixes that keep disagreeing with a filter say the filter is
 /// the one that is lost.
 struct LandmarkFixGate {
   double probability = 0.9999;  ///< in (0, 1) (0.9999 -> 21.1); 0 = no gate, every fix taken (seeds/004)
@@ -98,7 +98,7 @@ struct EngineConfig {
   /// the fix's options (bearing noise default, condition limit). A BearingsInput is turned into
   /// a pose fix by damped least squares started from the active filter's pose and handed to
   /// every filter's applyFix through each filter's gate (fix_gate); refused (decision reason
-  /// "bad_input" or "geometry", event "bad_input" or "refused") on unknown ids, NaN, more than
+  /// "bad_input" or "geometry", event "bad_input" or "fix_refused") on unknown ids, NaN, more than
   /// three bearings or the danger circle;
   /// fewer than three bearings (landmarks out of view) give decision reason "too_few_landmarks"
   /// and no event.
