@@ -6,14 +6,12 @@
 // expected.txt with `LCMLOC_UPDATE_GOLDENS=1 build/bin/test_golden` and say why in the commit.
 #include <gtest/gtest.h>
 
-#include <cinttypes>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <algorithm>
 #include <map>
-#include <sstream>
 
 #include <fmt/format.h>
 #include <lcm/lcm-cpp.hpp>
