@@ -32,7 +32,8 @@ settle() {
   done
 }
 # Count of channel $2 in log $1.
-count() { "$BIN/lcmloc-log" --log-level error info "$1" | awk -v ch="$2" '$1 == ch { print $3 }' | head -1; }
+# (exit 3: a damaged log, counted up to and past the damage)
+count() { { "$BIN/lcmloc-log" --log-level error info "$1" || [ $? -eq 3 ]; } | awk -v ch="$2" '$1 == ch { print $3 }' | head -1; }
 stop() {  # SIGINT the logger under /usr/bin/time (time itself does not forward signals)
   local child
   child=$(pgrep -P "$1" || true)

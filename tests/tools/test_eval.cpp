@@ -560,6 +560,22 @@ TEST_F(EvalTest, CommandLineWritesReportAndFigures) {
   }
 }
 
+TEST_F(EvalTest, CommandLineOnADamagedLogWritesTheReportAndExits3) {
+  const auto w = writeRun(file("run.lcmlog"), true);
+  const auto size = static_cast<int64_t>(fs::file_size(file("run.lcmlog")));
+  fs::resize_file(file("run.lcmlog"), static_cast<uintmax_t>(size - 5));  // cut the last event
+  const std::string out = file("out");
+  const int rc = shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") + " --config " LCMLOC_TEST_DATA_DIR
+                       "/eval_straight.yaml --no-plots --out " + out + " > " + file("stdout.txt") + " 2>&1");
+  const std::string text = slurp(file("stdout.txt"));
+  ASSERT_EQ(rc, 3) << text;
+  EXPECT_NE(text.find("at byte " + std::to_string(w.starts.back())), std::string::npos) << text;
+  std::ifstream f(out + "/report.json");
+  ASSERT_TRUE(f.good());
+  const auto j = nlohmann::json::parse(f);
+  EXPECT_EQ(j["filters"]["ukf_gated"]["faults_rejected"], 2);  // the intact events are still scored
+}
+
 TEST_F(EvalTest, CommandLineFailsWhenNothingIsUsable) {
   EXPECT_NE(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("missing.lcmlog") + " --no-plots --out " +
                 file("out") + " > /dev/null 2>&1"), 0);

@@ -258,6 +258,16 @@ TEST(LandmarkExperiment, CommandSolvesARecordedLog) {
   EXPECT_EQ(j["cases"][0]["name"], "log");
   EXPECT_EQ(j["cases"][0]["methods"]["least_squares"]["ok"], 299);
   EXPECT_NEAR(j["cases"][0]["methods"]["least_squares"]["position_rms_over_crb"].get<double>(), 1.0, 0.15);
+  // A damaged log: solved up to and past the damage, each place reported, exit 3.
+  const auto size = fs::file_size(dir / "run.lcmlog");
+  fs::copy_file(dir / "run.lcmlog", dir / "cut.lcmlog");
+  fs::resize_file(dir / "cut.lcmlog", size - 5);  // the last event (a VISION message) cut short
+  std::tie(rc, out) = runCmd("--log '" + (dir / "cut.lcmlog").string() + "' --config '" + (dir / "map.yaml").string() +
+                             "' --out '" + (dir / "rc").string() + "'");
+  EXPECT_EQ(rc, 3) << out;
+  EXPECT_NE(out.find("DAMAGE in " + (dir / "cut.lcmlog").string()), std::string::npos) << out;
+  EXPECT_NE(out.find("truncated"), std::string::npos) << out;
+  EXPECT_NE(out.find("298 observations with truth, 1 without"), std::string::npos) << out;
   std::tie(rc, out) = runCmd(log + " --config '" + (dir / "nomap.yaml").string() + "' --out '" + (dir / "r2").string() + "'");
   EXPECT_EQ(rc, 2) << out;
   EXPECT_NE(out.find("landmarks: --log needs the landmark map"), std::string::npos) << out;

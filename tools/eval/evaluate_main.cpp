@@ -45,7 +45,9 @@ int main(int argc, char** argv) {
   using namespace lcmloc;
   CLI::App app{"lcmloc-evaluate: scores the estimates recorded in an LCM log (pose_t) against the ground truth "
                "recorded with them: position, heading and drift errors, NEES against its chi-square bounds, gate "
-               "statistics; writes report.json, PNG figures and TUM files (docs/evaluate.md)."};
+               "statistics; writes report.json, PNG figures and TUM files (docs/evaluate.md). Exit: 0 done, 1 nothing "
+               "to evaluate, 2 bad options or config, 3 done from a damaged log (its intact events; each damaged "
+               "place reported)."};
   std::string log_path, out_dir = "out/evaluate", tum_dir;
   common::CommonOptions opts;
   const std::string& config_path = opts.config;
@@ -235,6 +237,10 @@ int main(int argc, char** argv) {
       } else {
         spdlog::warn("{}", plots.message);
       }
+    }
+    if (log.damaged) {
+      spdlog::warn("{}: the log is damaged: the report covers its {} intact events only", log_path, log.events_read);
+      return static_cast<int>(common::kExitInputDamaged);
     }
     return 0;
   });

@@ -25,7 +25,9 @@ constexpr int kExitBadConfig = lcmloc::common::kExitConfigError;
 
 int main(int argc, char** argv) {
   CLI::App app{"Offline evaluation of an lcmloc log: replays the sensor channels through each "
-               "filter, scores them against ground truth, writes report.json and PNG figures."};
+               "filter, scores them against ground truth, writes report.json and PNG figures. "
+               "Exit: 0 report written, 1 nothing usable, 2 bad config or filter, 3 report written from a "
+               "damaged log (its intact events; each damaged place reported)."};
   std::string log_path, out_dir = "out/eval";
   lcmloc::common::CommonOptions opts;
   const std::string& config_path = opts.config;
@@ -108,6 +110,11 @@ int main(int argc, char** argv) {
       for (const auto& f : plots.figures) std::cout << " " << f;
       if (plots.ok) std::cout << "\n";
       else spdlog::warn("{}", plots.message);
+    }
+    if (data.damaged) {
+      spdlog::warn("{}: the log is damaged ({} bytes unreadable): the report covers the intact events only",
+                   log_path, data.bytes_unreadable);
+      return static_cast<int>(lcmloc::common::kExitInputDamaged);
     }
     return 0;
   });

@@ -9,10 +9,9 @@
 #include <map>
 #include <stdexcept>
 
-#include <lcm/lcm-cpp.hpp>
-
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/process.hpp"
+#include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/landmark_bearings_t.hpp"
 #include "lcmloc/landmark_experiment/experiment.hpp"
@@ -23,30 +22,33 @@ namespace {
 
 /// VISION observations of a log with the GROUND_TRUTH pose of the same utime. Undecodable or
 /// non-finite messages are counted and skipped; a VISION message with no truth at its time too.
-std::vector<landmark_experiment::Observation> readLog(const std::string& path, const common::ChannelConfig& ch) {
-  lcm::LogFile log(path, "r");
-  if (!log.good()) throw std::runtime_error("cannot open log '" + path + "'");
+/// A damaged log is read up to and past the damage (eval's reader); each damaged place is logged
+/// and *damaged set.
+std::vector<landmark_experiment::Observation> readLog(const std::string& path, const common::ChannelConfig& ch,
+                                                      bool* damaged) {
   std::map<int64_t, lcmloc::ground_truth_t> truth;
   std::vector<lcmloc::landmark_bearings_t> vision;
   int64_t bad = 0;
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
-    if (ev->channel == ch.ground_truth) {
+  const auto scan = eval::scanLog(path, [&](const eval::RawEvent& ev) {
+    if (*ev.channel == ch.ground_truth) {
       lcmloc::ground_truth_t m{};
-      if (m.decode(ev->data, 0, ev->datalen) < 0 || !std::isfinite(m.x) || !std::isfinite(m.y) ||
-          !std::isfinite(m.heading)) {
+      if (!eval::decodeEvent(ev, m) || !std::isfinite(m.x) || !std::isfinite(m.y) || !std::isfinite(m.heading)) {
         ++bad;
-        continue;
+        return;
       }
       truth[m.utime] = m;
-    } else if (ev->channel == ch.vision) {
+    } else if (*ev.channel == ch.vision) {
       lcmloc::landmark_bearings_t m;
-      if (m.decode(ev->data, 0, ev->datalen) < 0) {
+      if (!eval::decodeEvent(ev, m)) {
         ++bad;
-        continue;
+        return;
       }
       vision.push_back(m);
     }
-  }
+  }, &common::stopFlag());
+  for (const auto& i : scan.issues) spdlog::warn("DAMAGE in {}: {}", path, i.describe());
+  if (scan.interrupted) spdlog::warn("{}: interrupted after {} events: solving those", path, scan.events_read);
+  *damaged = scan.damaged;
   std::vector<landmark_experiment::Observation> obs;
   int64_t no_truth = 0;
   for (const auto& v : vision) {
@@ -81,7 +83,8 @@ int main(int argc, char** argv) {
       "lcmloc-landmark-experiment: Fig. 5 of seeds/004 §III (three-landmark position and heading fix), "
       "Monte Carlo. Bearing noise, resolution and seed come from the `vision` section of the config; "
       "the landmarks are placed by the experiment (equilateral triangle, both readings of the distance), "
-      "not taken from the config's `landmarks` map"};
+      "not taken from the config's `landmarks` map. Exit: 0 ok, 1 error, 2 bad arguments or config, 3 --log "
+      "damaged (its intact events solved; each damaged place reported)"};
   common::CommonOptions opts;
   opts.config = std::string(LCMLOC_CONFIG_DIR) + "/landmark_paper.yaml";
   common::addCommonOptions(app, opts);
@@ -132,16 +135,17 @@ int main(int argc, char** argv) {
                  v.bearing_std / models::kArcSec, v.resolution / models::kArcSec, eo.distance);
     if (!log_file.empty() && cfg.scenario.landmarks.empty())
       throw common::ConfigError(cfg.file, "landmarks", "--log needs the landmark map of the recorded run");
+    bool damaged = false;
     const auto r = log_file.empty()
                        ? landmark_experiment::run(v, eo)
                        : landmark_experiment::runObservations(cfg.scenario.landmarks,
-                                                              readLog(log_file, cfg.channels), eo);
+                                                              readLog(log_file, cfg.channels, &damaged), eo);
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const bool plotted = landmark_experiment::writeReport(r, out);
     std::fputs(landmark_experiment::summaryTable(r).c_str(), stdout);
     std::printf("%d %s solved in %.2f s; report: %s/report.json%s\n", r.options.runs,
                 log_file.empty() ? "runs x 4 cases" : "observations", elapsed, out.c_str(),
                 plotted ? ", figures <case>.png" : " (gnuplot failed: no figures)");
-    return common::kExitOk;
+    return damaged ? common::kExitInputDamaged : common::kExitOk;
   });
 }

@@ -166,7 +166,7 @@ int info(const std::string& path) {
   if (undecodable > static_cast<int64_t>(bad.size()))
     std::cout << "(" << undecodable - static_cast<int64_t>(bad.size()) << " more undecodable events)\n";
   reportDamage(s, path, &std::cout);
-  return common::kExitOk;
+  return s.damaged ? common::kExitInputDamaged : common::kExitOk;
 }
 
 // --- to-csv ---------------------------------------------------------------------------------
@@ -310,7 +310,7 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
     f->flush();
     if (!*f) throw std::runtime_error("writing CSV for " + ch + " failed (disk full?)");
   }
-  return common::kExitOk;
+  return s.damaged ? common::kExitInputDamaged : common::kExitOk;
 }
 
 // --- cut ------------------------------------------------------------------------------------
@@ -370,7 +370,7 @@ int cut(const std::string& path, const std::string& output, const CutOptions& o)
     throw std::runtime_error(fmt::format("writing {} failed: {} ({} whole events kept)", output,
                                          std::strerror(static_cast<int>(err)), out.eventsWritten()));
   spdlog::info("wrote {} of {} events to {}", kept, s.events_read, output);
-  return common::kExitOk;
+  return s.damaged ? common::kExitInputDamaged : common::kExitOk;
 }
 
 }  // namespace
@@ -378,7 +378,9 @@ int cut(const std::string& path, const std::string& output, const CutOptions& o)
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-log: look inside LCM logs (ours or lcm-logger's): info, to-csv, cut.\n"
                "A truncated or damaged log is read up to and past the damage, which is reported with its\n"
-               "byte offset and event number."};
+               "byte offset and event number.\n"
+               "Exit: 0 ok, 1 error, 2 bad arguments or no such log, 3 the log is damaged (the command's\n"
+               "work is done with the intact events)."};
   common::CommonOptions opts;
   common::addOfflineOptions(app, opts, "system YAML file (checked when given; the log tools need no settings)");
   app.require_subcommand(1);

@@ -14,8 +14,6 @@ using namespace lcmloc;
 
 namespace {
 
-constexpr int kExitDamaged = 3;
-
 std::string bytes(int64_t n) {
   if (n >= (1 << 20)) return fmt::format("{:.1f} MB", n / 1048576.0);
   if (n >= 1024) return fmt::format("{:.1f} kB", n / 1024.0);
@@ -112,7 +110,7 @@ int main(int argc, char** argv) {
     if (r.interrupted) std::cout << "interrupted: the output holds what was replayed so far\n";
     for (const auto& is : r.issues)
       std::cout << fmt::format("damage: before event {} at byte {}: {}\n", is.event_index, is.byte_offset, is.what);
-    if (r.damaged) return kExitDamaged;
+    if (r.damaged) return common::kExitInputDamaged;
     return common::kExitOk;
   });
 }

@@ -17,8 +17,10 @@
 
 namespace lcmloc::common {
 
-/// Exit codes shared by every executable.
-enum ExitCode : int { kExitOk = 0, kExitRuntimeError = 1, kExitConfigError = 2 };
+/// Exit codes shared by every executable. kExitInputDamaged: a tool that reads an LCM log did its
+/// work, but the log was truncated or had corrupt events: it read up to and past the damage and
+/// reported each damaged place (the result lacks what was there).
+enum ExitCode : int { kExitOk = 0, kExitRuntimeError = 1, kExitConfigError = 2, kExitInputDamaged = 3 };
 
 struct CommonOptions {
   std::string config;     ///< scenario/system YAML file
