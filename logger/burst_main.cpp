@@ -2,6 +2,7 @@
 // (seq 0, 1, ...), for benchmarking loggers (tools/bench_logger.sh).
 #include <spdlog/spdlog.h>
 
+#include "lcmloc/common/config.hpp"
 #include "lcmloc/common/process.hpp"
 #include "lcmloc/magruler_t.hpp"
 
@@ -17,7 +18,9 @@ int main(int argc, char** argv) {
   app.add_option("--count,-n", count, "messages to publish")->check(lcmloc::common::positive());
   app.add_option("--size,-s", size, "encoded message size [bytes] (at least 45)")->check(CLI::Range(45, 60000));
   app.add_option("--channel,-c", channel, "channel");
+  app.footer("--config is only checked (a bad file exits 2, as everywhere): a burst needs no settings.");
   return common::runProcess(app, argc, argv, opts, "lcmloc-burst", [&] {
+    common::loadSystemConfig(opts.config);
     common::Bus bus(opts.lcm_url);
     lcmloc::magruler_t m;
     m.num_sensors = (size - 45) / 8;  // 45 bytes of fixed fields (fingerprint included) + 8 per reading

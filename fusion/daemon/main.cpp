@@ -61,7 +61,8 @@ std::optional<core::FilterState> lastPoseOnBus(common::Bus& bus, const common::S
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"lcmloc-fusion: fusion daemon, ODOMETRY + MAGRULER* + IMU + GPS + FUSION_CONTROL -> POSE, GATE, FUSION_STATUS"};
+  CLI::App app{"lcmloc-fusion: fusion daemon, ODOMETRY + MAGRULER* + IMU + GPS + LANDMARKS + BEACONS + VISION + "
+               "FUSION_CONTROL -> POSE (POSE_<TYPE> for shadows), GATE, FUSION_STATUS"};
   common::CommonOptions opts;
   common::addCommonOptions(app, opts);
   std::string filter, checkpoint;

@@ -30,7 +30,9 @@ namespace {
 const std::map<std::string, std::string> kExecutables{
     {"lcmloc-sim", LCMLOC_SIM}, {"lcmloc-odometry", LCMLOC_ODOMETRY}, {"lcmloc-magruler", LCMLOC_MAGRULER},
     {"lcmloc-fault-injector", LCMLOC_FAULT_INJECTOR}, {"lcmloc-fusion", LCMLOC_FUSION},
-    {"lcmloc-logger", LCMLOC_LOGGER}, {"lcmloc-launcher", LCMLOC_LAUNCHER}};
+    {"lcmloc-logger", LCMLOC_LOGGER}, {"lcmloc-launcher", LCMLOC_LAUNCHER},
+    // need no settings, but a bad --config is an error for them too (they ignored it)
+    {"lcmloc-burst", LCMLOC_BURST}, {"lcmloc-magnet-grid", LCMLOC_MAGNET_GRID}};
 
 /// A port no other test (in this run or a parallel one) uses.
 class ProcessTest : public ProcessFixture {

@@ -18,6 +18,7 @@
 
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/process.hpp"
+#include "lcmloc/core/filter.hpp"
 #include "lcmloc/common/transport.hpp"
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/fusion_status_t.hpp"
@@ -82,7 +83,7 @@ int main(int argc, char** argv) {
   std::string filter, params_yaml;
   std::vector<std::string> params;
   auto* sw = app.add_subcommand("switch", "switch the active filter: NAME [--param KEY=VALUE ...]");
-  sw->add_option("name", filter, "filter type (dead_reckoning, ukf, ukf_gated, ukf_calib)")->required();
+  sw->add_option("name", filter, "filter type (" + core::filterTypeList() + ")")->required();
   sw->add_option("--param", params, "filter parameter KEY=VALUE (dotted keys for nesting: gate.value=6.635)");
   sw->add_option("--params", params_yaml, "filter parameters as a YAML flow map, e.g. '{gate: {value: 6.635}}'");
   auto* reset = app.add_subcommand("reset", "reset every filter to the configured initial state");

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include "lcmloc/common/config.hpp"
 #include "lcmloc/common/process.hpp"
 #include "lcmloc/import/magnet_grid.hpp"
 #include "lcmloc/eval/report.hpp"
@@ -23,7 +24,8 @@ int main(int argc, char** argv) {
       "offset, the 55 mm grid -> map.csv, config.yaml), replay with the gated ruler UKF (and a dead-reckoning "
       "shadow), write OUT/<run>/report.json and track.png; OUT/summary.json over the runs. docs/magnet_grid.md."};
   common::CommonOptions opts;
-  common::addCommonOptions(app, opts);
+  common::addOfflineOptions(app, opts,
+                            "system YAML file (checked when given; unused otherwise: each run writes its own config.yaml)");
   import::MagnetGridOptions mo;
   std::string data = LCMLOC_MAGNET_GRID_DIR, out = "out/magnet_grid";
   std::vector<std::string> runs;
@@ -44,9 +46,9 @@ int main(int argc, char** argv) {
   app.add_option("--pw-diag", pw, "process noise per pw_distance: x, y [m^2], theta [rad^2]")->expected(3);
   app.add_option("--pw-turn", mo.pw_turn, "heading variance per radian turned [rad^2/rad]")->capture_default_str();
   app.add_option("--reach", mo.reach, "association window beyond the reed row [m]")->capture_default_str();
-  app.footer("--config and --lcm-url are accepted for uniformity and unused: each run gets its own config.yaml.");
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-magnet-grid", [&]() -> int {
+    if (!opts.config.empty()) common::loadSystemConfig(opts.config);
     if (pv.size() == 2) mo.pv_diag = core::Vec2(pv[0], pv[1]);
     if (pw.size() == 3) mo.pw_diag = core::Vec3(pw[0], pw[1], pw[2]);
     if (runs.empty())

@@ -41,16 +41,16 @@ int main(int argc, char** argv) {
   app.add_flag("--no-shadow", no_shadow, "run no shadow filters");
   app.add_flag("--with-inputs", with_inputs,
                "copy the input events to the output too (all but the old outputs, HEARTBEAT and LCM_SELF_TEST)");
-  app.add_option("--progress", progress, "[s, wall] between progress lines; 0 = none")->check(lcmloc::common::nonNegative());
+  app.add_option("--progress", progress, "[s, wall] between progress lines; 0 = none")->capture_default_str()->check(lcmloc::common::nonNegative());
   app.add_flag("--bench", bench,
                "benchmark instead: generate a synthetic log, measure read+decode, dead_reckoning and ukf_gated "
                "replay (messages/s, medians)");
-  app.add_option("--bench-duration", bo.duration_s, "[s] message time of the synthetic log")->check(lcmloc::common::positive());
-  app.add_option("--bench-reps", bo.repetitions, "repetitions (medians are reported)")->check(lcmloc::common::positive());
-  app.add_option("--bench-dir", bo.dir, "where the synthetic log and bench.json go");
+  app.add_option("--bench-duration", bo.duration_s, "[s] message time of the synthetic log")->capture_default_str()->check(lcmloc::common::positive());
+  app.add_option("--bench-reps", bo.repetitions, "repetitions (medians are reported)")->capture_default_str()->check(lcmloc::common::positive());
+  app.add_option("--bench-dir", bo.dir, "where the synthetic log and bench.json go")->capture_default_str();
   app.add_flag("--bench-keep-log", bo.keep_log, "reuse the synthetic log of an earlier run if present");
   app.add_option("--bench-output-every", bo.output_every,
-                 "fusion.output_every of the batched rows (1 = none)")->check(lcmloc::common::positive());
+                 "fusion.output_every of the batched rows (1 = none)")->capture_default_str()->check(lcmloc::common::positive());
   app.footer("--lcm-url is accepted for uniformity and unused: the replay reads and writes files only.");
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-replay", [&]() -> int {
