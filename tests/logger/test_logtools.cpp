@@ -518,6 +518,38 @@ TEST_F(LogTools, EveryToolReadsATruncatedLogUpToTheDamageAndSaysWhere) {
   EXPECT_EQ(s.events_read, index);  // every intact event before the damage
 }
 
+TEST_F(LogTools, ControlCharactersOfChannelNamesDoNotReachTheTerminal) {
+  // A channel name may hold any bytes: an escape sequence (clear the screen) and a line of its own.
+  const std::string log = path("ctl.lcmlog"), name = "ODO\x1b[2J\nDAMAGE in x";
+  {
+    lcm::LogFile f(log, "w");
+    lcmloc::odometry_t o{};
+    o.utime = kT0;
+    const auto data = enc(o);
+    lcm::LogEvent ev;
+    ev.eventnum = 0;
+    ev.timestamp = kT0;
+    ev.channel = name;
+    ev.datalen = static_cast<int32_t>(data.size());
+    ev.data = const_cast<uint8_t*>(data.data());
+    ASSERT_EQ(f.writeEvent(&ev), 0);
+  }
+  const ToolRun r = tool("info " + log);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("ODO?[2J?DAMAGE in x"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find('\x1b'), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("\nDAMAGE"), std::string::npos) << r.out;
+  const ToolRun csv = tool("to-csv " + log + " -o " + path("csv"));
+  ASSERT_EQ(csv.rc, 0) << csv.err;
+  EXPECT_EQ(csv.err.find('\x1b'), std::string::npos) << csv.err;
+  EXPECT_NE(csv.err.find("ODO?[2J?DAMAGE in x: 1 rows"), std::string::npos) << csv.err;
+  // Without -c every channel is selected: '.*' matched no name with a newline, so to-csv found
+  // nothing and cut dropped the event.
+  const ToolRun cut = tool("cut " + log + " -o " + path("cut.lcmlog"));
+  ASSERT_EQ(cut.rc, 0) << cut.err;
+  EXPECT_EQ(lcmloc::eval::scanLog(path("cut.lcmlog"), [](const lcmloc::eval::RawEvent&) {}).events_read, 1);
+}
+
 TEST_F(LogTools, InfoResynchronisesAfterACorruptEventInTheMiddle) {
   const std::string log = path("ref.lcmlog");
   const auto starts = writeReference(log);

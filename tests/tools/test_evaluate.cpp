@@ -696,6 +696,9 @@ TEST_F(EvaluateTest, ChannelNamesRunNoCommandInGnuplot) {
   EXPECT_EQ(report(file("out"))["tracks"].size(), 3u);
   EXPECT_FALSE(fs::exists(nl));
   EXPECT_FALSE(fs::exists(bq));
+  // The terminal summary shows the newlines of the name as '?': no line of it is the log's to write.
+  EXPECT_NE(output_.find("POSE_x'?system 'touch"), std::string::npos) << output_;
+  EXPECT_EQ(output_.find("\nsystem 'touch"), std::string::npos) << output_;
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/process.hpp"
+#include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/trajectory.hpp"
 #include "lcmloc/eval/trajectory_report.hpp"
 
@@ -25,7 +26,7 @@ std::string channelList(const std::map<std::string, int64_t>& counts) {
   std::ostringstream s;
   bool first = true;
   for (const auto& [c, n] : counts) {
-    s << (first ? "" : ", ") << c << " (" << n << ")";
+    s << (first ? "" : ", ") << lcmloc::eval::withoutControlCharacters(c) << " (" << n << ")";
     first = false;
   }
   return s.str();
@@ -153,7 +154,7 @@ int main(int argc, char** argv) {
       return kExitNothingUsable;
     }
     if (log.tracks.front().poses.empty())
-      spdlog::warn("{}: no estimates on {}; scoring {}", log_path, lo.pose_channel, tracks.front().channel);
+      spdlog::warn("{}: no estimates on {}; scoring {}", log_path, lo.pose_channel, eval::withoutControlCharacters(tracks.front().channel));
 
     if (!tum_dir.empty()) {
       try {
@@ -201,13 +202,13 @@ int main(int argc, char** argv) {
       if (s.before_truth + s.after_truth + s.in_truth_gap > 0)
         spdlog::warn("{}: {} of {} estimates not scored: {} before the first truth sample, {} after the last, {} in "
                      "truth gaps longer than {} s",
-                     s.channel, s.before_truth + s.after_truth + s.in_truth_gap, s.estimates, s.before_truth,
+                     eval::withoutControlCharacters(s.channel), s.before_truth + s.after_truth + s.in_truth_gap, s.estimates, s.before_truth,
                      s.after_truth, s.in_truth_gap, eo.max_truth_gap_s);
     }
     if (!any_scored) {
       const auto& t = tracks.front();
       spdlog::error("{}: no estimate lies inside the ground truth: estimates on {} span {}, truth on {} spans {}{}",
-                    log_path, t.channel, utimeSpan(t.poses.front().utime, t.poses.back().utime), lo.truth_channel,
+                    log_path, eval::withoutControlCharacters(t.channel), utimeSpan(t.poses.front().utime, t.poses.back().utime), lo.truth_channel,
                     utimeSpan(log.truth.front().utime, log.truth.back().utime),
                     eo.max_truth_gap_s > 0 ? " (gaps over --max-truth-gap excluded)" : "");
       return kExitNothingUsable;

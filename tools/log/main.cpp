@@ -22,6 +22,7 @@
 
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/process.hpp"
+#include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/logger/event_file.hpp"
 #include "lcmloc/logger/types.hpp"
@@ -59,6 +60,9 @@ void reportDamage(const eval::ScanSummary& s, const std::string& path, std::ostr
   }
 }
 
+/// A channel name from the log as the terminal shows it: control characters become '?'.
+std::string shown(const std::string& name) { return eval::withoutControlCharacters(name); }
+
 std::string fingerprintHex(int64_t h) { return fmt::format("0x{:016x}", static_cast<uint64_t>(h)); }
 
 std::string typeOf(const uint8_t* data, std::size_t size) {
@@ -89,18 +93,25 @@ bool noFingerprint(const eval::RawEvent& ev) {
   return !logger::readFingerprint(ev.data, static_cast<std::size_t>(ev.size), &h);
 }
 
-/// Refuses an output that is the log itself (the same file, also through a link), before it is
-/// opened for writing: that would truncate the log before it is read. A bad argument: exit 2.
-
-std::regex channelRegex(const std::vector<std::string>& regexes) {
-  std::string r;
-  for (std::size_t i = 0; i < regexes.size(); ++i) r += (i ? "|" : "") + ("(" + regexes[i] + ")");
-  try {
-    return std::regex(r.empty() ? ".*" : r);
-  } catch (const std::regex_error& e) {
-    throw std::runtime_error("bad channel regex '" + r + "': " + e.what());
+/// The -c regexes of a subcommand: a channel is selected when one of them matches it whole. None
+/// given: every channel, also one whose name holds a newline (which '.*' would not match).
+class ChannelFilter {
+ public:
+  explicit ChannelFilter(const std::vector<std::string>& regexes) : all_(regexes.empty()) {
+    std::string r;
+    for (std::size_t i = 0; i < regexes.size(); ++i) r += (i ? "|" : "") + ("(" + regexes[i] + ")");
+    try {
+      if (!all_) re_ = std::regex(r);
+    } catch (const std::regex_error& e) {
+      throw std::runtime_error("bad channel regex '" + r + "': " + e.what());
+    }
   }
-}
+  bool operator()(const std::string& channel) const { return all_ || std::regex_match(channel, re_); }
+
+ private:
+  bool all_;
+  std::regex re_;
+};
 
 // --- info -----------------------------------------------------------------------------------
 
@@ -126,7 +137,7 @@ int info(const std::string& path) {
     auto undecodableEvent = [&](const std::string& why) {
       ++c.undecodable;
       if (++undecodable <= 10)
-        bad.push_back(fmt::format("undecodable {} event at byte {} (event {}): {} bytes, {}", *ev.channel, ev.offset,
+        bad.push_back(fmt::format("undecodable {} event at byte {} (event {}): {} bytes, {}", shown(*ev.channel), ev.offset,
                                   ev.index, ev.size, why));
     };
     if (noFingerprint(ev)) return undecodableEvent("shorter than a fingerprint");  // not a type of its own
@@ -157,7 +168,7 @@ int info(const std::string& path) {
     if (c.types.size() > 1) type = "mixed (" + std::to_string(c.types.size()) + " types)";
     const double span = spanSeconds(c.first, c.last);
     const std::string rate = (c.count > 1 && span > 0) ? fmt::format("{:.2f}", (c.count - 1) / span) : "-";
-    std::cout << fmt::format("{:<24} {:<28} {:>9} {:>10} {:>12} {:>9} {:>11}\n", name, type, c.count, rate, c.bytes,
+    std::cout << fmt::format("{:<24} {:<28} {:>9} {:>10} {:>12} {:>9} {:>11}\n", shown(name), type, c.count, rate, c.bytes,
                              c.gaps, c.undecodable);
   }
   std::cout << fmt::format("total: {} events, {} sequence gaps, {} undecodable\n", s.events_read, seqs.gaps(),
@@ -219,12 +230,12 @@ struct Columns {
 int toCsv(const std::string& path, const std::vector<std::string>& channel_regexes, const std::string& output) {
   const bool to_stdout = output.empty() || output == "-";
   if (!to_stdout) common::refuseOutputOverInputs("--output", output, {path}, "input log");
-  const std::regex re = channelRegex(channel_regexes);
+  const ChannelFilter selected(channel_regexes);
   std::map<std::string, Columns> columns;
   std::map<std::string, int64_t> undecodable, unknown;
   // Pass 1: which channels, which columns.
   const auto s = scan(path, [&](const eval::RawEvent& ev) {
-    if (!std::regex_match(*ev.channel, re)) return;
+    if (!selected(*ev.channel)) return;
     const auto* type = logger::findType(ev.data, static_cast<std::size_t>(ev.size));
     if (!type) { ++(noFingerprint(ev) ? undecodable : unknown)[*ev.channel]; return; }
     logger::Fields fields;
@@ -232,8 +243,8 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
     columns[*ev.channel].merge(fields);
   });
   for (const auto& [ch, n] : unknown)
-    spdlog::warn("{}: {} event(s) of a type this tool does not know, not exported", ch, n);
-  for (const auto& [ch, n] : undecodable) spdlog::warn("{}: {} undecodable event(s) skipped", ch, n);
+    spdlog::warn("{}: {} event(s) of a type this tool does not know, not exported", shown(ch), n);
+  for (const auto& [ch, n] : undecodable) spdlog::warn("{}: {} undecodable event(s) skipped", shown(ch), n);
   reportDamage(s, path, nullptr);
   if (columns.empty()) {
     if (channel_regexes.empty())
@@ -246,7 +257,7 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
     if (cols.size() > kMaxColumns)
       throw std::runtime_error(fmt::format(
           "{}: more than {} columns (widest message: {} fields): too wide for a CSV, nothing written; select the "
-          "other channels with -c", ch, kMaxColumns, cols.widest));
+          "other channels with -c", shown(ch), kMaxColumns, cols.widest));
     cols.finish();
   }
   const bool to_dir = columns.size() > 1;
@@ -303,7 +314,7 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
     ++rows[*ev.channel];
   });
   for (const auto& [ch, n] : rows)
-    spdlog::info("{}: {} rows, {} columns{}", ch, n, columns[ch].names.size() + 1,
+    spdlog::info("{}: {} rows, {} columns{}", shown(ch), n, columns[ch].names.size() + 1,
                  to_dir ? " -> " + paths.at(ch)
                         : (to_stdout ? "" : " -> " + output));
   for (auto& [ch, f] : files) {
@@ -348,7 +359,7 @@ int cut(const std::string& path, const std::string& output, const CutOptions& o)
   if (o.from_utime && o.to_utime && *o.from_utime > *o.to_utime)
     throw common::ConfigError("--from-utime", "", fmt::format("{} is after --to-utime {}: nothing to keep",
                                                               *o.from_utime, *o.to_utime));
-  const std::regex re = channelRegex(o.channels);
+  const ChannelFilter selected(o.channels);
   logger::EventFile out(output);
   std::optional<int64_t> t0;
   int64_t kept = 0, err = 0;
@@ -360,7 +371,7 @@ int cut(const std::string& path, const std::string& output, const CutOptions& o)
     if (to && rel > *to) return;
     if (o.from_utime && ev.utime < *o.from_utime) return;
     if (o.to_utime && ev.utime > *o.to_utime) return;
-    if (!std::regex_match(*ev.channel, re)) return;
+    if (!selected(*ev.channel)) return;
     err = out.append(ev.utime, *ev.channel, ev.data, static_cast<std::size_t>(ev.size));
     if (!err) ++kept;
   });

@@ -1,5 +1,7 @@
 #include "lcmloc/eval/report.hpp"
 
+#include "lcmloc/eval/gnuplot.hpp"
+
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -73,7 +75,7 @@ json logJson(const LogData& data) {
 }
 
 void row(std::ostream& os, const std::string& name, const Metrics& m) {
-  os << std::left << std::setw(22) << name << std::right << std::fixed << std::setprecision(3);
+  os << std::left << std::setw(22) << withoutControlCharacters(name) << std::right << std::fixed << std::setprecision(3);
   if (m.samples > 0)
     os << std::setw(9) << m.rmse_m << std::setw(9) << m.max_error_m << std::setw(10) << m.final_error_m;
   else
@@ -145,14 +147,14 @@ void printSummary(std::ostream& os, const LogData& data, const Evaluation& ev) {
   os << "faults = rejected/total (- = filter does not use the ruler); gate threshold " << std::setprecision(3) << ev.gate_threshold
      << " (innovation distance, 2-dof chi-square)\n";
   if (ev.live && ev.live->max_diff_to_replay_m >= 0)
-    os << "live " << ev.live->filter << " vs offline replay: max position difference "
+    os << "live " << withoutControlCharacters(ev.live->filter) << " vs offline replay: max position difference "
        << std::scientific << std::setprecision(2) << ev.live->max_diff_to_replay_m << " m over "
        << ev.live->matched_poses << " poses\n" << std::fixed;
   if (data.truth.empty()) os << "no ground truth in the log: errors not computed\n";
   else
     for (const auto* run : runs)
       if (run->metrics.samples == 0)
-        os << "warning: " << run->name << ": no estimate within 0.1 s of the ground truth's time span: errors not "
+        os << "warning: " << withoutControlCharacters(run->name) << ": no estimate within 0.1 s of the ground truth's time span: errors not "
               "computed\n";
   os << "log: " << data.events_read << " events, " << data.file_size << " bytes";
   if (data.damaged) os << ", DAMAGED (" << data.bytes_unreadable << " bytes unreadable)";

@@ -160,7 +160,7 @@ void printTrajectorySummary(std::ostream& os, const TrajectoryLog& log, const st
      << std::setw(10) << "hRMSE[d]" << std::setw(9) << "final%" << std::setw(10) << "NEES3" << std::setw(10)
      << "NEES2" << "  covariance\n";
   for (const auto& s : scores) {
-    os << std::left << std::setw(22) << s.channel << std::right << std::setw(8) << s.scored << std::fixed;
+    os << std::left << std::setw(22) << withoutControlCharacters(s.channel) << std::right << std::setw(8) << s.scored << std::fixed;
     if (s.scored == 0) {
       os << "   (no estimate inside the truth span)\n";
       continue;
@@ -199,13 +199,13 @@ void printTrajectorySummary(std::ostream& os, const TrajectoryLog& log, const st
        << "accepted" << std::setw(9) << "rejected" << std::setw(10) << "NIS mean" << std::setw(6) << "dof"
        << "  reasons\n";
     for (const auto& g : gates.by_filter_sensor) {
-      os << std::left << std::setw(18) << g.filter << std::setw(18) << g.sensor << std::right << std::setw(9)
+      os << std::left << std::setw(18) << withoutControlCharacters(g.filter) << std::setw(18) << withoutControlCharacters(g.sensor) << std::right << std::setw(9)
          << g.accepted << std::setw(9) << g.rejected << std::setprecision(2);
       if (g.nis.samples) os << std::setw(10) << g.nis.mean << std::setw(6) << g.mean_dof << "  ";
       else os << std::setw(10) << "-" << std::setw(6) << "-" << "  ";
       bool first = true;
       for (const auto& [r, n] : g.reasons) {
-        os << (first ? "" : ", ") << r << " " << n;
+        os << (first ? "" : ", ") << withoutControlCharacters(r) << " " << n;
         first = false;
       }
       os << "\n";
