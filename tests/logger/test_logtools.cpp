@@ -100,6 +100,17 @@ class LogTools : public ::testing::Test {
     return r;
   }
 
+  /// Appends one event (channel, log time, payload) with LCM's writer.
+  static void writeEvent(lcm::LogFile& log, const std::string& ch, int64_t t, const std::vector<uint8_t>& data) {
+    lcm::LogEvent ev;
+    ev.eventnum = 0;
+    ev.timestamp = t;
+    ev.channel = ch;
+    ev.datalen = static_cast<int32_t>(data.size());
+    ev.data = const_cast<uint8_t*>(data.data());
+    ASSERT_EQ(log.writeEvent(&ev), 0);
+  }
+
   /// The reference log: ODOMETRY at 100 Hz with seq 50 missing, POSE (arrays), HEARTBEAT from
   /// two processes, RAW of an unknown type, one undecodable ODOMETRY_BAD event.
   /// Returns the byte offset of every event.
@@ -109,13 +120,7 @@ class LogTools : public ::testing::Test {
     EXPECT_TRUE(log.good());
     auto put = [&](const std::string& ch, int64_t t, const std::vector<uint8_t>& data) {
       starts.push_back(ftello(log.getFilePtr()));
-      lcm::LogEvent ev;
-      ev.eventnum = 0;
-      ev.timestamp = t;
-      ev.channel = ch;
-      ev.datalen = static_cast<int32_t>(data.size());
-      ev.data = const_cast<uint8_t*>(data.data());
-      ASSERT_EQ(log.writeEvent(&ev), 0);
+      writeEvent(log, ch, t, data);
     };
     for (int i = 0; i < 100; ++i) {
       const int64_t t = kT0 + i * 10000;
@@ -525,14 +530,7 @@ TEST_F(LogTools, ControlCharactersOfChannelNamesDoNotReachTheTerminal) {
     lcm::LogFile f(log, "w");
     lcmloc::odometry_t o{};
     o.utime = kT0;
-    const auto data = enc(o);
-    lcm::LogEvent ev;
-    ev.eventnum = 0;
-    ev.timestamp = kT0;
-    ev.channel = name;
-    ev.datalen = static_cast<int32_t>(data.size());
-    ev.data = const_cast<uint8_t*>(data.data());
-    ASSERT_EQ(f.writeEvent(&ev), 0);
+    writeEvent(f, name, kT0, enc(o));
   }
   const ToolRun r = tool("info " + log);
   ASSERT_EQ(r.rc, 0) << r.err;

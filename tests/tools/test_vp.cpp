@@ -28,6 +28,14 @@ fs::path tempDir(const std::string& name) {
 
 void write(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
 
+/// Import options reading d/odo.csv and d/gps.csv (the files the tests write).
+vp::ImportOptions csvsIn(const fs::path& d) {
+  vp::ImportOptions o;
+  o.odometry_csv = (d / "odo.csv").string();
+  o.gps_csv = (d / "gps.csv").string();
+  return o;
+}
+
 }  // namespace
 
 TEST(VpImport, BadRowsAreRefusedWithLineNumbersAndTheRestConverted) {
@@ -49,9 +57,7 @@ TEST(VpImport, BadRowsAreRefusedWithLineNumbersAndTheRestConverted) {
         "1010.0,x,20.0\n"            // line 3: not a number
         "1020.0,11.0,20.5\n"         // fix 1 (held out, every 2nd, phase 1)
         "1030.0,12.0,21.0\n");       // fix 2
-  vp::ImportOptions o;
-  o.odometry_csv = (d / "odo.csv").string();
-  o.gps_csv = (d / "gps.csv").string();
+  vp::ImportOptions o = csvsIn(d);
   o.output = (d / "out.lcmlog").string();
   o.holdout_every = 2;
   o.holdout_phase = 1;
@@ -123,9 +129,7 @@ TEST(VpImport, OneWrongTimeIsRefusedAloneAndTheRestConverted) {
   }
   write(d / "odo.csv", odo);
   write(d / "gps.csv", gps);
-  vp::ImportOptions o;
-  o.odometry_csv = (d / "odo.csv").string();
-  o.gps_csv = (d / "gps.csv").string();
+  vp::ImportOptions o = csvsIn(d);
   o.holdout_every = 0;
   const auto r = vp::importVictoriaPark(o);
   EXPECT_EQ(r.odometry_refused, 1);
@@ -154,9 +158,7 @@ TEST(VpImport, AnOutputThatIsAnInputIsRefused) {
   write(d / "odo.csv", "time_ms,speed_mps,steering_rad\n1000.0,2.0,0.0\n1025.0,2.0,0.0\n");
   write(d / "gps.csv", "time_ms,Lo_m,La_m\n1000.0,10.0,20.0\n");
   fs::create_hard_link(d / "odo.csv", d / "link.csv");
-  vp::ImportOptions o;
-  o.odometry_csv = (d / "odo.csv").string();
-  o.gps_csv = (d / "gps.csv").string();
+  vp::ImportOptions o = csvsIn(d);
   for (const auto& out : {d / "odo.csv", d / "link.csv", d / "." / "gps.csv"}) {
     o.output = out.string();
     try {
@@ -178,9 +180,7 @@ TEST(VpImport, WrongHeaderOrMissingFileIsAnError) {
   const auto d = tempDir("hdr");
   write(d / "odo.csv", "t,v,psi\n1,2,3\n");
   write(d / "gps.csv", "time_ms,Lo_m,La_m\n");
-  vp::ImportOptions o;
-  o.odometry_csv = (d / "odo.csv").string();
-  o.gps_csv = (d / "gps.csv").string();
+  vp::ImportOptions o = csvsIn(d);
   EXPECT_THROW(vp::importVictoriaPark(o), std::runtime_error);
   o.odometry_csv = (d / "missing.csv").string();
   EXPECT_THROW(vp::importVictoriaPark(o), std::runtime_error);
