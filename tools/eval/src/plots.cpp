@@ -16,14 +16,11 @@
 
 #include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/report.hpp"
+#include "lcmloc/core/text.hpp"
 
 namespace lcmloc::eval {
 
-std::string withoutControlCharacters(std::string text) {
-  for (auto& c : text)
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
-  return text;
-}
+std::string withoutControlCharacters(std::string text) { return core::printable(std::move(text)); }
 
 std::string gnuplotQuote(const std::string& text) {
   std::string out = "'";
