@@ -42,7 +42,7 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
   out.on_decision = [this](const std::string& f, bool, const core::GateDecision& d) {
     bus_.publish(cfg_.channels.gate, common::toLcm(d, f, out_seq_[cfg_.channels.gate]++));
     if (!d.accepted && d.reason == "gate")
-      spdlog::info("{}: {} seq {} rejected by the gate (tau = {:.2f} > {:.3f})", f, d.sensor,
+      spdlog::info("{}: {} seq {} rejected by the gate (tau = {:.2f} > {:.3f})", f, core::printable(d.sensor),
                    d.measurement_seq, d.mahalanobis, d.gate);
   };
   out.on_event = [this](const std::string& event, const std::string& detail, int64_t utime) {
@@ -50,17 +50,18 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
     if (event == "too_old") {
       ++rejected_;
       if (log_throttle_.allow("too_old"))
-        spdlog::warn("rejected input: {} (older than the {:.3f} s reorder window)", detail, cfg_.fusion.reorder_window);
+        spdlog::warn("rejected input: {} (older than the {:.3f} s reorder window)", core::printable(detail),
+                     cfg_.fusion.reorder_window);
       publishStatus("rejected_input", "too old: " + detail, utime);
       return;
     }
     if (event == "too_new") {  // the time-jump guard dropped it (fusion.max_time_jump)
       ++rejected_;
-      if (log_throttle_.allow("too_new")) spdlog::warn("rejected input: {}", detail);
+      if (log_throttle_.allow("too_new")) spdlog::warn("rejected input: {}", core::printable(detail));
       publishStatus("rejected_input", "too new: " + detail, last_utime_);
       return;
     }
-    spdlog::info("{}: {}", event, detail);
+    spdlog::info("{}: {}", event, core::printable(detail));
     publishStatus(event, detail, utime);
   };
   const auto map = cfg.fusion.map_file.empty()
@@ -113,7 +114,7 @@ void FusionDaemon::release(const std::optional<core::FilterState>& init, const s
   } else {
     detail += ", initialized from the configuration (" + source + ")";
   }
-  spdlog::info("started: {}", detail);
+  spdlog::info("started: {}", core::printable(detail));
   publishStatus("started", detail, utime);
   auto held = std::move(held_);
   held_.clear();
@@ -125,11 +126,11 @@ bool FusionDaemon::received(const std::string& ch, int64_t seq) {
   const auto gap = gaps_.observe(ch, seq);
   if (gap) {
     const std::string what = gap.describe(ch);
-    if (log_throttle_.allow("gap:" + ch)) spdlog::warn("{}", what);
+    if (log_throttle_.allow("gap:" + ch)) spdlog::warn("{}", core::printable(what));
     publishStatus("drop", what, last_utime_);
   } else if (gap.restarted) {
     const std::string what = gap.describeRestart(ch);
-    if (log_throttle_.allow("restart:" + ch)) spdlog::warn("{}", what);
+    if (log_throttle_.allow("restart:" + ch)) spdlog::warn("{}", core::printable(what));
     publishStatus("source_restart", what, last_utime_);
   }
   return true;
@@ -138,14 +139,14 @@ bool FusionDaemon::received(const std::string& ch, int64_t seq) {
 void FusionDaemon::reject(const std::string& ch, int64_t seq, int64_t utime, const std::string& why) {
   ++rejected_;
   const std::string detail = ch + " seq " + std::to_string(seq) + ": " + why;
-  if (log_throttle_.allow("reject:" + ch)) spdlog::warn("rejected input: {}", detail);
+  if (log_throttle_.allow("reject:" + ch)) spdlog::warn("rejected input: {}", core::printable(detail));
   publishStatus("rejected_input", detail, utime > 0 ? utime : last_utime_);
 }
 
 void FusionDaemon::onDecodeError(const std::string& ch, const std::string& why) {
   ++messages_in_;
   ++rejected_;
-  if (log_throttle_.allow("decode:" + ch)) spdlog::warn("rejected input: {}: {}", ch, why);
+  if (log_throttle_.allow("decode:" + ch)) spdlog::warn("rejected input: {}: {}", core::printable(ch), why);
   publishStatus("rejected_input", ch + ": " + why, last_utime_);
 }
 
@@ -158,7 +159,7 @@ void FusionDaemon::checkResumeGap(const core::EngineInput& in) {
       "{} seq {}: the first input comes {:.3f} s of message time after the state this daemon started from (utime {}): "
       "the motion in between is not in the estimate",
       in.channel, in.seq, (static_cast<double>(in.utime) - static_cast<double>(*init_utime_)) * 1e-6, *init_utime_);
-  spdlog::warn("{}", detail);
+  spdlog::warn("{}", core::printable(detail));
   publishStatus("resume_gap", detail, in.utime);
 }
 
@@ -250,7 +251,7 @@ void FusionDaemon::onControl(const std::string& ch, const lcmloc::fusion_control
         if (!m.filter.empty()) params["type"] = m.filter;
         fc = common::parseFilterConfig(params, fc, ch, "parameters");
       } catch (const std::exception& e) {
-        spdlog::warn("refused switch to '{}': {}", m.filter, e.what());
+        spdlog::warn("refused switch to '{}': {}", core::printable(m.filter), e.what());
         publishStatus("refused", std::string("switch to '") + m.filter + "': " + e.what(), m.utime);
         return;
       }
@@ -312,7 +313,7 @@ void FusionDaemon::publishStatus(const std::string& event, const std::string& de
   m.filter = engine_->activeFilter();
   m.status = static_cast<int32_t>(last_status_);
   m.event = event;
-  m.detail = detail;
+  m.detail = core::printable(detail);  // names from the bus inside: no control characters on the bus again
   m.messages_in = messages_in_;
   m.messages_used = engine_->counters().processed;
   m.messages_rejected = rejected_;

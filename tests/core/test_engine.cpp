@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "lcmloc/core/engine.hpp"
+#include "lcmloc/core/filter.hpp"
 #include "lcmloc/core/odometry_batch.hpp"
 #include "lcmloc/core/vehicle_model.hpp"
 #include "lcmloc/core/reorder.hpp"
@@ -256,6 +257,73 @@ TEST(Engine, SetPoseAndResetApplyToActiveAndShadowFilters) {
   EXPECT_EQ(Eigen::VectorXd(st.x.head(3)), cfg.filter.initial_pose);
   EXPECT_EQ(st.x[3], 0.0);
   EXPECT_EQ(e.activeFilter(), "ukf_calib");
+}
+
+TEST(Engine, SetPoseWithAbsurdNumbersIsRefusedAndNoFilterMoves) {
+  // Each of these used to be acknowledged: the first made every later state infinite, the next
+  // two were not applied (the variance squared to infinity or to 0) yet answered "ack".
+  Recorder rec;
+  EngineConfig cfg = engineConfig("ukf_gated");
+  cfg.shadow = {"dead_reckoning"};
+  cfg.reorder_window_us = 0;
+  FusionEngine e(cfg, straightMap(10), rec.outputs());
+  int64_t t = 1000000, seq = 0;
+  double s = 0;
+  driveWithMarkers(e, 1.0, t, seq, s);
+  e.flush();
+  const Eigen::VectorXd before = e.activeState().x;
+  const std::vector<std::pair<SetPose, std::string>> cases{
+      {SetPose{Pose(1e308, -1e308, 0.0), Vec3(1, 1, 1)}, "position (1e+308, -1e+308) m is beyond"},
+      {SetPose{Pose(1, 2, 0.1), Vec3(1e200, 1e200, 1e200)}, "not finite"},
+      {SetPose{Pose(1, 2, 0.1), Vec3(1e-200, 1e-200, 1e-200)}, "variance of x is not > 0"},
+      {SetPose{Pose(1, 2, 0.1), Vec3(-0.1, 0.1, 0.1)}, "stddev must be > 0"},
+      {SetPose{Pose(1, 2, 0.1), Vec3(2e7, 1, 1)}, "a variance (4e+14) is beyond"},
+  };
+  for (const auto& [cmd, why] : cases) {
+    rec.events.clear();
+    ASSERT_TRUE(e.push(controlIn(++t, ++seq, cmd)));
+    e.flush();
+    ASSERT_EQ(rec.count("refused"), 1) << why;
+    EXPECT_EQ(rec.count("ack"), 0) << why;
+    EXPECT_NE(rec.events.back().detail.find(why), std::string::npos) << rec.events.back().detail;
+    EXPECT_EQ(e.activeState().x, before) << why;
+  }
+  rec.events.clear();
+  ASSERT_TRUE(e.push(controlIn(++t, ++seq, SetPose{Pose(1, 2, 0.1), Vec3(0.1, 0.1, 0.1)})));
+  e.flush();
+  EXPECT_EQ(rec.count("ack"), 1);
+  EXPECT_EQ(Eigen::VectorXd(e.activeState().x.head(3)), Eigen::Vector3d(1, 2, 0.1));
+}
+
+TEST(Engine, AFilterWhoseStateRunsAwayStartsOverInsteadOfPublishingIt) {
+  Recorder rec;
+  EngineConfig cfg = engineConfig("dead_reckoning");
+  cfg.reorder_window_us = 0;
+  FusionEngine e(cfg, straightMap(10), rec.outputs());
+  int64_t t = 1000000, seq = 0;
+  // Finite (so taken), but its square through the heading's variance is not.
+  ASSERT_TRUE(e.push(odoIn(t, ++seq, 0.02)));
+  ASSERT_TRUE(e.push(odoIn(t += 10000, ++seq, 1e300)));
+  e.flush();
+  EXPECT_EQ(rec.count("restarted"), 1);
+  EXPECT_NE(rec.events.back().detail.find("dead_reckoning: its state became non-finite"), std::string::npos)
+      << rec.events.back().detail;
+  const FilterState& out = rec.last_state.at("dead_reckoning");
+  EXPECT_TRUE(out.x.allFinite());
+  EXPECT_TRUE(out.P.allFinite());
+  EXPECT_EQ(Eigen::VectorXd(out.x.head(3)), cfg.filter.initial_pose);
+}
+
+TEST(UnusableState, PositionsAndVariancesBeyondAnyLocalFrameAreRefused) {
+  FilterState s;
+  s.x = Eigen::Vector3d(kMaxAbsPosition, -kMaxAbsPosition, 0.0);
+  s.P = Eigen::Matrix3d::Identity() * kMaxVariance;
+  EXPECT_EQ(unusableState(s), "");
+  s.x(1) = -1.0001 * kMaxAbsPosition;
+  EXPECT_NE(unusableState(s).find("is beyond"), std::string::npos);
+  s.x(1) = 0.0;
+  s.P(2, 2) = 1.0001 * kMaxVariance;
+  EXPECT_NE(unusableState(s).find("a variance"), std::string::npos);
 }
 
 TEST(Engine, NonFiniteInputsAreRejectedWithoutCorruptingTheState) {

@@ -441,7 +441,9 @@ TEST(OdoInsFilter, LandmarkFixGateOffTakesEveryFixLockOutOffRefusesForever) {
       // gate off: the first fix moves the filter 40 m, the others (of the origin) move it back.
       EXPECT_EQ(all[0].second.reason, probability == 0 || k > 0 ? "fix" : "gate") << probability << " " << k;
       EXPECT_EQ(std::isinf(all[0].second.gate), probability == 0);
-      if (k == 0) EXPECT_NEAR(e.activeState().x[0], probability == 0 ? 40.0 : 0.0, 0.01);
+      if (k == 0) {
+        EXPECT_NEAR(e.activeState().x[0], probability == 0 ? 40.0 : 0.0, 0.01);
+      }
     }
     FusionEngine lost(ec, {}, out);  // only ever sees fixes of another place
     stand(lost, 1000000, 50, M_PI / 2, &seq);

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <map>
 #include <thread>
 
@@ -460,4 +461,36 @@ TEST_F(ReplayProcessTest, HelpAndCtlWithoutDaemonOrWithBadArguments) {
   }
   Child noout(LCMLOC_REPLAY, {"in.lcmlog", "--config", LCMLOC_PAPER_YAML}, path("noout.out"));
   EXPECT_EQ(noout.wait(10s).value_or(-1), 2) << noout.output();
+}
+
+TEST_F(ReplayProcessTest, CtlTakesOnlyTheAnswerToItsOwnCommandAndNoTimeBeyondInt64) {
+  Bus bus(url_);
+  // Runs lcmloc-ctl while publishing msg on channel every 20 ms; (exit code, output).
+  auto ctlWhile = [&](const std::vector<std::string>& args, const std::string& channel, const auto& msg,
+                      const std::string& name) {
+    std::vector<std::string> all{"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML, "--timeout", "1"};
+    all.insert(all.end(), args.begin(), args.end());
+    Child c(LCMLOC_CTL, all, path(name));
+    const auto deadline = std::chrono::steady_clock::now() + 10s;
+    std::optional<int> rc;
+    while (!(rc = c.wait(20ms)) && std::chrono::steady_clock::now() < deadline) bus.publish(channel, msg);
+    return std::make_pair(rc.value_or(-1), c.output());
+  };
+  // An ack of another command (another utime) is no answer to this one: it used to exit 0.
+  lcmloc::fusion_status_t ack{};
+  ack.utime = 123;
+  ack.event = "ack";
+  ack.detail = "reset ukf_gated";
+  auto [rc, out] = ctlWhile({"--utime", "5000000", "reset"}, "FUSION_STATUS", ack, "foreign_ack.out");
+  EXPECT_EQ(rc, 4) << out;
+  EXPECT_NE(out.find("no answer"), std::string::npos) << out;
+  // A POSE with a utime at the end of the int64 range: the command's time would overflow into a
+  // negative one (it was sent at utime -9223372036854726808).
+  lcmloc::pose_t pose{};
+  pose.utime = std::numeric_limits<int64_t>::max() - 1000;
+  pose.filter = "ukf_gated";
+  std::tie(rc, out) = ctlWhile({"reset"}, "POSE", pose, "huge_utime.out");
+  EXPECT_EQ(rc, 1) << out;
+  EXPECT_NE(out.find("too close to the end of the int64 range"), std::string::npos) << out;
+  EXPECT_EQ(out.find("sent to"), std::string::npos) << out;
 }

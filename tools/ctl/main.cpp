@@ -19,6 +19,7 @@
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/process.hpp"
 #include "lcmloc/core/filter.hpp"
+#include "lcmloc/core/text.hpp"
 #include "lcmloc/common/transport.hpp"
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/fusion_status_t.hpp"
@@ -134,7 +135,9 @@ int main(int argc, char** argv) {
             daemon_seen = true;
             return;
           }
-          const bool mine = m.event == "ack" || m.event == "refused" ||
+          // The daemon answers a command at the command's utime: an ack or refusal at another
+          // time answers someone else's command.
+          const bool mine = ((m.event == "ack" || m.event == "refused") && m.utime == utime) ||
                             (m.event == "rejected_input" && m.detail.find(cfg.channels.control) != std::string::npos);
           if (mine && !answer) answer = m;
         });
@@ -148,7 +151,13 @@ int main(int argc, char** argv) {
                       "(or give --utime)", cfg.channels.pose, cfg.channels.status, timeout);
         return common::kExitRuntimeError;
       }
-      utime = newest + std::max<int64_t>(1, std::llround(cfg.fusion.reorder_window * 1e6));
+      const int64_t window = std::max<int64_t>(1, std::llround(cfg.fusion.reorder_window * 1e6));
+      // A stray message with a utime near INT64_MAX on the bus: no overflow into a negative time.
+      if (__builtin_add_overflow(newest, window, &utime)) {
+        spdlog::error("the newest message time on the bus ({}) is too close to the end of the int64 range for a "
+                      "command after it: give --utime", newest);
+        return common::kExitRuntimeError;
+      }
     }
     cmd.utime = utime;
     cmd.seq = 0;
@@ -162,7 +171,8 @@ int main(int argc, char** argv) {
                                "than the command by the reorder window)\n", timeout);
       return kExitNoAnswer;
     }
-    std::cout << fmt::format("{}: {} (filter {})\n", answer->event, answer->detail, answer->filter);
+    std::cout << fmt::format("{}: {} (filter {})\n", answer->event, core::printable(answer->detail),
+                             core::printable(answer->filter));
     return answer->event == "ack" ? common::kExitOk : kExitRefused;
   });
 }

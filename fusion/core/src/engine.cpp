@@ -146,10 +146,17 @@ struct FusionEngine::Impl {
   }
 
   FilterState scratch;  ///< reused for every published state (no allocations per message)
-  void emitState(const Filter& f, bool is_active) {
+  void emitState(Filter& f, bool is_active) {
     if (is_active) unpublished = false;  // output_every > 1: the active state is out
     if (!out.on_state) return;
     f.stateInto(scratch);
+    if (!scratch.x.allFinite() || !scratch.P.allFinite()) {
+      // Never on the bus: a filter whose numbers ran away starts over, and says so.
+      startFresh(f, configOf(f, is_active), scratch.utime);
+      event("restarted", f.name() + ": its state became non-finite: started from its configured initial state",
+            scratch.utime);
+      f.stateInto(scratch);
+    }
     out.on_state(f.name(), is_active, scratch);
   }
 
@@ -344,19 +351,26 @@ struct FusionEngine::Impl {
   static std::string filterKey(const Filter& f, bool is_active) { return (is_active ? "active " : "shadow ") + f.name(); }
 
   void control(int64_t utime, const SetPose& c) {
-    if (!c.pose.allFinite() || !c.stddev.allFinite() || !(c.stddev.array() > 0).all()) {
-      event("refused", "set_pose: pose must be finite and stddev > 0", utime);
-      return;
-    }
     // A pose fix for every filter: each moves what depends on the pose with it (odo_ins turns
-    // its velocity with the heading).
+    // its velocity with the heading). Checked as the variances it gives: a standard deviation
+    // of 1e200 squares to infinity, one of 1e-200 to 0.
     PoseFix fix;
     fix.utime = utime;
     fix.pose = c.pose;
     fix.cov = c.stddev.array().square().matrix().asDiagonal();
     fix.source = "set_pose";
-    forEachFilter([&](Filter& f, bool is_active) { applyFixTo(f, is_active, fix); });
+    FilterState as_state;
+    as_state.x = fix.pose;
+    as_state.P = fix.cov;
+    if (!(c.stddev.array() > 0).all()) return event("refused", "set_pose: stddev must be > 0", utime);
+    if (const std::string why = unusableState(as_state); !why.empty())
+      return event("refused", "set_pose: " + why + " (pose and stddev must be finite, stddev > 0)", utime);
+    std::string not_taken;
+    forEachFilter([&](Filter& f, bool is_active) {
+      if (!applyFixTo(f, is_active, fix)) not_taken += (not_taken.empty() ? "" : ", ") + f.name();
+    });
     refused_fixes.clear();
+    if (!not_taken.empty()) return event("refused", "set_pose: not taken by " + not_taken, utime);
     event("ack", "set_pose", utime);
   }
 };

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 
 #include <Eigen/Eigenvalues>
@@ -126,6 +128,16 @@ std::string unusableState(const FilterState& s) {
   const auto n = s.x.size();
   if (n < 3 || s.P.rows() != n || s.P.cols() != n) return "state must have >= 3 entries and a matching P";
   if (!s.x.allFinite() || !s.P.allFinite()) return "state or covariance not finite";
+  if (std::abs(s.x(0)) > kMaxAbsPosition || std::abs(s.x(1)) > kMaxAbsPosition) {
+    std::ostringstream o;
+    o << std::setprecision(6) << "position (" << s.x(0) << ", " << s.x(1) << ") m is beyond " << kMaxAbsPosition << " m";
+    return o.str();
+  }
+  if (s.P.diagonal().maxCoeff() > kMaxVariance) {
+    std::ostringstream o;
+    o << std::setprecision(6) << "a variance (" << s.P.diagonal().maxCoeff() << ") is beyond " << kMaxVariance;
+    return o.str();
+  }
   for (int i = 0; i < 3; ++i)
     if (!(s.P(i, i) > 0.0)) return "the variance of " + std::string(i == 0 ? "x" : i == 1 ? "y" : "theta") + " is not > 0";
   const double scale = s.P.diagonal().cwiseAbs().maxCoeff();

@@ -205,10 +205,17 @@ class Filter {
 std::unique_ptr<Filter> makeFilter(const FilterConfig& cfg, const MarkerMap& map);
 
 /// Why a state cannot start a filter ("" when it can): fewer than 3 entries or a P of another
-/// size, a value that is not finite, a P that is not symmetric or not positive semi-definite,
-/// or a pose variance (x, y, theta) that is not > 0. Hand-overs, checkpoints and fixes are
-/// checked with it: a zero or negative covariance froze the filter (every measurement refused).
+/// size, a value that is not finite, a position beyond kMaxAbsPosition or a variance beyond
+/// kMaxVariance, a P that is not symmetric or not positive semi-definite, or a pose variance (x,
+/// y, theta) that is not > 0. Hand-overs, checkpoints, fixes and set_pose are checked with it: a
+/// zero or negative covariance froze the filter (every measurement refused), and a finite but
+/// absurd one (x = 1e308, a variance of 1e400 from a standard deviation of 1e200) made its next
+/// states infinite.
 std::string unusableState(const FilterState& s);
+/// [m] |x| and |y| of a usable state: 10,000 km, more than any local frame spans.
+inline constexpr double kMaxAbsPosition = 1e7;
+/// Largest usable variance (any state): kMaxAbsPosition squared.
+inline constexpr double kMaxVariance = kMaxAbsPosition * kMaxAbsPosition;
 
 /// Names accepted by makeFilter.
 std::vector<std::string> filterTypes();
