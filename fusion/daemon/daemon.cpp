@@ -114,6 +114,9 @@ void FusionDaemon::release(const std::optional<core::FilterState>& init, const s
   } else {
     detail += ", initialized from the configuration (" + source + ")";
   }
+  if (held_dropped_ > 0)
+    detail += fmt::format("; {} inputs queued while waiting were dropped, the oldest first (more than {} came in)",
+                          held_dropped_, kMaxHeld);
   spdlog::info("started: {}", core::printable(detail));
   publishStatus("started", detail, utime);
   auto held = std::move(held_);
@@ -165,6 +168,10 @@ void FusionDaemon::checkResumeGap(const core::EngineInput& in) {
 
 void FusionDaemon::push(core::EngineInput&& in) {
   if (hold_) {
+    if (held_.size() >= kMaxHeld) {
+      held_.pop_front();
+      ++held_dropped_;
+    }
     held_.push_back(std::move(in));
     return;
   }

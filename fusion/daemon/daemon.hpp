@@ -4,6 +4,7 @@
 // Bad input never stops it: each rejected message gets a log line (rate-limited) and a status
 // event, and is counted.
 #include <cstdint>
+#include <deque>
 #include <map>
 #include <memory>
 #include <optional>
@@ -99,7 +100,12 @@ class FusionDaemon {
   bool event_seen_ = false;
   bool hold_ = false;
   common::LocalFrame frame_;  ///< lat/lon of GPS fixes -> local metric frame (cfg.datum)
-  std::vector<core::EngineInput> held_;
+  /// Inputs queued while holding, at most kMaxHeld (a flood while waiting for the hand-over must
+  /// not take the memory): beyond, the oldest go first (they are the likeliest to be covered by
+  /// the state handed over), counted in held_dropped_ and said in the "started" event.
+  std::deque<core::EngineInput> held_;
+  static constexpr std::size_t kMaxHeld = 200000;
+  int64_t held_dropped_ = 0;
   /// Inputs at or before this (and within fusion.max_time_jump of it) were covered by the init state.
   std::optional<int64_t> init_utime_;
   bool resumed_ = false;  ///< the first input after the init state was seen (resume_gap checked)

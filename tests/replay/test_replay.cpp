@@ -11,10 +11,13 @@
 
 #include "process_fixture.hpp"
 #include "daemon/checkpoint.hpp"
+#include "daemon/daemon.hpp"
 #include "lcmloc/common/convert.hpp"
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/pose_t.hpp"
+#include "lcmloc/odometry_t.hpp"
+#include "lcmloc/replay/log_bus.hpp"
 #include "lcmloc/replay/replay.hpp"
 
 using namespace lcmloc;
@@ -381,4 +384,38 @@ TEST_F(ReplayTest, CheckpointRoundTripsExactlyAndRejectsGarbage) {
   EXPECT_EQ(fusion::checkpointUnwritable(path("new.ck")), "");
   EXPECT_FALSE(fs::exists(path("new.ck.tmp")));  // the probe is removed again
   EXPECT_NE(fusion::checkpointUnwritable(path("no/such/dir/ck")).find("No such file or directory"), std::string::npos);
+}
+
+TEST_F(ReplayTest, AFloodWhileHoldingForAHandOverKeepsTheNewestInputsAndSaysSo) {
+  // Inputs queued while a daemon waits for the running one's last POSE (--init-from-bus) used to
+  // have no bound: a flood took the memory.
+  const std::string out = path("held.lcmlog");
+  {
+    replay::LogBus bus(out);
+    fusion::FusionDaemon daemon(cfg_, bus, fusion::FusionDaemon::Options{true});
+    lcmloc::odometry_t o{};
+    o.delta_s = 0.0;
+    std::vector<uint8_t> buf;
+    const int64_t n = 200005;
+    for (int64_t k = 0; k < n; ++k) {
+      o.utime = 1000000 + k * 10;
+      o.seq = k;
+      buf.resize(static_cast<std::size_t>(o.getEncodedSize()));
+      o.encode(buf.data(), 0, static_cast<int>(buf.size()));
+      ASSERT_EQ(bus.dispatch(cfg_.channels.odometry, buf.data(), buf.size(), o.utime), 1);
+    }
+    EXPECT_EQ(daemon.processed(), 0);
+    daemon.release(std::nullopt, "test");
+    daemon.shutdown();
+    EXPECT_EQ(daemon.processed(), 200000);  // the newest
+    bus.close();
+  }
+  bool said = false;
+  for (const auto& ev : readLog(out))
+    if (ev.channel == cfg_.channels.status) {
+      const auto m = decode<lcmloc::fusion_status_t>(ev);
+      if (m.event == "started")
+        said = m.detail.find("5 inputs queued while waiting were dropped, the oldest first") != std::string::npos;
+    }
+  EXPECT_TRUE(said);
 }
