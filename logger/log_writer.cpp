@@ -56,7 +56,10 @@ bool LogWriter::push(Event ev) {
     if (closing_ || stats_.failed || queue_.size() >= opts_.capacity ||
         queued_bytes_ + bytes > opts_.queue_bytes) {
       ++stats_.dropped;
-      ++dropped_by_channel_[ev.channel];
+      auto it = dropped_by_channel_.find(ev.channel);
+      if (it == dropped_by_channel_.end())
+        it = dropped_by_channel_.emplace(dropped_by_channel_.size() < kMaxChannels ? ev.channel : kOtherChannels, 0).first;
+      ++it->second;
       return false;
     }
     queued_bytes_ += bytes;

@@ -2,7 +2,9 @@
 // thread only enqueues; a writer thread writes (see log_writer.hpp). Rotation by size and time,
 // SIGHUP starts a new file, fsync every flush period, clean close on SIGINT/SIGTERM, a clear
 // error and exit 1 when the disk fills up. Per-channel accounting from the messages' seq:
-// upstream gaps apart from the logger's own drops, periodically on LOGGER_STATUS and at exit.
+// upstream gaps apart from the logger's own drops, periodically on LOGGER_STATUS and at exit
+// (for at most logger::kMaxChannels channels; the rest are counted as one bucket). Channel and
+// process names from the bus are printed with their control characters as '?'.
 #include <signal.h>
 #include <sys/socket.h>
 
@@ -15,6 +17,7 @@
 
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/process.hpp"
+#include "lcmloc/core/text.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/logger/log_writer.hpp"
 #include "lcmloc/logger/types.hpp"
@@ -80,7 +83,36 @@ void sizeReceiveBuffer(const std::string& url, int bytes) {
                  best, bytes, rmem_max, bytes);
 }
 
-struct ChannelStats { int64_t received = 0, gaps = 0; };
+struct ChannelStats { int64_t received = 0, gaps = 0, dropped = 0, ignored = 0; };
+
+/// Sequences (channels, HEARTBEAT processes) whose seq is followed; a new one beyond is not.
+constexpr std::size_t kMaxSequences = 1000;
+/// Bytes of channel names listed in one logger_status_t; the channels beyond go into the
+/// kOtherChannels row (LCM channel names on udpm are short, so kMaxChannels of them fit anyway;
+/// this bounds the message for any transport: lcmloc's decoders refuse messages above 1 MiB).
+constexpr std::size_t kStatusNameBytes = 256 * 1024;
+
+/// The rows the status and the summary list: each channel with statistics of its own (at most
+/// kMaxChannels, and names of at most name_bytes bytes in all), then kOtherChannels for the rest.
+std::vector<std::pair<std::string, ChannelStats>> channelRows(const std::map<std::string, ChannelStats>& stats,
+                                                               const ChannelStats& other, std::size_t name_bytes) {
+  std::vector<std::pair<std::string, ChannelStats>> rows;
+  ChannelStats rest = other;
+  std::size_t bytes = 0;
+  for (const auto& [ch, s] : stats) {
+    if (bytes + ch.size() <= name_bytes) {
+      bytes += ch.size();
+      rows.emplace_back(ch, s);
+    } else {
+      rest.received += s.received;
+      rest.gaps += s.gaps;
+      rest.dropped += s.dropped;
+      rest.ignored += s.ignored;
+    }
+  }
+  if (rest.received > 0) rows.emplace_back(logger::kOtherChannels, rest);
+  return rows;
+}
 
 }  // namespace
 
@@ -135,42 +167,67 @@ int main(int argc, char** argv) {
     common::Bus bus(url);
     sizeReceiveBuffer(url, cfg.logger.recv_buf_size);
     logger::LogWriter writer(wo);
+    // Per-channel statistics for the first logger::kMaxChannels channels; the others together.
     std::map<std::string, ChannelStats> stats;
-    common::SeqTracker gaps;  // keyed by channel (HEARTBEAT: by channel and process)
+    ChannelStats other;
+    common::SeqTracker gaps;  // keyed by channel (HEARTBEAT: by channel and process), kMaxSequences at most
     common::LogThrottle gap_log;  // every gap is counted; the first 5 per key are logged, then 1 in 1000
+    bool sequences_full = false;
     int64_t received = 0;
     int64_t awaited_status_seq = -1;  // our final status, once published: recorded when it comes back
-    bool final_status_back = false;
+    bool final_status_back = false, status_recorded = false;
     bus.subscribeRaw(regex, [&](const std::string& ch, const uint8_t* data, std::size_t size, int64_t recv) {
       ++received;
-      auto& s = stats[ch];
+      auto it = stats.find(ch);
+      if (it == stats.end() && stats.size() < logger::kMaxChannels) it = stats.emplace(ch, ChannelStats{}).first;
+      const bool own = it != stats.end();
+      ChannelStats& s = own ? it->second : other;
+      if (!own && other.received == 0)
+        spdlog::warn("more than {} channels: '{}' and every later new channel are counted together as '{}' (their "
+                     "sequence gaps are not followed); every message is still recorded",
+                     logger::kMaxChannels, core::printable(ch), logger::kOtherChannels);
       ++s.received;
       int64_t seq = 0;
       const logger::TypeInfo* type = logger::findType(data, size);
       if (type && logger::readSeq(data, size, &seq)) {  // seq is only known for lcmloc types
+        if (ch == status_channel) {
+          status_recorded = true;
+          if (awaited_status_seq >= 0 && seq == awaited_status_seq && type->hash == lcmloc::logger_status_t::getHash())
+            final_status_back = true;
+        }
         std::string key = ch;
         if (type->hash == lcmloc::heartbeat_t::getHash()) {  // many publishers share HEARTBEAT
           lcmloc::heartbeat_t hb;
           if (hb.decode(data, 0, static_cast<int>(size)) >= 0) key = ch + "[" + hb.process + "]";
         }
-        if (awaited_status_seq >= 0 && seq == awaited_status_seq && ch == status_channel &&
-            type->hash == lcmloc::logger_status_t::getHash())
-          final_status_back = true;
-        const auto gap = gaps.observe(key, seq);
-        if (gap.restarted && gap_log.allow(key + ":restart")) spdlog::warn("{}", gap.describeRestart(key));
-        if (gap) {
-          s.gaps += gap.missing;
-          if (gap_log.allow(key)) spdlog::warn("{} (lost upstream, not by the logger)", gap.describe(key));
+        if (own && !gaps.tracks(key) && gaps.size() >= kMaxSequences) {
+          if (!sequences_full)
+            spdlog::warn("more than {} sequences (channels, heartbeat processes): the sequence gaps of '{}' and of "
+                         "every later new one are not counted",
+                         kMaxSequences, core::printable(key));
+          sequences_full = true;
+        } else if (own) {
+          const auto gap = gaps.observe(key, seq);
+          const std::string shown = gap.missing || gap.restarted || gap.ignored ? core::printable(key) : std::string();
+          if (gap.ignored) {
+            ++s.ignored;
+            s.gaps -= gap.uncounted;
+            if (gap_log.allow(key + ":ignored")) spdlog::warn("{}", gap.describeIgnored(shown));
+          }
+          if (gap.restarted && gap_log.allow(key + ":restart")) spdlog::warn("{}", gap.describeRestart(shown));
+          if (gap) {
+            s.gaps += gap.missing;
+            if (gap_log.allow(key)) spdlog::warn("{} (lost upstream, not by the logger)", gap.describe(shown));
+          }
         }
       }
-      writer.push({ch, std::vector<uint8_t>(data, data + size), recv});
+      if (!writer.push({ch, std::vector<uint8_t>(data, data + size), recv})) ++s.dropped;
     });
 
     int64_t status_seq = 0;
     auto publishStatus = [&](const std::string& state) {
       if (status_channel.empty()) return;
       const auto w = writer.stats();
-      const auto drops = writer.droppedByChannel();
       lcmloc::logger_status_t m;
       m.utime = common::wallMicros();
       m.seq = status_seq++;
@@ -186,10 +243,10 @@ int main(int argc, char** argv) {
       m.flushed_events = w.flushed_events;
       m.queue_depth = w.queue_depth;
       m.queue_capacity = static_cast<int32_t>(wo.capacity);
-      for (const auto& [ch, s] : stats) {
+      for (const auto& [ch, s] : channelRows(stats, other, kStatusNameBytes)) {
         m.channels.push_back(ch);
         m.channel_received.push_back(s.received);
-        m.channel_dropped.push_back(drops.count(ch) ? drops.at(ch) : 0);
+        m.channel_dropped.push_back(s.dropped);
         m.channel_gaps.push_back(s.gaps);
       }
       m.num_channels = static_cast<int32_t>(m.channels.size());
@@ -229,7 +286,7 @@ int main(int argc, char** argv) {
     // Our own last status (and heartbeat, sent before it) come back over the bus: wait for the
     // status when we record its channel (bounded), so the log ends with it. (Recorded: an earlier
     // status of ours came in; LCM's regex dialect is its own, so it is not matched here.)
-    if (!status_channel.empty() && stats.count(status_channel)) {
+    if (!status_channel.empty() && status_recorded) {
       const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(500);
       while (!final_status_back && std::chrono::steady_clock::now() < until) bus.handle(20);
     }
@@ -237,16 +294,21 @@ int main(int argc, char** argv) {
     writer.close();
 
     const auto w = writer.stats();
-    const auto drops = writer.droppedByChannel();
-    for (const auto& [ch, s] : stats) {
-      const auto d = drops.count(ch) ? drops.at(ch) : 0;
-      spdlog::info("  {:<24} {:>8} messages, {} sequence gaps, {} dropped", ch, s.received, s.gaps, d);
+    for (const auto& [ch, s] : channelRows(stats, other, SIZE_MAX)) {
+      spdlog::info("  {:<24} {:>8} messages, {} sequence gaps, {} dropped{}", core::printable(ch), s.received, s.gaps,
+                   s.dropped, s.ignored ? fmt::format(", {} seq(s) ignored", s.ignored) : "");
     }
     const auto files = writer.files();
     spdlog::info("recorded {} of {} messages on {} channels to {} file(s) ({} .. {}); {} sequence gaps upstream, "
                  "{} dropped by the logger, {} lost to write errors",
-                 w.written, received, stats.size(), files.size(), files.empty() ? "" : files.front(),
-                 files.empty() ? "" : files.back(), gaps.gaps(), w.dropped, w.write_lost);
+                 w.written, received,
+                 other.received ? fmt::format("more than {}", logger::kMaxChannels) : std::to_string(stats.size()),
+                 files.size(), files.empty() ? "" : files.front(), files.empty() ? "" : files.back(), gaps.gaps(),
+                 w.dropped, w.write_lost);
+    if (gaps.ignored())
+      spdlog::warn("{} seq(s) ignored: each broke its sequence and the next message did not go on from it (a "
+                   "corrupt seq, or a message out of order); not counted as gaps",
+                   gaps.ignored());
     if (w.failed) {
       spdlog::error("{}; stopped recording. {} holds {} whole events up to byte {} and stays readable",
                     w.error, w.file, w.written, w.bytes_written);

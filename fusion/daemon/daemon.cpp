@@ -127,6 +127,11 @@ void FusionDaemon::release(const std::optional<core::FilterState>& init, const s
 bool FusionDaemon::received(const std::string& ch, int64_t seq) {
   ++messages_in_;
   const auto gap = gaps_.observe(ch, seq);
+  if (gap.ignored) {  // a lone corrupt seq: neither a loss nor a restart (and maybe a gap too)
+    const std::string what = gap.describeIgnored(ch);
+    if (log_throttle_.allow("ignored:" + ch)) spdlog::warn("{}", core::printable(what));
+    publishStatus("seq_ignored", what, last_utime_);
+  }
   if (gap) {
     const std::string what = gap.describe(ch);
     if (log_throttle_.allow("gap:" + ch)) spdlog::warn("{}", core::printable(what));

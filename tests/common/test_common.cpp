@@ -546,28 +546,140 @@ TEST(Process, SeqTrackerCountsGapsPerKey) {
   EXPECT_EQ(missing("B", 2), 1);
   EXPECT_EQ(missing("A", 9), 0);  // duplicate
   EXPECT_FALSE(t.observe("A", 10).restarted);
-  const common::SeqGap back = t.observe("A", 0);  // the sender started over
+  EXPECT_FALSE(t.observe("A", 0).restarted);  // went back: said when the next message goes on from it
+  const common::SeqGap back = t.observe("A", 1);  // the sender started over
   EXPECT_TRUE(back.restarted);
   EXPECT_EQ(back.missing, 0);
   EXPECT_EQ(back.describeRestart("A"),
             "A: seq went back from 10 to 0 (the sender started over?): messages it did not send meanwhile are not "
             "counted");
-  EXPECT_EQ(missing("A", 1), 0);
+  EXPECT_EQ(missing("A", 2), 0);
   EXPECT_EQ(t.gaps("A"), 2);
   EXPECT_EQ(t.gaps("B"), 1);
   EXPECT_EQ(t.gaps(), 3);
-  // A corrupt seq far ahead (or at the end of the range) is not 2^31 or more lost messages, and
-  // the counting goes on after it.
+  // A jump far ahead, confirmed: up to kMaxSeqGap it is lost messages, beyond a new sequence.
   const int64_t k = common::SeqTracker::kMaxSeqGap;
-  EXPECT_EQ(missing("B", 3 + k), k);  // the bound
-  EXPECT_EQ(missing("B", 5 + 2 * k), 0);  // one more: beyond it
-  EXPECT_EQ(missing("B", 10), 0);
-  EXPECT_EQ(missing("B", 12), 1);
+  EXPECT_EQ(missing("B", 3 + k), 0);
+  EXPECT_EQ(missing("B", 4 + k), k);  // the bound
+  EXPECT_EQ(missing("B", 6 + 2 * k), 0);  // one more: beyond it
+  const common::SeqGap beyond = t.observe("B", 7 + 2 * k);
+  EXPECT_EQ(beyond.missing, 0);
+  EXPECT_TRUE(beyond.restarted);
+  EXPECT_EQ(beyond.describeRestart("B"),
+            "B: seq jumped ahead from " + std::to_string(4 + k) + " to " + std::to_string(6 + 2 * k) +
+                " (a new sequence, not lost messages): messages it did not send meanwhile are not counted");
+  EXPECT_EQ(missing("B", 9 + 2 * k), 1);
+  // The ends of the range: no overflow, and a lone seq there is ignored.
   EXPECT_EQ(missing("C", -5), 0);
-  EXPECT_EQ(missing("C", INT64_MAX), 0);  // no overflow
+  EXPECT_EQ(missing("C", INT64_MAX), 0);
   EXPECT_EQ(missing("C", -4), 0);
   EXPECT_EQ(missing("C", -2), 1);
-  EXPECT_EQ(t.gaps(), 3 + k + 2);
+  EXPECT_EQ(missing("C", INT64_MIN), 0);
+  EXPECT_EQ(missing("C", INT64_MAX), 0);
+  EXPECT_EQ(missing("C", INT64_MIN), 0);
+  EXPECT_EQ(t.gaps(), 3 + k + 1 + 1);
+  EXPECT_EQ(t.ignored("C"), 3);
+}
+
+// A seq that broke the sequence and was not followed is said: which, after what, and why.
+TEST(Process, SeqTrackerSaysWhichSeqItIgnoredAndTakesBackASmallJumpThatWasALoneOutlier) {
+  common::SeqTracker t;
+  for (int64_t s = 0; s <= 100; ++s) t.observe("A", s);
+  EXPECT_FALSE(t.observe("A", 100 | (int64_t{1} << 30)).ignored);
+  const common::SeqGap g = t.observe("A", 101);
+  EXPECT_TRUE(g.ignored);
+  EXPECT_FALSE(g.restarted);
+  EXPECT_EQ(g.missing, 0);
+  EXPECT_EQ(g.describeIgnored("A"),
+            "A: seq 1073741924 (after 100) ignored: the next message (seq 101) did not go on from it (a corrupt "
+            "seq, or a message out of order); not counted as a gap");
+  // Bit 3 flipped: 102 -> 110 looks like 7 lost messages, counted at once; 103 goes on from 102:
+  // the 7 are taken back.
+  EXPECT_EQ(t.observe("A", 102).missing, 0);
+  EXPECT_EQ(t.observe("A", 110).missing, 7);
+  EXPECT_EQ(t.gaps(), 7);
+  const common::SeqGap back = t.observe("A", 103);
+  EXPECT_TRUE(back.ignored);
+  EXPECT_FALSE(back.restarted);
+  EXPECT_EQ(back.uncounted, 7);
+  EXPECT_EQ(back.ignored_seq, 110);
+  EXPECT_EQ(back.ignored_after, 102);
+  EXPECT_EQ(back.describeIgnored("A"),
+            "A: seq 110 (after 102) ignored: the next message (seq 103) did not go on from it (a corrupt seq, or a "
+            "message out of order); not counted as a gap (the 7 message(s) counted missing before it are taken back)");
+  EXPECT_EQ(t.gaps(), 0);
+  EXPECT_EQ(t.gaps("A"), 0);
+  EXPECT_EQ(t.observe("A", 104).missing, 0);
+  EXPECT_EQ(t.ignored(), 2);
+  EXPECT_EQ(t.ignored("A"), 2);
+  // Every other message lost (a burst): each small gap is counted, none is taken for an outlier.
+  common::SeqTracker lossy;
+  for (int64_t s = 0; s < 100; s += 2) lossy.observe("B", s);
+  EXPECT_EQ(lossy.gaps(), 49);
+  EXPECT_EQ(lossy.ignored(), 0);
+  // Keys are found by name however many there are.
+  common::SeqTracker many;
+  for (int64_t s = 0; s < 3; ++s)
+    for (int c = 0; c < 2000; ++c) many.observe("C" + std::to_string(c), s * 2);
+  EXPECT_EQ(many.size(), 2000u);
+  EXPECT_TRUE(many.tracks("C1999"));
+  EXPECT_FALSE(many.tracks("C2000"));
+  EXPECT_EQ(many.gaps("C1234"), 2);
+  EXPECT_EQ(many.gaps(), 4000);
+}
+
+// One corrupt seq used to add up to 2^31 "missing" messages: the audit's ODOMETRY seqs 0, 2^31, 0,
+// 2^31, ... gave 4294967294 gaps for 8 messages, and one seq with bit 30 flipped 1.07e9; a corrupt
+// seq that went back was a "restart" and the next good one a gap of its own.
+TEST(Process, SeqTrackerIgnoresALoneCorruptSeq) {
+  common::SeqTracker alternating;
+  for (int i = 0; i < 8; ++i) alternating.observe("ODOMETRY", i % 2 ? int64_t{1} << 31 : 0);
+  EXPECT_EQ(alternating.gaps(), 0);
+  for (const int bit : {62, 40, 30, 20, 12, 5, 3, 1}) {  // one bit flipped in one message of a counting stream
+    SCOPED_TRACE(bit);
+    common::SeqTracker t;
+    int restarts = 0;
+    for (int64_t s = 0; s < 200; ++s) {
+      const auto g = t.observe("A", s == 100 ? s ^ (int64_t{1} << bit) : s);
+      restarts += g.restarted;
+    }
+    EXPECT_EQ(t.gaps(), 0);
+    EXPECT_EQ(restarts, 0);
+  }
+  common::SeqTracker junk;  // the audit's seqjunk stream
+  for (const int64_t s : {int64_t{0}, int64_t{1} << 31, int64_t{0}, int64_t{1} << 31, INT64_MAX, INT64_MIN})
+    junk.observe("ODOMETRY", s);
+  EXPECT_EQ(junk.gaps(), 0);
+  EXPECT_EQ(junk.observe("ODOMETRY", 1).missing, 0);  // goes on from 0
+  EXPECT_EQ(junk.observe("ODOMETRY", 4).missing, 2);
+  EXPECT_EQ(junk.gaps(), 2);
+}
+
+// A real loss or restart is still counted or said, once the next message goes on from the new seq.
+TEST(Process, SeqTrackerTakesABigJumpOrAStepBackWhenTheNextMessageGoesOnFromIt) {
+  common::SeqTracker t;
+  for (int64_t s = 0; s < 10; ++s) t.observe("A", s);
+  EXPECT_EQ(t.observe("A", 5010).missing, 0);  // 5000 missing, or a corrupt seq: not known yet
+  const common::SeqGap g = t.observe("A", 5011);  // goes on from it: 5000 lost
+  EXPECT_EQ(g.missing, 5000);
+  EXPECT_EQ(g.before_seq, 5010);
+  EXPECT_EQ(g.describe("A"), "A: 5000 message(s) missing before seq 5010");
+  EXPECT_EQ(t.gaps(), 5000);
+  EXPECT_EQ(t.observe("A", 5013).missing, 1);  // a small gap: at once
+  EXPECT_FALSE(t.observe("A", 0).restarted);  // went back: not known yet
+  const common::SeqGap back = t.observe("A", 1);  // the sender started over
+  EXPECT_TRUE(back.restarted);
+  EXPECT_EQ(back.missing, 0);
+  EXPECT_EQ(back.last_seq, 5013);
+  EXPECT_EQ(back.before_seq, 0);
+  EXPECT_EQ(t.observe("A", 2).missing, 0);
+  EXPECT_EQ(t.gaps(), 5001);
+  // The jumped message lost too: the one after it starts the wait again, and the total is right.
+  for (int64_t s = 3; s < 10; ++s) t.observe("A", s);
+  EXPECT_EQ(t.observe("A", 3009).missing, 0);
+  EXPECT_EQ(t.observe("A", 3011).missing, 0);  // 3010 lost as well
+  EXPECT_EQ(t.observe("A", 3012).missing, 3001);  // 10 .. 3010 (3009 came, but its seq was not taken)
+  EXPECT_EQ(t.gaps(), 5001 + 3001);
 }
 
 TEST(Process, PacerFollowsTheRealtimeFactor) {

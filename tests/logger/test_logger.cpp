@@ -13,6 +13,7 @@
 #include "process_fixture.hpp"
 #include "lcmloc/common/transport.hpp"
 #include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/logger_status_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 
@@ -250,6 +251,96 @@ TEST_F(LoggerTest, CleanShutdownCountsUpstreamGapsApartFromDrops) {
   // Said at start: the size it got, and the kernel's cap.
   EXPECT_NE(out.find("receive buffer: "), std::string::npos) << out;
   EXPECT_NE(out.find("net.core.rmem_max = "), std::string::npos) << out;
+}
+
+// Channel and heartbeat process names are whatever bytes their publisher chose: printed as they
+// were, "X\e[2J\e[31mEVIL\a" cleared the screen in a gap warning and in the summary, and a process
+// name "p\e]0;pwned\a" set the terminal's title.
+TEST_F(LoggerTest, ControlCharactersOfChannelAndProcessNamesNeverReachTheTerminal) {
+  auto logger = start({"--output", path("ctl.lcmlog"), "--channel", "X.*", "--channel", "HEARTBEAT"});
+  const std::string evil = "X\x1b[2J\x1b[31mEVIL\x07";
+  for (int64_t seq : {1, 5}) {
+    lcmloc::odometry_t o{};
+    o.seq = seq;
+    ASSERT_TRUE(bus_->publish(evil, o));
+  }
+  for (int64_t seq : {0, 7}) {
+    lcmloc::heartbeat_t hb{};
+    hb.seq = seq;
+    hb.process = "p\x1b[2J\x1b]0;pwned\x07";
+    hb.state = "running";
+    ASSERT_TRUE(bus_->publish("HEARTBEAT", hb));
+  }
+  ASSERT_TRUE(waitStatus([](const auto& s) { return s.gaps >= 9; }, 10s)) << logger->output();
+  logger->signal(SIGTERM);
+  ASSERT_EQ(logger->wait(10s), std::optional<int>(0)) << logger->output();
+  const std::string out = logger->output();
+  EXPECT_EQ(out.find('\x1b'), std::string::npos) << out;
+  EXPECT_EQ(out.find('\x07'), std::string::npos) << out;
+  EXPECT_NE(out.find("X?[2J?[31mEVIL?: 3 message(s) missing before seq 5"), std::string::npos) << out;
+  EXPECT_NE(out.find("HEARTBEAT[p?[2J?]0;pwned?]: 6 message(s) missing before seq 7"), std::string::npos) << out;
+  EXPECT_NE(out.find("X?[2J?[31mEVIL?                 2 messages, 3 sequence gaps"), std::string::npos) << out;
+  int events = 0;  // recorded as they came
+  lcmloc::eval::scanLog(path("ctl.lcmlog"), [&](const lcmloc::eval::RawEvent& ev) { events += *ev.channel == evil; });
+  EXPECT_EQ(events, 2);
+}
+
+// One corrupt seq counted as up to 2^31 lost messages (bit 30 flipped: 1073741824 "gaps").
+TEST_F(LoggerTest, ALoneCorruptSeqIsIgnoredNotCountedAsLostMessages) {
+  auto logger = start({"--output", path("seq.lcmlog")});
+  for (int64_t seq : {int64_t{0}, int64_t{1}, int64_t{2}, int64_t{3} | (int64_t{1} << 30), int64_t{4}, int64_t{5},
+                      int64_t{8}})
+    publish(seq);
+  ASSERT_TRUE(waitStatus([](const auto& s) { return s.written == 7; }, 10s)) << logger->output();
+  EXPECT_EQ(status_->gaps, 2);  // 6 and 7
+  EXPECT_EQ(status_->channel_gaps, std::vector<int64_t>{2});
+  logger->signal(SIGTERM);
+  ASSERT_EQ(logger->wait(10s), std::optional<int>(0)) << logger->output();
+  const std::string out = logger->output();
+  EXPECT_NE(out.find("ODOMETRY: seq 1073741827 (after 2) ignored: the next message (seq 4) did not go on from it"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("ODOMETRY                        7 messages, 2 sequence gaps, 0 dropped, 1 seq(s) ignored"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("2 sequence gaps upstream"), std::string::npos) << out;
+}
+
+// 30,000 channel names grew the logger's memory, a LOGGER_STATUS past 1 MiB (which no lcmloc
+// decoder takes) and a summary of 30,005 lines. Statistics are kept for kMaxChannels channels;
+// every message is still recorded.
+TEST_F(LoggerTest, ThousandsOfChannelsAreAllRecordedButCountedOneByOneOnlyUpToALimit) {
+  auto logger = start({"--output", path("many.lcmlog"), "--channel", "C[0-9]+"});
+  constexpr int kChannels = 1500;
+  for (int i = 0; i < kChannels; ++i) {
+    lcmloc::odometry_t o{};
+    o.seq = 0;
+    char name[16];
+    std::snprintf(name, sizeof name, "C%05d", i);
+    ASSERT_TRUE(bus_->publish(name, o));
+    if (i % 100 == 99) bus_->handle(5);
+  }
+  ASSERT_TRUE(waitStatus([](const auto& s) { return s.received >= kChannels; }, 20s)) << logger->output();
+  EXPECT_EQ(status_->channels.size(), 1001u);  // 1000 channels of their own and the rest together
+  int64_t listed = 0;
+  for (const auto r : status_->channel_received) listed += r;
+  EXPECT_EQ(listed, status_->received);
+  ASSERT_FALSE(status_->channels.empty());
+  EXPECT_EQ(status_->channels.back(), "(other channels)");
+  EXPECT_LT(status_->getEncodedSize(), 100 * 1024);
+  logger->signal(SIGTERM);
+  ASSERT_EQ(logger->wait(10s), std::optional<int>(0)) << logger->output();
+  int events = 0;
+  lcmloc::eval::scanLog(path("many.lcmlog"), [&](const lcmloc::eval::RawEvent& ev) { events += (*ev.channel)[0] == 'C'; });
+  EXPECT_EQ(events, kChannels);
+  const std::string out = logger->output();
+  int lines = 0;
+  for (std::size_t at = 0; (at = out.find(" messages, ", at)) != std::string::npos; ++at) ++lines;
+  EXPECT_LE(lines, 1002) << "one line per channel counted on its own, one for the rest";
+  EXPECT_NE(out.find("more than 1000 channels: 'C01000' and every later new channel are counted together"),
+            std::string::npos)
+      << out.substr(0, 4000);
+  EXPECT_NE(out.find("(other channels)"), std::string::npos);
 }
 
 TEST_F(LoggerTest, DiskFullExitsNonZeroAndKeepsEveryWholeEventReadable) {

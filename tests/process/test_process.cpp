@@ -498,6 +498,54 @@ TEST_F(ProcessTest, LauncherStopsAChildsWholeProcessGroupAndLeaksItNoDescriptors
     EXPECT_EQ(line.find("socket:"), std::string::npos) << "inherited: " << line;
 }
 
+// The launcher kept every pid seen in any `running` heartbeat as ready, for good: a heartbeat of
+// some other process (another host's pids are any numbers, or a forged one) with the pid a child
+// was to get made that child "ready" the moment it started, and the map grew with every pid seen.
+TEST_F(ProcessTest, LauncherTakesOnlyItsOwnChildrensHeartbeatsAsReady) {
+  auto script = [&](const std::string& name) {
+    const std::string f = writeFile(name + ".sh", "#!/bin/sh\necho $$ > " + path(name + ".tmp") + "\nmv " +
+                                                      path(name + ".tmp") + " " + path(name + ".pid") +
+                                                      "\nexec sleep 300\n");
+    fs::permissions(f, fs::perms::owner_all);
+    return f;
+  };
+  const std::string system = writeFile(
+      "system.yaml", "scenario: " + std::string(LCMLOC_PAPER_YAML) + "\nready_timeout: 4\nprocesses:\n" +
+                         "  - {name: one, executable: " + script("one") + "}\n" +
+                         "  - {name: two, executable: " + script("two") + "}\n" +
+                         "  - {name: three, executable: " + script("three") + "}\n");
+  Child launcher(LCMLOC_LAUNCHER, {"--system", system, "--lcm-url", url_}, path("launcher.out"));
+  auto waitFile = [&](const std::string& f, std::chrono::milliseconds t) {
+    const auto deadline = std::chrono::steady_clock::now() + t;
+    while (!fs::exists(f) && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(10ms);
+    return fs::exists(f);
+  };
+  ASSERT_TRUE(waitFile(path("one.pid"), 10s)) << launcher.output();
+  int one = 0, pid_max = 32768;
+  std::ifstream(path("one.pid")) >> one;
+  std::ifstream("/proc/sys/kernel/pid_max") >> pid_max;
+  // While `one` (no heartbeat) is waited for: "running" heartbeats of other processes with the
+  // next 30,000 pids (on this machine's pid_max of 32768: every pid), `two`'s among them.
+  lcmloc::common::Bus bus(url_);
+  lcmloc::heartbeat_t hb{};
+  hb.process = "lcmloc-elsewhere";
+  hb.state = "running";
+  for (int k = 1; k <= std::min(30000, pid_max - 2); ++k) {
+    int pid = one + k;
+    if (pid >= pid_max) pid -= pid_max - 300;  // (pids wrap around to 300)
+    hb.pid = pid;
+    ASSERT_TRUE(bus.publish("HEARTBEAT", hb));
+    if (k % 500 == 0) std::this_thread::sleep_for(5ms);
+  }
+  ASSERT_FALSE(fs::exists(path("two.pid"))) << "published too late: two started already\n" << launcher.output();
+  ASSERT_TRUE(waitFile(path("three.pid"), 20s)) << launcher.output();
+  launcher.signal(SIGINT);
+  EXPECT_EQ(launcher.wait(10s), std::optional<int>(0)) << launcher.output();
+  const std::string out = launcher.output();
+  EXPECT_NE(out.find("one: no heartbeat within 4.0 s"), std::string::npos) << out;
+  EXPECT_NE(out.find("two: no heartbeat within 4.0 s"), std::string::npos) << out;
+}
+
 TEST_F(ProcessTest, LauncherRefusesTwoProcessesOfTheSameName) {
   // Unnamed processes are named after their executable: two magnetic rulers need names.
   const std::string system = writeFile("system.yaml", std::string("processes:\n") +

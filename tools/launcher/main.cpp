@@ -31,6 +31,7 @@ struct Child {
   launcher::ProcessSpec spec;
   pid_t pid = -1;
   bool running = false;
+  bool ready = false;        ///< a `running` heartbeat with its pid came since it was started
   int status = 0;            ///< waitpid status once exited
   bool killed = false;       ///< needed SIGKILL
   bool terminated = false;   ///< sent SIGTERM by the launcher (a stop)
@@ -122,9 +123,14 @@ class Launcher {
   int run() {
     const auto sys = common::loadSystemConfig(scenario_);  // validate before starting anything
     common::Bus bus(url_);
+    // Only our own children's heartbeats count, from their start on: a heartbeat of another
+    // process (on another host its pid may be any number) cannot make a child ready before it
+    // is, and nothing is kept per pid seen.
     bus.subscribe<lcmloc::heartbeat_t>(sys.channels.heartbeat,
                                        [this](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
-                                         if (m.state == "running") ready_[m.pid] = true;
+                                         if (m.state != "running") return;
+                                         for (auto& c : children_)
+                                           if (c.running && c.pid == m.pid) c.ready = true;
                                        });
     for (const auto& spec : cfg_.processes) {
       children_.emplace_back();
@@ -168,17 +174,18 @@ class Launcher {
       if (common::stopRequested()) return false;
       c.pid = spawn(c, scenario_, url_);
       c.running = true;
+      c.ready = false;
       c.started = Clock::now();
       spdlog::info("started {} (pid {})", c.spec.name, c.pid);
       const auto deadline = Clock::now() + secs(cfg_.ready_timeout);
-      while (!ready_[c.pid] && Clock::now() < deadline && !common::stopRequested()) {
+      while (!c.ready && Clock::now() < deadline && !common::stopRequested()) {
         bus.handle(50);
         if (reap(c, false)) {
           spdlog::error("{} ended during start-up ({})", c.spec.name, describeStatus(c));
           return false;
         }
       }
-      if (!ready_[c.pid] && cfg_.ready_timeout > 0)
+      if (!c.ready && cfg_.ready_timeout > 0)
         spdlog::warn("{}: no heartbeat within {:.1f} s; continuing", c.spec.name, cfg_.ready_timeout);
     }
     return true;
@@ -191,6 +198,7 @@ class Launcher {
     ++c.restarts;
     c.pid = spawn(c, scenario_, url_);
     c.running = true;
+    c.ready = false;
     c.killed = false;
     c.terminated = false;
     c.started = Clock::now();
@@ -247,7 +255,6 @@ class Launcher {
   launcher::LaunchConfig cfg_;
   std::string scenario_, url_;
   std::vector<Child> children_;
-  std::map<int32_t, bool> ready_;
 };
 
 }  // namespace

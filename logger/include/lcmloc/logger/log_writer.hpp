@@ -21,6 +21,13 @@
 
 namespace lcmloc::logger {
 
+/// At most this many channels get statistics of their own (the logger's per-channel counts, the
+/// writer's drops by channel); the others are counted together under kOtherChannels. A bus with
+/// thousands of channel names (a bug, or hostile traffic) must not grow the logger's memory and
+/// its LOGGER_STATUS without bound. Every message is recorded all the same.
+inline constexpr std::size_t kMaxChannels = 1000;
+inline const std::string kOtherChannels = "(other channels)";
+
 struct Event {
   std::string channel;
   std::vector<uint8_t> data;
@@ -75,6 +82,8 @@ class LogWriter {
 
   WriterStats stats() const;
   bool failed() const;
+  /// Messages refused by push, per channel (at most kMaxChannels of them; the rest under
+  /// kOtherChannels).
   std::map<std::string, int64_t> droppedByChannel() const;
   /// Paths of every file opened so far, in order.
   std::vector<std::string> files() const;
