@@ -2,9 +2,35 @@
 
 #include <cmath>
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "lcmloc/core/text.hpp"
+
 namespace lcmloc::common {
+
+std::string truthProblem(const lcmloc::ground_truth_t& m) {
+  if (m.utime < 0 || m.utime >= kTruthUtimeLimit)
+    return "utime outside [0, 2^62) us";
+  struct Field {
+    const char* name;
+    double value, limit;  // limit 0: finite is enough
+    const char* what;     // of a non-finite value
+    const char* unit;
+  };
+  const Field fields[] = {{"x", m.x, kTruthLengthLimit, "pose: x", "m"},
+                          {"y", m.y, kTruthLengthLimit, "pose: y", "m"},
+                          {"heading", m.heading, 0.0, "pose: heading", "rad"},
+                          {"speed", m.speed, kTruthSpeedLimit, "speed", "m/s"},
+                          {"steering", m.steering, 0.0, "steering", "rad"},
+                          {"distance", m.distance, kTruthLengthLimit, "distance", "m"}};
+  for (const auto& f : fields) {
+    if (!std::isfinite(f.value)) return fmt::format("non-finite {} = {}", f.what, f.value);
+    if (f.limit > 0 && std::abs(f.value) > f.limit)
+      return fmt::format("{} = {:g} {} beyond +-{:g} {}", f.name, f.value, f.unit, f.limit, f.unit);
+  }
+  return {};
+}
 
 TruthDriver::TruthDriver(Bus& bus, const SystemConfig& cfg, std::string process, OnTruth on_truth,
                          std::function<void()> restart, std::function<Heartbeat::Counters()> extra)
@@ -17,6 +43,7 @@ TruthDriver::TruthDriver(Bus& bus, const SystemConfig& cfg, std::string process,
                               {"published", published_},
                               {"gaps", gaps_.gaps()},
                               {"dropped", dropped_},
+                              {"bad_truth", bad_truth_},
                               {"decode_errors", bus_.decodeErrors()}};
         if (extra)
           for (auto& kv : extra()) c.push_back(std::move(kv));
@@ -29,8 +56,19 @@ TruthDriver::TruthDriver(Bus& bus, const SystemConfig& cfg, std::string process,
 
 void TruthDriver::onMessage(const std::string& ch, const lcmloc::ground_truth_t& m) {
   ++received_;
-  if (const auto gap = gaps_.observe(ch, m.seq))
-    if (throttle_.allow(ch)) spdlog::warn("{}", gap.describe(ch));
+  const auto gap = gaps_.observe(ch, m.seq);
+  if (gap.ignored && throttle_.allow(ch + ":ignored")) spdlog::warn("{}", core::printable(gap.describeIgnored(ch)));
+  if (gap && throttle_.allow(ch)) spdlog::warn("{}", core::printable(gap.describe(ch)));
+  // One rule for every driver, before the time guard and any sensor model: a NaN or a corrupt
+  // utime would otherwise poison a model's state for good (an odometer stuck at NaN) or overflow
+  // its time arithmetic.
+  if (const std::string why = truthProblem(m); !why.empty()) {
+    ++bad_truth_;
+    if (throttle_.allow(ch + ":bad"))
+      spdlog::warn("{} seq {} utime {}: {}: refused, no measurement from it ({} refused so far)", ch, m.seq,
+                   m.utime, why, bad_truth_);
+    return;
+  }
   guard_.offer(
       lcmloc::ground_truth_t(m), m.utime,
       [&](lcmloc::ground_truth_t&& t) {
@@ -63,8 +101,9 @@ int TruthDriver::run(const std::function<std::string()>& out) {
     bus_.handle(100);
   }
   guard_.flush([&](const lcmloc::ground_truth_t&, int, int64_t) { ++dropped_; });
-  spdlog::info("stopping: {} ground-truth samples in, {}, {} gaps{}", received_, out(), gaps_.gaps(),
-               dropped_ ? ", " + std::to_string(dropped_) + " dropped (time far from the others)" : "");
+  spdlog::info("stopping: {} ground-truth samples in, {}, {} gaps{}{}", received_, out(), gaps_.gaps(),
+               dropped_ ? ", " + std::to_string(dropped_) + " dropped (time far from the others)" : "",
+               bad_truth_ ? ", " + std::to_string(bad_truth_) + " refused (bad ground truth)" : "");
   heartbeat_.publish("stopping");
   return kExitOk;
 }

@@ -8,6 +8,7 @@
 
 #include "lcmloc/core/ruler_model.hpp"
 #include "lcmloc/core/vehicle_model.hpp"
+#include "lcmloc/models/gnss_sensors.hpp"
 #include "lcmloc/models/schedule.hpp"
 #include "lcmloc/models/world.hpp"
 
@@ -335,5 +336,127 @@ TEST(FaultInjector, FiresOnceAtEachDistance) {
     const auto imax = std::max_element(f.reading.readings.begin(), f.reading.readings.end()) -
                       f.reading.readings.begin();
     EXPECT_EQ(imax, std::lround((f.fault.lateral_offset + 0.5) * 12));
+  }
+}
+
+// Corrupt ground truth that gets to a model (the drivers refuse it before, in TruthDriver; the
+// offline runner and a future caller might not): the time arithmetic saturates instead of
+// overflowing, and a sample the model cannot use leaves its state as it was.
+
+TEST(Schedule, ExtremeTimesNeitherOverflowNorLoseTheGrid) {
+  constexpr int64_t kMin = std::numeric_limits<int64_t>::min(), kMax = std::numeric_limits<int64_t>::max();
+  EXPECT_EQ(saturatingAdd(kMax - 5, 100), kMax);
+  EXPECT_EQ(saturatingAdd(kMin + 5, -100), kMin);
+  EXPECT_EQ(saturatingAdd(1000, -100), 900);
+  EXPECT_DOUBLE_EQ(secondsBetween(3000000, 1000000), 2.0);
+  EXPECT_NEAR(secondsBetween(kMax, kMin), 18446744073709.55, 0.01);  // 2^64 us, no overflow
+  EXPECT_NEAR(secondsBetween(kMin, kMax), -18446744073709.55, 0.01);
+
+  // A schedule started at utime INT64_MIN (next = INT64_MIN + period), then a sample at 1e18:
+  // now - next does not fit in int64. The next tick is the first of the grid after now.
+  const int64_t start = kMin + 100, now = 1000000000000000000;
+  int64_t next = start;
+  EXPECT_TRUE(scheduleDue(next, now, 100));
+  EXPECT_GT(next, now);
+  EXPECT_LE(next, now + 100);
+  EXPECT_EQ((static_cast<uint64_t>(next) - static_cast<uint64_t>(start)) % 100, 0u);
+  next = kMin;  // the whole int64 range in one step
+  EXPECT_TRUE(scheduleDue(next, kMax, 1));
+  EXPECT_EQ(next, kMax);
+  EXPECT_TRUE(scheduleDue(next, kMin, 100));  // back to INT64_MIN: restarts there
+  EXPECT_EQ(next, kMin + 100);
+  next = kMax;
+  EXPECT_FALSE(scheduleDue(next, kMax - 50, 100));
+  EXPECT_EQ(next, kMax);
+}
+
+TEST(OdometrySensor, ANonFiniteOrHugeDistanceIsSkippedAndTheIncrementsAfterItAreRight) {
+  OdometrySensorConfig cfg;  // 100 Hz, 1 mm ticks
+  cfg.scale_error = 0.0;
+  cfg.slip_std = 0.0;
+  for (const double bad : {std::nan(""), std::numeric_limits<double>::infinity(), 1e300, -1e300, 1e17}) {
+    OdometrySensor odo(cfg, 2.5, 3);
+    double sum = 0.0;
+    int n = 0;
+    for (int k = 0; k < 200; ++k) {
+      TruthState t = straightTruth(1000000 + 10000 * k, 0.01 * k);
+      if (k == 100) t.distance = bad;
+      const auto s = odo.sample(t);
+      if (k == 100) {
+        EXPECT_FALSE(s.has_value()) << bad;
+        continue;
+      }
+      if (!s) continue;
+      ++n;
+      // 1 cm per truth sample, 2 cm for the one after the skipped sample; NaN made it 9.2e15 m
+      // once and 0 ever after.
+      EXPECT_GE(s->input.delta_s, 0.0) << bad << " k " << k;
+      EXPECT_LE(s->input.delta_s, 0.0211) << bad << " k " << k;
+      if (k > 101) {
+        EXPECT_NEAR(s->input.delta_s, 0.01, 0.0011) << bad << " k " << k;
+      }
+      EXPECT_TRUE(std::isfinite(s->input.delta_theta)) << bad;
+      sum += s->input.delta_s;
+    }
+    EXPECT_EQ(n, 198) << bad;  // every sample but the first and the bad one
+    EXPECT_NEAR(sum, 1.99, cfg.tick_length) << bad;
+  }
+}
+
+TEST(OdometrySensor, ExtremeUtimesNeitherOverflowNorSilenceTheSensor) {
+  constexpr int64_t kMin = std::numeric_limits<int64_t>::min(), kMax = std::numeric_limits<int64_t>::max();
+  for (const int64_t first : {kMax - 5, kMin}) {
+    OdometrySensorConfig cfg;
+    cfg.scale_error = 0.0;
+    cfg.slip_std = 0.0;
+    OdometrySensor odo(cfg, 2.5, 3);
+    EXPECT_FALSE(odo.sample(straightTruth(first, 0.0)).has_value());
+    int n = 0;
+    double sum = 0.0;
+    for (int k = 1; k < 100; ++k)
+      if (auto s = odo.sample(straightTruth(1000000 + 10000 * k, 0.01 * k))) {
+        ++n;
+        sum += s->input.delta_s;
+        EXPECT_EQ(s->input.utime, 1000000 + 10000 * k);
+      }
+    EXPECT_EQ(n, 99) << first;
+    EXPECT_NEAR(sum, 0.99, cfg.tick_length) << first;
+  }
+}
+
+TEST(ImuSensor, ANonFiniteSpeedIsSkippedAndDoesNotPoisonTheSamplesAfterIt) {
+  ImuSensorConfig cfg;  // 100 Hz
+  ImuSensor imu(cfg, 2.5, 5);
+  int n = 0;
+  for (int k = 0; k < 100; ++k) {
+    TruthState t = straightTruth(1000000 + 10000 * k, 0.02 * k);
+    t.speed = k == 50 ? std::nan("") : 2.0;
+    const auto s = imu.sample(t);
+    if (k == 50) {
+      EXPECT_FALSE(s.has_value());
+    }
+    if (!s) continue;
+    ++n;
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_TRUE(std::isfinite(s->accel[i]) && std::isfinite(s->gyro[i]) && std::isfinite(s->mag[i])) << "k " << k;
+      EXPECT_LT(std::abs(s->accel[0]), 1.0) << "k " << k;  // constant speed: noise and bias only
+    }
+  }
+  EXPECT_EQ(n, 98);  // every sample but the first and the NaN one
+}
+
+TEST(FaultInjector, ANaNDistanceFiresNothingAndTheFaultsStillFireAtTheirDistances) {
+  const ScenarioConfig sc;  // faults at 12.9 m and 24.5 m
+  FaultInjector inj(sc.faults, sc.magruler, 9);
+  std::vector<InjectedFault> fired;
+  for (int k = 0; k <= 3000; ++k) {
+    TruthState t = straightTruth(10000 * k, 0.015 * k);
+    if (k == 10) t.distance = std::nan("");  // fired the phantom marker at 0.15 m
+    if (auto f = inj.sample(t)) fired.push_back(*f);
+  }
+  ASSERT_EQ(fired.size(), 2u);
+  for (const auto& f : fired) {
+    EXPECT_GE(f.truth.distance, f.fault.at_distance);
+    EXPECT_LT(f.truth.distance - 0.015, f.fault.at_distance);
   }
 }

@@ -21,7 +21,9 @@ FaultInjector::FaultInjector(std::vector<FaultConfig> faults, const MagRulerConf
 }
 
 std::optional<InjectedFault> FaultInjector::sample(const TruthState& truth) {
-  if (next_ >= faults_.size() || truth.distance < faults_[next_].at_distance) return std::nullopt;
+  // Written so that a NaN distance (corrupt ground truth) fires nothing: `distance < at` is
+  // false for NaN, and the fault went off at once, at the wrong place.
+  if (next_ >= faults_.size() || !(truth.distance >= faults_[next_].at_distance)) return std::nullopt;
   InjectedFault out;
   out.fault = faults_[next_++];
   out.truth = truth;

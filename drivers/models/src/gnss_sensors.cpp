@@ -48,14 +48,17 @@ ImuSample ImuSensor::ideal(const ImuSensorConfig& cfg, double wheelbase, double 
 
 std::optional<ImuSample> ImuSensor::sample(const TruthState& truth) {
   const int64_t period = periodUs(cfg_.rate_hz);
+  // A speed that is not finite (corrupt ground truth that got this far; drivers refuse it in
+  // TruthDriver) would stay in last_speed_ and make every later sample NaN: skipped.
+  if (!std::isfinite(truth.speed)) return std::nullopt;
   if (!started_) {
     started_ = true;
-    next_utime_ = truth.utime + period;
+    next_utime_ = saturatingAdd(truth.utime, period);
     last_utime_ = truth.utime;
     last_speed_ = truth.speed;
     return std::nullopt;
   }
-  const double dt = static_cast<double>(truth.utime - last_utime_) * 1e-6;
+  const double dt = secondsBetween(truth.utime, last_utime_);
   if (!(dt > 0)) return std::nullopt;
   const double a = (truth.speed - last_speed_) / dt;
   last_utime_ = truth.utime;
@@ -96,7 +99,7 @@ std::optional<GpsFixSample> GpsSensor::sample(const TruthState& truth) {
     next_utime_ = truth.utime;
   }
   if (!scheduleDue(next_utime_, truth.utime, period)) return std::nullopt;
-  const double t = static_cast<double>(truth.utime - t0_) * 1e-6;
+  const double t = secondsBetween(truth.utime, t0_);
   GpsFixSample f;
   f.utime = truth.utime;
   f.hdop = cfg_.hdop;

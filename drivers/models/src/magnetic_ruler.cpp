@@ -132,7 +132,7 @@ std::vector<double> MagneticRuler::read(const TruthState& truth) {
   // Common-mode disturbance: first-order Markov process in message time.
   std::normal_distribution<double> normal(0.0, 1.0);
   if (impl_->have_read && cfg_.disturbance_tau > 0.0) {
-    const double dt = 1e-6 * static_cast<double>(truth.utime - impl_->last_read_utime);
+    const double dt = secondsBetween(truth.utime, impl_->last_read_utime);
     const double a = std::exp(-std::max(dt, 0.0) / cfg_.disturbance_tau);
     impl_->disturbance = a * impl_->disturbance +
                          std::sqrt(1.0 - a * a) * cfg_.disturbance_std * normal(rng_);
@@ -187,7 +187,7 @@ std::optional<RulerReading> MagneticRuler::sample(const TruthState& truth) {
   for (std::size_t i = 0; i < residual.size(); ++i) residual[i] = now.readings[i] - st.background[i];
   const double amplitude = rawPeak(residual).amplitude;
   if (!st.tracking && amplitude < 0.5 * cfg_.detection_threshold) {
-    const double dt = 1e-6 * static_cast<double>(truth.utime - st.background_utime);
+    const double dt = secondsBetween(truth.utime, st.background_utime);
     const double w = std::clamp(dt / kBackgroundTau, 0.0, 1.0);
     for (std::size_t i = 0; i < residual.size(); ++i) st.background[i] += w * residual[i];
   }

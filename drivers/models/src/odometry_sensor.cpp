@@ -16,22 +16,32 @@ OdometrySensor::OdometrySensor(const OdometrySensorConfig& cfg, double wheelbase
 }
 
 std::optional<OdometrySample> OdometrySensor::sample(const TruthState& truth) {
+  // A count of ticks an encoder can hold, exactly, as a double as well (2^53).
+  constexpr double kMaxTicks = 9007199254740992.0;
   const auto period_us = static_cast<int64_t>(std::llround(1e6 / cfg_.rate_hz));
   if (!started_) {
+    if (!std::isfinite(truth.distance)) return std::nullopt;
     started_ = true;
-    next_utime_ = truth.utime + period_us;
+    next_utime_ = saturatingAdd(truth.utime, period_us);
     last_true_distance_ = truth.distance;
     return std::nullopt;
   }
   std::normal_distribution<double> normal(0.0, 1.0);
   const double ds_true = truth.distance - last_true_distance_;
+  const double measured = measured_distance_ + ((1.0 + cfg_.scale_error) * ds_true +
+                                                cfg_.slip_std * std::sqrt(std::abs(ds_true)) * normal(rng_));
+  // Quantize the accumulated distance, not the increment: the error never accumulates.
+  const double ticks_now = std::floor(measured / cfg_.tick_length);
+  // A distance the encoder cannot count (not finite, or beyond 2^53 ticks: corrupt ground truth
+  // that got this far) is no step of this encoder: the sample is skipped and the state kept, so
+  // the next valid sample gives the right increment (converting it to int64 would be undefined
+  // behaviour, and a NaN kept in the state would freeze the odometer for good).
+  if (!(std::abs(ticks_now) <= kMaxTicks)) return std::nullopt;
   last_true_distance_ = truth.distance;
-  measured_distance_ += (1.0 + cfg_.scale_error) * ds_true +
-                        cfg_.slip_std * std::sqrt(std::abs(ds_true)) * normal(rng_);
+  measured_distance_ = measured;
   if (!scheduleDue(next_utime_, truth.utime, period_us)) return std::nullopt;
 
-  // Quantize the accumulated distance, not the increment: the error never accumulates.
-  const auto ticks = static_cast<int64_t>(std::floor(measured_distance_ / cfg_.tick_length));
+  const auto ticks = static_cast<int64_t>(ticks_now);
   OdometrySample out;
   out.ticks = ticks - ticks_total_;
   ticks_total_ = ticks;

@@ -64,6 +64,9 @@ struct OdometrySample {
 class OdometrySensor {
  public:
   OdometrySensor(const OdometrySensorConfig& cfg, double wheelbase, uint64_t seed);
+  /// A sample whose distance the encoder cannot count (not finite, or beyond 2^53 ticks) is
+  /// skipped and leaves the state as it was (only the noise generator moved on): the next valid
+  /// sample gives the right increment. Drivers refuse such ground truth before (TruthDriver).
   std::optional<OdometrySample> sample(const TruthState& truth);
  private:
   OdometrySensorConfig cfg_;
