@@ -73,6 +73,13 @@ void Bus::subscribeRaw(const std::string& channel, RawHandler handler) {
 
 int Bus::handle(int timeout_ms) { return lcm_->handleTimeout(timeout_ms); }
 
+bool Bus::drain(int max_ms) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(max_ms);
+  while (handle(0) > 0)
+    if (std::chrono::steady_clock::now() >= until) return false;
+  return true;
+}
+
 void MessageBus::decodeFailed(const std::string& channel, const std::string& why) {
   if (decode_errors_[channel]++ == 0)
     spdlog::warn("{}: {}; further decode errors on this channel are counted, not logged", channel, why);

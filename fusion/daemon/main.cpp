@@ -49,7 +49,7 @@ std::optional<core::FilterState> lastPoseOnBus(common::Bus& bus, const common::S
     hb.tick();
     bus.handle(50);
   }
-  while (bus.handle(0) > 0) {}
+  bus.drain();  // (a flood is taken by the daemon's loop then)
   w->waiting = false;
   if (w->last && !w->stopped)
     spdlog::warn("the daemon that published {} did not report stopped within {:.1f} s: it may still be running",
@@ -133,7 +133,9 @@ int main(int argc, char** argv) {
         last_checkpoint = std::chrono::steady_clock::now();
       }
     }
-    while (bus.handle(0) > 0) {}  // what already arrived is processed too
+    // What already arrived is processed too, for at most a second: a sender flooding the bus must
+    // not keep the daemon from stopping.
+    if (!bus.drain()) spdlog::warn("inputs still arriving after 1 s of stopping: the rest are not processed");
     daemon.shutdown();
     saveCheckpoint();
     hb.publish("stopping");

@@ -1,5 +1,7 @@
 // lcmloc_common: YAML config, conversions, the typed LCM bus over memq://, process helpers.
 #include <gtest/gtest.h>
+
+#include <chrono>
 #include <unistd.h>
 
 #include <cmath>
@@ -396,6 +398,28 @@ TEST(Transport, PublishSubscribeTyped) {
   EXPECT_EQ(got[0].utime, 42);
   EXPECT_EQ(got[1].seq, 2);
   EXPECT_EQ(got[1].delta_s, 0.5);
+}
+
+TEST(Transport, DrainTakesWhatArrivedButStopsUnderAFlood) {
+  // The daemon and the logger drained the bus at a stop with `while (handle(0) > 0)`: a sender
+  // faster than them kept them from stopping (SIGTERM waited for the flood to end).
+  common::Bus bus("memq://");
+  int handled = 0;
+  bool flood = false;
+  lcmloc::odometry_t m{};
+  bus.subscribe<lcmloc::odometry_t>("ODOMETRY", [&](const std::string&, const lcmloc::odometry_t&, int64_t) {
+    ++handled;
+    if (flood) bus.publish("ODOMETRY", m);  // every message handled brings the next
+  });
+  for (int i = 0; i < 5; ++i) ASSERT_TRUE(bus.publish("ODOMETRY", m));
+  EXPECT_TRUE(bus.drain());
+  EXPECT_EQ(handled, 5);
+  flood = true;
+  ASSERT_TRUE(bus.publish("ODOMETRY", m));
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_FALSE(bus.drain(100));
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(5));
+  EXPECT_GT(handled, 6);
 }
 
 TEST(Transport, UndecodablePayloadIsCountedNotFatal) {

@@ -145,7 +145,7 @@ int main(int argc, char** argv) {
     const auto deadline = Clock::now() + std::chrono::duration<double>(timeout);
     if (utime < 0) {
       while (!daemon_seen && Clock::now() < deadline && !common::stopRequested()) bus.handle(50);
-      while (bus.handle(0) > 0) {}
+      bus.drain();
       if (!daemon_seen) {
         spdlog::error("no {} or {} on the bus within {:.1f} s: is lcmloc-fusion running and receiving inputs? "
                       "(or give --utime)", cfg.channels.pose, cfg.channels.status, timeout);

@@ -108,6 +108,10 @@ class Bus : public MessageBus {
   /// Waits up to timeout_ms for messages and dispatches them. >0 handled, 0 timeout, <0 error
   /// (e.g. interrupted by a signal).
   int handle(int timeout_ms);
+  /// Handles what has already arrived, for at most max_ms of wall time (a sender flooding the
+  /// bus must not keep a stopping process from stopping). Returns false when it stopped at that
+  /// limit with messages still coming in.
+  bool drain(int max_ms = 1000);
 
   lcm::LCM& lcm() { return *lcm_; }
 
