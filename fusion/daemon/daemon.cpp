@@ -263,7 +263,7 @@ void FusionDaemon::onControl(const std::string& ch, const lcmloc::fusion_control
         if (!m.filter.empty()) params["type"] = m.filter;
         fc = common::parseFilterConfig(params, fc, ch, "parameters");
       } catch (const std::exception& e) {
-        spdlog::warn("refused switch to '{}': {}", core::printable(m.filter), e.what());
+        spdlog::warn("refused switch to '{}': {}", core::printable(m.filter), core::printable(e.what()));
         publishStatus("refused", std::string("switch to '") + m.filter + "': " + e.what(), m.utime);
         return;
       }

@@ -12,6 +12,7 @@
 #include "lcmloc/core/odometry_batch.hpp"
 #include "lcmloc/core/vehicle_model.hpp"
 #include "lcmloc/core/reorder.hpp"
+#include "lcmloc/core/text.hpp"
 
 using namespace lcmloc::core;
 
@@ -312,6 +313,19 @@ TEST(Engine, AFilterWhoseStateRunsAwayStartsOverInsteadOfPublishingIt) {
   EXPECT_TRUE(out.x.allFinite());
   EXPECT_TRUE(out.P.allFinite());
   EXPECT_EQ(Eigen::VectorXd(out.x.head(3)), cfg.filter.initial_pose);
+}
+
+TEST(Printable, ControlCharactersAndInvalidUtf8BecomeQuestionMarks) {
+  EXPECT_EQ(printable("POSE_A.b-1"), "POSE_A.b-1");
+  EXPECT_EQ(printable("a\nb\x1b[2J\x07\x7f"), "a?b?[2J??");
+  // C1 controls in UTF-8 (U+009B is CSI, ESC [ in one character), kept: text beyond them.
+  EXPECT_EQ(printable("\xc2\x9b" "2J\xc2\x9d" "0;x\xc2\x9c"), "?2J?0;x?");
+  EXPECT_EQ(printable("caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x9a\x97 \xc2\xa0"), "caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x9a\x97 \xc2\xa0");
+  // Not UTF-8: stray continuation and lead bytes, an overlong '/', a surrogate, a cut sequence.
+  EXPECT_EQ(printable("\xff\xfe\x80"), "???");
+  EXPECT_EQ(printable("\xc0\xaf"), "??");
+  EXPECT_EQ(printable("\xed\xa0\x80"), "???");
+  EXPECT_EQ(printable("ok\xe2\x82"), "ok??");
 }
 
 TEST(UnusableState, PositionsAndVariancesBeyondAnyLocalFrameAreRefused) {

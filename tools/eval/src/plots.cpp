@@ -20,7 +20,7 @@
 
 namespace lcmloc::eval {
 
-std::string withoutControlCharacters(std::string text) { return core::printable(std::move(text)); }
+std::string withoutControlCharacters(std::string text) { return core::printable(text); }
 
 std::string gnuplotQuote(const std::string& text) {
   std::string out = "'";

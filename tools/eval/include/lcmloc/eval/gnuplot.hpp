@@ -15,7 +15,7 @@ namespace lcmloc::eval {
 /// backslashes literally.
 std::string gnuplotQuote(const std::string& text);
 
-/// text with every control character (bytes below 0x20 and 0x7f) replaced by '?'.
+/// core::printable(text): every control character (C0, DEL, C1) and invalid UTF-8 byte as '?'.
 std::string withoutControlCharacters(std::string text);
 
 /// True when an executable named exe is in PATH.
