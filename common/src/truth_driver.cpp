@@ -29,6 +29,9 @@ std::string truthProblem(const lcmloc::ground_truth_t& m) {
     if (f.limit > 0 && std::abs(f.value) > f.limit)
       return fmt::format("{} = {:g} {} beyond +-{:g} {}", f.name, f.value, f.unit, f.limit, f.unit);
   }
+  // tan(steering) of the odometry model: a wheel turned by pi/2 or more is no steering angle (a
+  // steering of 1e308 quantized to Inf and gave a NaN heading increment).
+  if (!(std::abs(m.steering) < M_PI / 2)) return fmt::format("steering = {:g} rad at or beyond +-pi/2", m.steering);
   return {};
 }
 

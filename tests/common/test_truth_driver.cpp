@@ -74,8 +74,8 @@ TEST(TruthProblem, AcceptsValidSamplesUpToTheEdgesOfTheRanges) {
   t.y = common::kTruthLengthLimit;
   t.distance = common::kTruthLengthLimit;
   t.speed = -common::kTruthSpeedLimit;
-  t.heading = 100.0;  // angles: finite is enough, the models wrap them
-  t.steering = -7.0;
+  t.heading = 100.0;  // the heading: finite is enough, the models wrap it
+  t.steering = -1.5707;  // just inside -pi/2
   EXPECT_EQ(common::truthProblem(t), "");
 }
 
@@ -102,6 +102,11 @@ TEST(TruthProblem, RefusesNonFiniteFieldsBadUtimesAndValuesNoVehicleReaches) {
     t = truth(5);
     t.utime = u;
     EXPECT_NE(common::truthProblem(t).find("utime"), std::string::npos) << u;
+  }
+  for (const double s : {M_PI / 2, -M_PI / 2, 1e308}) {
+    t = truth(5);
+    t.steering = s;
+    EXPECT_NE(common::truthProblem(t).find("steering = "), std::string::npos) << s;
   }
   for (const double d : {1e300, -1e300, 1.0001e9}) {
     t = truth(5);

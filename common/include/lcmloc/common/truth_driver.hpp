@@ -33,8 +33,8 @@ inline constexpr double kTruthSpeedLimit = 1e5;
 
 /// Why m is not usable ground truth ("" when it is): a non-finite field ("non-finite pose: x =
 /// nan" for x, y, heading; "non-finite speed = inf", ...), utime outside [0, kTruthUtimeLimit),
-/// or |x|, |y|, |distance| > kTruthLengthLimit, |speed| > kTruthSpeedLimit. Angles need only be
-/// finite (the models wrap them). The one rule every sensor driver applies (in TruthDriver).
+/// or |x|, |y|, |distance| > kTruthLengthLimit, |speed| > kTruthSpeedLimit, |steering| >= pi/2.
+/// The heading need only be finite (the models wrap it). The one rule every sensor driver applies (in TruthDriver).
 std::string truthProblem(const lcmloc::ground_truth_t& m);
 
 class TruthDriver {
