@@ -267,6 +267,15 @@ SeqGap SeqTracker::observe(const std::string& key, int64_t seq) {
   SeqGap gap;
   gap.before_seq = seq;
   gap.last_seq = e.last;
+  // The seq `outlier` (after `after`) broke the sequence and this message did not go on from it.
+  auto ignore = [&](int64_t outlier, int64_t after) {
+    gap.ignored = true;
+    gap.ignored_seq = outlier;
+    gap.ignored_after = after;
+    gap.next_seq = seq;
+    ++e.ignored;
+    ++ignored_;
+  };
   if (e.jump_missing > 0) {
     const int64_t counted = e.jump_missing;
     e.jump_missing = 0;
@@ -280,12 +289,7 @@ SeqGap SeqTracker::observe(const std::string& key, int64_t seq) {
       gap.missing = std::max<int64_t>(0, seq - e.before_jump - 2);
       e.gaps += gap.missing;
       total_ += gap.missing;
-      gap.ignored = true;
-      gap.ignored_seq = e.last;
-      gap.ignored_after = e.before_jump;
-      gap.next_seq = seq;
-      ++e.ignored;
-      ++ignored_;
+      ignore(e.last, e.before_jump);
       gap.last_seq = e.before_jump;
       e.last = seq;
       return gap;
@@ -310,12 +314,7 @@ SeqGap SeqTracker::observe(const std::string& key, int64_t seq) {
       return gap;
     }
     // Not confirmed: a lone outlier. The sequence goes on from the last seq taken.
-    gap.ignored = true;
-    gap.ignored_seq = e.candidate;
-    gap.ignored_after = e.last;
-    gap.next_seq = seq;
-    ++e.ignored;
-    ++ignored_;
+    ignore(e.candidate, e.last);
   }
   int64_t step = 0;
   if (__builtin_sub_overflow(seq, e.last, &step) || step < 0 || step - 1 > kMaxUnconfirmedGap) {
