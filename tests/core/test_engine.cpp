@@ -13,6 +13,7 @@
 #include "lcmloc/core/vehicle_model.hpp"
 #include "lcmloc/core/reorder.hpp"
 #include "lcmloc/core/text.hpp"
+#include "lcmloc/core/time_guard.hpp"
 
 using namespace lcmloc::core;
 
@@ -543,19 +544,23 @@ TEST(Engine, AnInputFarInTheFutureIsDroppedInsteadOfMakingEveryLaterInputTooOld)
   EXPECT_EQ(u.counters().too_old, 98);
 }
 
-TEST(Engine, ANewTimeBaseIsTakenAfterThreeInputsInARowWithNothingLost) {
+TEST(Engine, ANewTimeBaseIsTakenAfterInputsSpanningTheConfirmSpanWithNothingLost) {
   const int64_t t0 = 1000000, later = t0 + 3600 * int64_t{1000000};  // e.g. a restarted source
   Recorder r;
   FusionEngine e(engineConfig("dead_reckoning"), {}, r.outputs());
   for (auto& in : odometryRun(50, t0)) e.push(std::move(in));
-  // Two inputs of the new base and one of the old (held, then taken), then the new base.
+  // The inputs of the new base are held until they span kTimeJumpConfirmSpanUs (0.2 s: the
+  // 21st at 100 Hz), then taken with the rest.
   auto after = odometryRun(50, later);
-  e.push(std::move(after[0]));
-  e.push(std::move(after[1]));
+  const std::size_t confirming = kTimeJumpConfirmSpanUs / 10000;
+  for (std::size_t k = 0; k < confirming; ++k) e.push(std::move(after[k]));
   EXPECT_EQ(r.count("time_jump"), 0);
-  e.push(std::move(after[2]));
+  EXPECT_LE(e.counters().processed, 50);  // none of the new base yet
+  e.push(std::move(after[confirming]));
   EXPECT_EQ(r.count("time_jump"), 1);
-  for (std::size_t k = 3; k < after.size(); ++k) e.push(std::move(after[k]));
+  EXPECT_NE(r.events.back().detail.find("confirmed by the inputs of 200 ms in a row"), std::string::npos)
+      << r.events.back().detail;
+  for (std::size_t k = confirming + 1; k < after.size(); ++k) e.push(std::move(after[k]));
   e.flush();
   EXPECT_EQ(e.counters().processed, 100);
   EXPECT_EQ(e.counters().too_new + e.counters().too_old, 0);
@@ -570,6 +575,30 @@ TEST(Engine, ANewTimeBaseIsTakenAfterThreeInputsInARowWithNothingLost) {
   e2.flush();
   EXPECT_EQ(e2.counters().too_new, 1);
   EXPECT_EQ(e2.counters().processed, 10);
+}
+
+TEST(Engine, AFastChannelWithAFaultyClockDoesNotTakeTheTimeBaseOver) {
+  // A channel four times as fast as odometry, its clock an hour ahead for a second: three of its
+  // inputs in a row came before the next odometry and took the time base over; the good odometry
+  // was then refused, and the filters restarted when the clock came back.
+  const int64_t t0 = 1000000, ahead = 3600 * int64_t{1000000};
+  Recorder r;
+  FusionEngine e(engineConfig("dead_reckoning"), {}, r.outputs());
+  int64_t seq = 0;
+  for (int k = 0; k < 300; ++k) {
+    const int64_t t = t0 + 10000 * k;
+    e.push(odoIn(t, k, 0.01));
+    for (int j = 0; j < 4; ++j) {
+      const bool faulty = k >= 100 && k < 200;
+      e.push(rulerIn(t + 2500 * j + (faulty ? ahead : 0), seq++, 0.0));
+    }
+  }
+  e.flush();
+  EXPECT_EQ(r.count("time_jump"), 0);
+  EXPECT_EQ(e.counters().too_new, 400);  // the faulty readings, dropped as outliers
+  EXPECT_EQ(e.counters().too_old, 0);
+  const auto& x = r.last_state.at("dead_reckoning").x;
+  EXPECT_NEAR(std::hypot(x[0], x[1]), 3.0, 1e-9);  // every odometry increment taken
 }
 
 namespace {
@@ -673,7 +702,7 @@ TEST(Engine, InputsFarInThePastAreDroppedAsTooOldUnlessThreeInARowStartANewTimeB
             std::string::npos)
       << r.events[0].detail;
   // A first input with a corrupt utime far in the future: the run that follows restarts the
-  // filters after three inputs and then gives the clean run's states.
+  // filters after the confirm span and then gives the clean run's states.
   StateTrace after;
   FusionEngine f(engineConfig("dead_reckoning"), {}, after.outputs());
   f.push(odoIn(int64_t{1} << 60, 99, 0.5));

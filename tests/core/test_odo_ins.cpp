@@ -254,7 +254,7 @@ TEST(OdoInsFilter, ImuDropoutCoastsOnOdometryAndIsReported) {
 
 TEST(OdoInsFilter, ATimeJumpOfHoursIsNotBridgedStepByStep) {
   // Driving north at 10 m/s, then every input jumps 3 hours ahead (a clock set from relative to
-  // absolute time, or corrupt stamps the time-jump guard takes after three in a row). Bridging
+  // absolute time, or corrupt stamps the time-jump guard takes once they go on for 0.2 s). Bridging
   // such a gap in 20 ms steps took CPU time in proportion (hours for years; SIGTERM waited). The
   // INS now moves its time across the gap with the state held and takes the speed from the next
   // odometer increment: the pose stays where it was and the drive goes on at 10 m/s.

@@ -106,7 +106,7 @@ struct FusionEngine::Impl {
   /// second run gives what the first gave.
   void newTimeBase(int side, const EngineInput& first, int64_t newest) {
     const std::string at = first.channel + " seq " + std::to_string(first.seq) + ": ";
-    const std::string n = std::to_string(kTimeJumpConfirm) + " inputs in a row";
+    const std::string n = "confirmed by the inputs of " + std::to_string(guard.confirmSpan() / 1000) + " ms in a row";
     if (side > 0) {
       event("time_jump",
             at + "new time base: utime " + std::to_string(first.utime) + " after " + std::to_string(newest) + ", " + n,

@@ -5,7 +5,7 @@
 // sensor model sees it (truthProblem: a non-finite field, a utime outside [0, 2^62) us or a value
 // no vehicle reaches is refused, counted as "bad_truth" and warned about, first 5 then 1 in 1000);
 // its message time guarded (core::TimeBaseGuard with fusion.max_time_jump: a truth sample far
-// from the others is dropped unless three in a row confirm a new time base; one in the past is a
+// from the others is dropped unless those in a row (three or more, over 0.2 s) confirm a new time base; one in the past is a
 // simulator that started over, and the driver's model starts over with it, so the second run
 // gives what the first gave); a heartbeat with "received", "published", "gaps", "dropped",
 // "bad_truth", "decode_errors" and the driver's own counters; the loop until SIGINT/SIGTERM; a

@@ -3,14 +3,22 @@
 // (a corrupt utime: dropped), or jumped for good (a new time base: a source that resumed after a
 // pause, or one that started over, such as a restarted simulator or a log played again). Used by
 // the fusion engine and by the sensor drivers' GROUND_TRUTH input. Middleware free.
+#include <algorithm>
 #include <cstdint>
 #include <utility>
 #include <vector>
 
 namespace lcmloc::core {
 
-/// Consecutive inputs beyond the guard that confirm a new time base.
+/// Consecutive inputs beyond the guard that confirm a new time base (at least; see
+/// kTimeJumpConfirmSpanUs).
 inline constexpr int kTimeJumpConfirm = 3;
+/// [us] Message time the consecutive inputs of a new time base must span, too (at most half the
+/// guard's max_jump): a count alone let one fast channel with a faulty clock take the time base
+/// over, three of its inputs coming before the next of a slower channel (an IMU at 400 Hz with
+/// its clock 1e12 us ahead, before the next 100 Hz ODOMETRY); the other channels' inputs on the
+/// old time base, inside the span, drop such outliers.
+inline constexpr int64_t kTimeJumpConfirmSpanUs = 200000;
 
 /// a - b > limit (limit >= 0), also where a - b does not fit in 64 bits (corrupt utimes).
 inline bool apartBy(int64_t a, int64_t b, int64_t limit) {
@@ -26,15 +34,17 @@ inline int64_t secondsApart(int64_t a, int64_t b) {
 }
 
 /// An input whose time is more than max_jump_us ahead of, or behind, the newest time taken so
-/// far is held. kTimeJumpConfirm consecutive held inputs on the same side, within max_jump_us of
-/// each other, confirm a new time base; an input of the old time base drops the held ones as
-/// outliers. max_jump_us <= 0: off (every input is taken).
+/// far is held. Consecutive held inputs on the same side, within max_jump_us of each other, confirm
+/// a new time base once they are kTimeJumpConfirm or more and span kTimeJumpConfirmSpanUs (or
+/// max_jump_us / 2, the smaller) of message time; an input of the old time base drops the held
+/// ones as outliers. max_jump_us <= 0: off (every input is taken).
 template <typename T>
 class TimeBaseGuard {
  public:
   enum Side { kBack = -1, kAhead = 1 };
 
-  explicit TimeBaseGuard(int64_t max_jump_us) : max_jump_(max_jump_us) {}
+  explicit TimeBaseGuard(int64_t max_jump_us)
+      : max_jump_(max_jump_us), confirm_span_(std::min(kTimeJumpConfirmSpanUs, max_jump_us / 2)) {}
 
   /// Offers an input with message time utime. Calls, in this order: drop(held, side, newest) for
   /// each held input that turned out an outlier; confirm(side, first, newest) when this input
@@ -58,6 +68,8 @@ class TimeBaseGuard {
     side_ = static_cast<Side>(side);
     held_.push_back(std::move(in));
     if (static_cast<int>(held_.size()) < kTimeJumpConfirm) return true;
+    // (within max_jump_ of the first held one, checked above: no overflow)
+    if ((utime > held_utime_ ? utime - held_utime_ : held_utime_ - utime) < confirm_span_) return true;
     std::vector<T> confirmed = std::move(held_);
     held_.clear();
     confirm(side_, static_cast<const T&>(confirmed.front()), newest_);
@@ -76,6 +88,8 @@ class TimeBaseGuard {
   void flush(Drop&& drop) {
     dropHeld(drop);
   }
+  /// [us] Message time the inputs confirming a new time base span at least.
+  int64_t confirmSpan() const { return confirm_span_; }
   /// Newest message time taken (INT64_MIN: none yet, or time started over).
   int64_t newest() const { return newest_; }
 
@@ -87,6 +101,7 @@ class TimeBaseGuard {
   }
 
   int64_t max_jump_;
+  int64_t confirm_span_;  ///< kTimeJumpConfirmSpanUs, at most max_jump_ / 2
   int64_t newest_ = INT64_MIN;
   std::vector<T> held_;
   int64_t held_utime_ = 0;  ///< message time of the first held input
