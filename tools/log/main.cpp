@@ -22,7 +22,7 @@
 
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/process.hpp"
-#include "lcmloc/eval/gnuplot.hpp"
+#include "lcmloc/core/text.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/logger/event_file.hpp"
 #include "lcmloc/logger/types.hpp"
@@ -59,9 +59,6 @@ void reportDamage(const eval::ScanSummary& s, const std::string& path, std::ostr
     if (os) *os << line << "\n";
   }
 }
-
-/// A channel name from the log as the terminal shows it: control characters become '?'.
-std::string shown(const std::string& name) { return eval::withoutControlCharacters(name); }
 
 std::string fingerprintHex(int64_t h) { return fmt::format("0x{:016x}", static_cast<uint64_t>(h)); }
 
@@ -137,7 +134,7 @@ int info(const std::string& path) {
     auto undecodableEvent = [&](const std::string& why) {
       ++c.undecodable;
       if (++undecodable <= 10)
-        bad.push_back(fmt::format("undecodable {} event at byte {} (event {}): {} bytes, {}", shown(*ev.channel), ev.offset,
+        bad.push_back(fmt::format("undecodable {} event at byte {} (event {}): {} bytes, {}", core::printable(*ev.channel), ev.offset,
                                   ev.index, ev.size, why));
     };
     if (noFingerprint(ev)) return undecodableEvent("shorter than a fingerprint");  // not a type of its own
@@ -171,7 +168,7 @@ int info(const std::string& path) {
     if (c.types.size() > 1) type = "mixed (" + std::to_string(c.types.size()) + " types)";
     const double span = spanSeconds(c.first, c.last);
     const std::string rate = (c.count > 1 && span > 0) ? fmt::format("{:.2f}", (c.count - 1) / span) : "-";
-    std::cout << fmt::format("{:<24} {:<28} {:>9} {:>10} {:>12} {:>9} {:>11}\n", shown(name), type, c.count, rate, c.bytes,
+    std::cout << fmt::format("{:<24} {:<28} {:>9} {:>10} {:>12} {:>9} {:>11}\n", core::printable(name), type, c.count, rate, c.bytes,
                              c.gaps, c.undecodable);
   }
   std::cout << fmt::format("total: {} events, {} sequence gaps, {} undecodable\n", s.events_read, seqs.gaps(),
@@ -246,8 +243,8 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
     columns[*ev.channel].merge(fields);
   });
   for (const auto& [ch, n] : unknown)
-    spdlog::warn("{}: {} event(s) of a type this tool does not know, not exported", shown(ch), n);
-  for (const auto& [ch, n] : undecodable) spdlog::warn("{}: {} undecodable event(s) skipped", shown(ch), n);
+    spdlog::warn("{}: {} event(s) of a type this tool does not know, not exported", core::printable(ch), n);
+  for (const auto& [ch, n] : undecodable) spdlog::warn("{}: {} undecodable event(s) skipped", core::printable(ch), n);
   reportDamage(s, path, nullptr);
   if (columns.empty()) {
     if (channel_regexes.empty())
@@ -260,7 +257,7 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
     if (cols.size() > kMaxColumns)
       throw std::runtime_error(fmt::format(
           "{}: more than {} columns (widest message: {} fields): too wide for a CSV, nothing written; select the "
-          "other channels with -c", shown(ch), kMaxColumns, cols.widest));
+          "other channels with -c", core::printable(ch), kMaxColumns, cols.widest));
     cols.finish();
   }
   const bool to_dir = columns.size() > 1;
@@ -317,7 +314,7 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
     ++rows[*ev.channel];
   });
   for (const auto& [ch, n] : rows)
-    spdlog::info("{}: {} rows, {} columns{}", shown(ch), n, columns[ch].names.size() + 1,
+    spdlog::info("{}: {} rows, {} columns{}", core::printable(ch), n, columns[ch].names.size() + 1,
                  to_dir ? " -> " + paths.at(ch)
                         : (to_stdout ? "" : " -> " + output));
   for (auto& [ch, f] : files) {

@@ -359,11 +359,8 @@ struct FusionEngine::Impl {
     fix.pose = c.pose;
     fix.cov = c.stddev.array().square().matrix().asDiagonal();
     fix.source = "set_pose";
-    FilterState as_state;
-    as_state.x = fix.pose;
-    as_state.P = fix.cov;
     if (!(c.stddev.array() > 0).all()) return event("refused", "set_pose: stddev must be > 0", utime);
-    if (const std::string why = unusableState(as_state); !why.empty())
+    if (const std::string why = detail::fixProblem(fix); !why.empty())
       return event("refused", "set_pose: " + why + " (pose and stddev must be finite, stddev > 0)", utime);
     std::string not_taken;
     forEachFilter([&](Filter& f, bool is_active) {

@@ -28,14 +28,15 @@ std::unique_ptr<Filter> makeLandmarkFilter(const FilterConfig& cfg, const Marker
 /// travel plus pw_turn |dtheta| on the heading.
 Vec3 poseProcessNoise(const FilterConfig& c, double ds, double dtheta);
 
-/// Can this fix be applied: finite, with a symmetric positive semi-definite covariance whose
-/// variances are > 0 (unusableState of the pose with it).
-inline bool usableFix(const PoseFix& fix) {
+/// Why this fix cannot be applied ("" when it can): unusableState of the pose with its
+/// (symmetrized) covariance.
+inline std::string fixProblem(const PoseFix& fix) {
   FilterState s;
   s.x = fix.pose;
   s.P = 0.5 * (fix.cov + fix.cov.transpose());
-  return unusableState(s).empty();
+  return unusableState(s);
 }
+inline bool usableFix(const PoseFix& fix) { return fixProblem(fix).empty(); }
 
 /// A gate decision for measurement `seq` of `sensor` at utime, with the gate's threshold;
 /// not accepted, no reason yet (the filter fills in the rest).
