@@ -31,8 +31,10 @@ class ReorderBuffer {
   bool push(const OrderKey& key, const T& item) { return push(key, T(item)); }
   bool push(const OrderKey& key, T&& item) {
     if (released_any_ && !(last_released_ < key)) return false;
+    // Before either insert: one out of order (at equal utimes from two sources) that found the
+    // storage full would otherwise grow it with the released items still in it, for good.
+    compact();
     if (empty() || items_.back().first < key) {  // the usual case: in order
-      compact();
       items_.emplace_back(key, std::move(item));
     } else {
       const auto it = lowerBound(key);
