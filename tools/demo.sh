@@ -52,12 +52,22 @@ export LCM_DEFAULT_URL="${LCM_DEFAULT_URL:-udpm://239.255.76.67:7667?ttl=0&recv_
 mkdir -p "$out"
 log="$out/run.lcmlog"
 rm -f "$log"
-# The run's scenario: config/paper.yaml with this run's real-time factor and log file.
+# The run's scenario: config/paper.yaml with this run's real-time factor and log file. The
+# fusion's reorder window is message time: at X times real time it is X times shorter in wall
+# time, so it is scaled by X (X > 1) to keep the same margin for late UDP deliveries. Offline
+# replay of the log uses the same scenario, so both order the inputs alike.
 scenario="$out/scenario.yaml"
+base_window=$(sed -n 's|^  reorder_window: *\([0-9.eE+-]*\).*|\1|p' "$LCMLOC_ROOT/config/paper.yaml")
+if ! window=$(awk -v w="$base_window" -v f="$factor" \
+  'BEGIN { if (w !~ /^[0-9.eE+-]+$/ || f !~ /^[0-9.eE+-]+$/) exit 1; printf "%g", (f > 1 ? w * f : w) }'); then
+  lcmloc_log "--factor must be a number (got '$factor'); config/paper.yaml needs fusion.reorder_window"
+  exit 2
+fi
 sed -e "s|^\(  realtime_factor:\)[^#]*|\1 $factor   |" -e "s|^\(  output:\)[^#]*|\1 $log   |" \
-  "$LCMLOC_ROOT/config/paper.yaml" > "$scenario"
-if [[ $(grep -c -e "^  realtime_factor: $factor " -e "^  output: $log " "$scenario") -ne 2 ]]; then
-  lcmloc_log "could not set realtime_factor and logger output in $scenario"
+  -e "s|^\(  reorder_window:\)[^#]*|\1 $window   |" "$LCMLOC_ROOT/config/paper.yaml" > "$scenario"
+if [[ $(grep -c -e "^  realtime_factor: $factor " -e "^  output: $log " -e "^  reorder_window: $window " \
+  "$scenario") -ne 3 ]]; then
+  lcmloc_log "could not set realtime_factor, reorder_window and logger output in $scenario"
   exit 1
 fi
 
