@@ -212,6 +212,50 @@ TEST(MagneticRuler, DipoleFieldAgainstHandValues) {
   EXPECT_DOUBLE_EQ(ruler.sensorLateral(12), 0.5);
 }
 
+TEST(MagneticRuler, FieldOfALongRouteIsTheSumOverEveryMarkerInReach) {
+  // The ruler looks markers up in a grid; the field must be exactly what a scan of the whole map
+  // in map order gives: markers in clusters (within reach of each other across cell borders),
+  // on cell borders, far away (negative coordinates too), one listed twice, and non-finite ones.
+  MagRulerConfig cfg;
+  const double dz = cfg.height + cfg.marker_depth;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> far(-5000.0, 5000.0), near(-4.0, 4.0);
+  core::MarkerMap map;
+  for (int i = 0; i < 2000; ++i) {
+    const double cx = far(rng), cy = far(rng);
+    for (int j = 0; j < 4; ++j) map.push_back(core::Marker{static_cast<int>(map.size()), cx + near(rng), cy + near(rng)});
+  }
+  for (double b : {-6.0, -3.0, 0.0, 3.0, 6.0}) map.push_back(core::Marker{static_cast<int>(map.size()), b, 0.5 * b});
+  map.push_back(map[7]);
+  map.push_back(core::Marker{static_cast<int>(map.size()), std::numeric_limits<double>::quiet_NaN(), 0.0});
+  map.push_back(core::Marker{static_cast<int>(map.size()), std::numeric_limits<double>::infinity(), 1.0});
+  MagneticRuler ruler(cfg, map, 1);
+  auto scan = [&](double x, double y) {
+    double b = cfg.earth_field_z;
+    for (const auto& m : map) {
+      const double rho = std::hypot(x - m.x, y - m.y);
+      if (rho < 3.0) b += dipoleVerticalField(cfg.dipole_moment, rho, dz);
+    }
+    return b;
+  };
+  int with_markers = 0;
+  for (int i = 0; i < 6000; ++i) {
+    // Half of the points next to a marker, the rest anywhere (mostly in empty road).
+    const auto& m = map[static_cast<std::size_t>(i) % 8000];
+    const double x = i % 2 ? m.x + near(rng) : far(rng), y = i % 2 ? m.y + near(rng) : far(rng);
+    const double want = scan(x, y);
+    with_markers += want != cfg.earth_field_z;
+    ASSERT_EQ(ruler.fieldAt(x, y), want) << "at (" << x << ", " << y << ")";
+  }
+  EXPECT_GT(with_markers, 1500);  // most of the points near markers do see them
+  for (double b : {-6.0, -3.0, 0.0, 3.0, 6.0}) {
+    for (double d : {-2.9, -1.0, -1e-9, 0.0, 1e-9, 1.0, 2.9}) EXPECT_EQ(ruler.fieldAt(b + d, 0.5 * b), scan(b + d, 0.5 * b));
+  }
+  EXPECT_EQ(ruler.fieldAt(map[7].x, map[7].y), scan(map[7].x, map[7].y));  // the marker listed twice counts twice
+  EXPECT_EQ(ruler.fieldAt(std::numeric_limits<double>::quiet_NaN(), 0.0), cfg.earth_field_z);
+  EXPECT_EQ(ruler.fieldAt(1e300, -1e300), cfg.earth_field_z);
+}
+
 TEST(MagneticRuler, PeakMappingAccuracyAcrossWidth) {
   MagRulerConfig cfg;
   MagneticRuler ruler(cfg, {core::Marker{0, 0.0, 0.0}}, 11);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
+#include <unordered_map>
 
 #include "lcmloc/models/world.hpp"
 #include "lcmloc/models/schedule.hpp"
@@ -88,6 +89,19 @@ struct MagneticRuler::Impl {
   RulerReading best;
   int64_t next_raw_utime = 0;
   bool raw_started = false;
+
+  // Markers by cell of a kCullDistance grid: a point's field needs only the markers of its own
+  // and the eight neighbouring cells, so a read costs the same on a route of any length (a
+  // linear scan of 20,000 markers for each of 13 sensors at 100 Hz took a whole core).
+  // Keys may collide (cells far apart, or beyond the clamp): that only adds candidates, which the
+  // distance test drops, and a marker found twice is taken once.
+  std::unordered_map<uint64_t, std::vector<std::size_t>> cells;
+  static int64_t cellOf(double v) {
+    return static_cast<int64_t>(std::clamp(std::floor(v / kCullDistance), -1e15, 1e15));
+  }
+  static uint64_t key(int64_t ix, int64_t iy) {
+    return static_cast<uint64_t>(ix) * 0x9E3779B97F4A7C15ull ^ static_cast<uint64_t>(iy);
+  }
 };
 
 MagneticRuler::MagneticRuler(const MagRulerConfig& cfg, const core::MarkerMap& markers,
@@ -114,6 +128,11 @@ MagneticRuler::MagneticRuler(const MagRulerConfig& cfg, const core::MarkerMap& m
   impl_->nominal_peak = rawPeak(singleMarkerReadings(cfg_, 0.0, 0.0)).amplitude;
   std::normal_distribution<double> gain(1.0, cfg_.gain_std);
   for (int i = 0; i < cfg_.num_sensors; ++i) impl_->gains.push_back(gain(rng_));
+  for (std::size_t k = 0; k < markers_.size(); ++k) {
+    const auto& m = markers_[k];
+    if (!std::isfinite(m.x) || !std::isfinite(m.y)) continue;  // no field anywhere (hypot is NaN or Inf)
+    impl_->cells[Impl::key(Impl::cellOf(m.x), Impl::cellOf(m.y))].push_back(k);
+  }
 }
 
 double MagneticRuler::sensorLateral(int i) const { return sensorLateralOf(cfg_, i); }
@@ -121,7 +140,19 @@ double MagneticRuler::sensorLateral(int i) const { return sensorLateralOf(cfg_, 
 double MagneticRuler::fieldAt(double x, double y) const {
   const double dz = cfg_.height + cfg_.marker_depth;
   double b = cfg_.earth_field_z;
-  for (const auto& m : markers_) {
+  if (!std::isfinite(x) || !std::isfinite(y)) return b;
+  // The markers within reach, summed in map order (as a scan of the whole map would).
+  thread_local std::vector<std::size_t> near;
+  near.clear();
+  const int64_t ix = Impl::cellOf(x), iy = Impl::cellOf(y);
+  for (int64_t dx = -1; dx <= 1; ++dx)
+    for (int64_t dy = -1; dy <= 1; ++dy)
+      if (const auto it = impl_->cells.find(Impl::key(ix + dx, iy + dy)); it != impl_->cells.end())
+        near.insert(near.end(), it->second.begin(), it->second.end());
+  std::sort(near.begin(), near.end());
+  near.erase(std::unique(near.begin(), near.end()), near.end());
+  for (const std::size_t k : near) {
+    const auto& m = markers_[k];
     const double rho = std::hypot(x - m.x, y - m.y);
     if (rho < kCullDistance) b += dipoleVerticalField(cfg_.dipole_moment, rho, dz);
   }
