@@ -123,7 +123,8 @@ TEST(PaperScenario, ValidMarkersRejectedAtMostAtTheGateRate) {
   double maha_sum = 0.0;
   for (uint64_t seed = 1; seed <= 50; ++seed) {
     sc.seed = seed;
-    const auto& r = runScenario(sc, filters).filters[0];
+    const auto result = runScenario(sc, filters);  // (a reference into the temporary would dangle)
+    const auto& r = result.filters[0];
     EXPECT_EQ(r.faults_total, 0);
     EXPECT_EQ(r.decisions.size(), 20u) << "seed " << seed;
     decisions += static_cast<int>(r.decisions.size());
