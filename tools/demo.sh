@@ -12,7 +12,8 @@ usage() {
   cat << 'USAGE'
 usage: tools/demo.sh [--fast] [--factor X] [--out DIR] [--no-build]
   --fast        run the simulation 10x faster than real time (default: 1.0, live pace)
-  --factor X    real-time factor X (1.0 = live, 10 = ten times faster)
+  --factor X    real-time factor X (1.0 = live, 10 = ten times faster; X > 1 also
+                scales fusion.reorder_window by X, a window of message time)
   --out DIR     output directory (default: out/demo)
   --no-build    skip package installation and build (use what is in build/)
 Environment: LCMLOC_BUILD_DIR (default build/), LCM_DEFAULT_URL (default
