@@ -547,6 +547,11 @@ TEST_F(EvaluateTest, BadInputsGiveClearErrors) {
   EXPECT_NE(output_.find("no estimate lies inside the ground truth"), std::string::npos) << output_;
   // Bad options.
   EXPECT_EQ(evaluate(file("apart.lcmlog") + out + " --datum 95,0"), 2);
+  EXPECT_EQ(evaluate(file("apart.lcmlog") + out + " --datum -33.9"), 2);
+  EXPECT_NE(output_.find("--datum needs LAT,LON or LAT,LON,ALT"), std::string::npos) << output_;
+  EXPECT_EQ(evaluate(file("apart.lcmlog") + out + " --datum 1,2,3,4"), 2);
+  EXPECT_EQ(evaluate("--help"), 0);
+  EXPECT_NE(output_.find("--datum LAT,LON[,ALT] "), std::string::npos) << output_;
   EXPECT_EQ(evaluate(file("apart.lcmlog") + out + " --config " + file("missing.yaml")), 2);
   // The estimates' channel as the truth: said so (it said "no estimates on POSE" though the log
   // lists POSE), for --all-poses a shadow's channel too.

@@ -67,7 +67,9 @@ int main(int argc, char** argv) {
   auto* o_gate = app.add_option("--gate-channel", lo.gate_channel, "channel of the gate decisions (gate_decision_t)")
                      ->capture_default_str();
   app.add_option("--datum", datum, "LAT,LON[,ALT]: origin of the local frame for gps_fix_t truth [deg, deg, m]")
-      ->delimiter(',')->expected(2, 3);
+      ->delimiter(',')
+      ->expected(1, 3)  // 2 or 3, checked below (a minimum above 1 would print "x 2" in --help)
+      ->type_name("LAT,LON[,ALT]");
   app.add_option("-o,--out", out_dir, "output directory for report.json and figures")->capture_default_str();
   app.add_option("--tum-dir", tum_dir, "write estimate.tum (estimate_<CHANNEL>.tum for POSE_*) and truth.tum here");
   app.add_flag("--export-only", export_only, "only export TUM files (--tum-dir): no truth needed, no scoring");
@@ -89,6 +91,10 @@ int main(int argc, char** argv) {
   return common::runProcess(app, argc, argv, opts, "lcmloc-evaluate", [&] {
     if (export_only && tum_dir.empty()) {
       spdlog::error("--export-only needs --tum-dir DIR");
+      return kExitBadConfig;
+    }
+    if (datum.size() == 1) {
+      spdlog::error("--datum needs LAT,LON or LAT,LON,ALT (got one number)");
       return kExitBadConfig;
     }
     try {
