@@ -66,7 +66,7 @@ void parsePath(KeyReader& root, models::PathConfig& p) {
 
 void parseMarkers(KeyReader& root, models::MarkerLayout& m) {
   KeyReader r(root.child("markers"), root.file(), "markers");
-  r.get("count", m.count, 0, 100000);
+  r.get("count", m.count, static_cast<int>(kMarkerCount.lo), static_cast<int>(kMarkerCount.hi));
   r.get("spacing", m.spacing, 1e-3, 1e6);
   r.get("first_at", m.first_at, 0.0, 1e6);
   r.finish();

@@ -68,6 +68,20 @@ TEST(Path, MarkerMapAtArcLengths) {
   EXPECT_NEAR(std::hypot(map[1].x - map[0].x, map[1].y - map[0].y), 2.0, 1e-12);
 }
 
+TEST(Path, RespacedMarkersCoverTheSameStretch) {
+  const MarkerLayout paper;  // 20 markers 2 m apart from 2 m: the last at 40 m
+  MarkerLayout m = respaced(paper, 5.0);
+  EXPECT_EQ(m.count, 8);  // 2 .. 37 m: none beyond the old last marker
+  EXPECT_EQ(m.spacing, 5.0);
+  EXPECT_EQ(m.first_at, 2.0);
+  EXPECT_EQ(respaced(paper, 1.0).count, 39);  // 2 .. 40 m
+  // 0.3 / 0.1 is 2.9999999999999996 in doubles: still four markers, the last on the old last one
+  EXPECT_EQ(respaced(MarkerLayout{2, 0.3, 2.0}, 0.1).count, 4);
+  EXPECT_EQ(respaced(paper, 100.0).count, 1);   // wider than the stretch: the first marker only
+  EXPECT_EQ(respaced(MarkerLayout{1, 2.0, 3.0}, 4.0).count, 1);
+  EXPECT_EQ(respaced(MarkerLayout{0, 2.0, 3.0}, 4.0).count, 0);  // no markers stay none
+}
+
 TEST(Seeds, ComponentSeedsAreStableAndDistinct) {
   EXPECT_EQ(componentSeed(1, "vehicle"), componentSeed(1, "vehicle"));
   EXPECT_NE(componentSeed(1, "vehicle"), componentSeed(1, "odometry"));

@@ -17,6 +17,7 @@
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/convert.hpp"
 #include "lcmloc/landmark_experiment/experiment.hpp"
+#include "run_command.hpp"
 #include "test_log_writer.hpp"
 
 using namespace lcmloc;
@@ -35,13 +36,7 @@ const CaseResult& get(const Result& r, const std::string& name) {
 }
 /// Runs lcmloc-landmark-experiment with args (shell words), output to dir/out.txt; (exit code, output).
 std::pair<int, std::string> runExperimentCommand(const std::string& args, const std::filesystem::path& dir) {
-  const std::string cmd = std::string(LCMLOC_LANDMARK_EXPERIMENT_BIN) + " " + args + " > '" +
-                          (dir / "out.txt").string() + "' 2>&1";
-  const int st = std::system(cmd.c_str());
-  std::ifstream in(dir / "out.txt");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, ss.str()};
+  return runCommand(LCMLOC_LANDMARK_EXPERIMENT_BIN, args, dir);
 }
 Result smallRun(uint64_t seed) {
   const auto cfg = common::loadSystemConfig(LCMLOC_LANDMARK_YAML);

@@ -1,6 +1,7 @@
 // lcmloc-montecarlo: runs the scenario N times (seed = base + i) in process with each requested
 // filter and writes per-filter lock-out rate, RMSE median / p95, faults and valid markers
-// rejected to a JSON report.
+// rejected to a JSON report. --marker-spacing and --pw-diag vary the marker layout and the process
+// noise without editing the configuration.
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -26,6 +27,8 @@ struct Options {
   double scale_error = 0.01;
   double steering_bias_deg = 0.5;
   bool no_faults = false;
+  double marker_spacing = 0.0;  // > 0: markers every this many metres over the configured span
+  std::vector<double> pw_diag;   // 3 values: replaces fusion.filter.pw_diag
   std::string filters = "ukf_gated,ukf_calib";
   std::string out = "out/montecarlo/report.json";
 };
@@ -60,7 +63,7 @@ nlohmann::json summary(const std::vector<double>& v) {
           {"max", v.empty() ? NAN : *std::max_element(v.begin(), v.end())}};
 }
 
-nlohmann::json report(const Options& o, const lcmloc::models::ScenarioConfig& sc, int runs_done,
+nlohmann::json report(const Options& o, const lcmloc::models::ScenarioConfig& sc, const Eigen::Vector3d& pw, int runs_done,
                       uint64_t base, const std::vector<std::string>& names,
                       const std::vector<FilterStats>& stats) {
   nlohmann::json j;
@@ -72,6 +75,8 @@ nlohmann::json report(const Options& o, const lcmloc::models::ScenarioConfig& sc
   j["scale_error"] = sc.odometry.scale_error;
   j["steering_bias_rad"] = sc.odometry.steering_bias;
   j["faults_per_run"] = sc.faults.size();
+  j["markers"] = {{"count", sc.markers.count}, {"spacing_m", sc.markers.spacing}};
+  j["pw_diag"] = {pw[0], pw[1], pw[2]};
   for (std::size_t i = 0; i < names.size(); ++i) {
     const FilterStats& s = stats[i];
     j["filters"][names[i]] = {
@@ -102,6 +107,14 @@ int run(const Options& o) {
   sc.odometry.scale_error = o.scale_error;
   sc.odometry.steering_bias = o.steering_bias_deg * M_PI / 180.0;
   if (o.no_faults) sc.faults.clear();
+  if (o.marker_spacing > 0) {
+    sc.markers = lcmloc::models::respaced(sc.markers, o.marker_spacing);
+    if (sc.markers.count > lcmloc::common::kMarkerCount.hi)
+      throw ConfigError("--marker-spacing", "marker_spacing",
+                        fmt::format("{} markers {} m apart: more than markers.count allows ({})", sc.markers.count,
+                                    o.marker_spacing, lcmloc::common::kMarkerCount.hi));
+  }
+  if (!o.pw_diag.empty()) base_filter.pw_diag = Eigen::Vector3d(o.pw_diag[0], o.pw_diag[1], o.pw_diag[2]);
 
   const auto names = splitList(o.filters);
   if (names.empty()) throw ConfigError("--filters", "filters", "no filter given");
@@ -115,9 +128,11 @@ int run(const Options& o) {
     filters.push_back(f);
   }
   const uint64_t base = o.seed_base >= 0 ? static_cast<uint64_t>(o.seed_base) : sc.seed;
-  spdlog::info("{} runs of '{}' (seeds {}..{}), scale error {}, steering bias {} rad, filters {}",
-               o.runs, sc.name, base, base + o.runs - 1, sc.odometry.scale_error,
-               sc.odometry.steering_bias, o.filters);
+  spdlog::info("{} runs of '{}' (seeds {}..{}), scale error {}, steering bias {} rad, {} markers {} m apart, "
+               "Pw ({}, {}, {}), filters {}",
+               o.runs, sc.name, base, base + o.runs - 1, sc.odometry.scale_error, sc.odometry.steering_bias,
+               sc.markers.count, sc.markers.spacing, base_filter.pw_diag[0], base_filter.pw_diag[1],
+               base_filter.pw_diag[2], o.filters);
 
   std::vector<FilterStats> stats(names.size());
   int done = 0, next_progress = 1;
@@ -148,7 +163,7 @@ int run(const Options& o) {
   }
   if (done < o.runs) spdlog::warn("stopped after {} of {} runs", done, o.runs);
 
-  const auto j = report(o, sc, done, base, names, stats);
+  const auto j = report(o, sc, base_filter.pw_diag, done, base, names, stats);
   const std::filesystem::path out(o.out);
   if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
   std::ofstream f(out);
@@ -181,6 +196,15 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(lcmloc::common::kOdometrySteeringBias.lo * 180.0 / M_PI,
                                 lcmloc::common::kOdometrySteeringBias.hi * 180.0 / M_PI));
   app.add_flag("--no-faults", o.no_faults, "run without the configured fault markers");
+  app.add_option("--marker-spacing", o.marker_spacing,
+                 "markers this many metres apart over the stretch the configured markers cover (default: as configured) [m]")
+      ->check(lcmloc::common::positive());
+  app.add_option("--pw-diag", o.pw_diag,
+                 "process noise Pw of the filters: x [m^2], y [m^2], theta [rad^2] per pw_distance of travel "
+                 "(default: the config's fusion.filter.pw_diag)")
+      ->expected(3)
+      ->delimiter(',')
+      ->check(lcmloc::common::nonNegative());
   app.add_option("--filters", o.filters, "comma-separated filter types")->capture_default_str();
   app.add_option("--out", o.out, "JSON report path")->capture_default_str();
   return lcmloc::common::runProcess(app, argc, argv, common, "lcmloc-montecarlo", [&] {

@@ -1,5 +1,8 @@
 #include "lcmloc/models/scenario_config.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace lcmloc::models {
 namespace {
 
@@ -23,6 +26,14 @@ uint64_t splitmix64(uint64_t x) {
 
 uint64_t componentSeed(uint64_t master, const std::string& component) {
   return splitmix64(master ^ fnv1a64(component));
+}
+
+MarkerLayout respaced(const MarkerLayout& layout, double spacing) {
+  MarkerLayout out = layout;
+  const double span = std::max(layout.count - 1, 0) * layout.spacing;
+  out.count = layout.count > 0 ? static_cast<int>(std::floor(span / spacing + 1e-9)) + 1 : 0;
+  out.spacing = spacing;
+  return out;
 }
 
 double stopArcLength(const ScenarioConfig& sc, double path_length) {

@@ -29,6 +29,7 @@ struct Bounds {
 };
 inline constexpr Bounds kImuRateHz{0.1, 10000.0};         ///< imu.rate_hz, lcmloc-imu --rate
 inline constexpr Bounds kVisionRateHz{1e-3, 1000.0};      ///< vision.rate_hz, lcmloc-vision --rate
+inline constexpr Bounds kMarkerCount{0, 100000};          ///< markers.count, lcmloc-montecarlo --marker-spacing
 inline constexpr Bounds kRealtimeFactor{0.0, 1e6};        ///< scenario.realtime_factor, --realtime-factor
 inline constexpr Bounds kInsSimDuration{0.01, 1e6};       ///< ins_sim.duration [s], --duration
 inline constexpr Bounds kFlushPeriod{0.001, 3600.0};      ///< logger.flush_period [s], --flush-period

@@ -29,6 +29,10 @@ struct MarkerLayout {
   double first_at = 2.0;  ///< arc length of the first marker [m]
 };
 
+/// The same stretch of road (first marker to last, or less by under one spacing) with markers
+/// `spacing` metres apart (> 0).
+MarkerLayout respaced(const MarkerLayout& layout, double spacing);
+
 struct VehicleConfig {
   double wheelbase = 2.5;           ///< L [m]
   double speed = 1.5;               ///< cruise speed [m/s]
