@@ -493,4 +493,23 @@ TEST_F(ReplayProcessTest, CtlTakesOnlyTheAnswerToItsOwnCommandAndNoTimeBeyondInt
   EXPECT_EQ(rc, 1) << out;
   EXPECT_NE(out.find("too close to the end of the int64 range"), std::string::npos) << out;
   EXPECT_EQ(out.find("sent to"), std::string::npos) << out;
+  // A stray ODOMETRY an hour ahead of the daemon's POSE: the daemon holds it as a possible time
+  // jump, so the command is timed after the POSE (5 s + the 50 ms reorder window), not after it.
+  pose.utime = 5000000;
+  lcmloc::odometry_t stray{};
+  stray.utime = pose.utime + 3600000000LL;
+  {
+    Child c(LCMLOC_CTL, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML, "--timeout", "1", "reset"},
+            path("stray.out"));
+    const auto deadline = std::chrono::steady_clock::now() + 10s;
+    std::optional<int> code;
+    for (int i = 0; !(code = c.wait(20ms)) && std::chrono::steady_clock::now() < deadline; ++i) {
+      bus.publish("ODOMETRY", stray);
+      bus.publish("POSE", pose);
+    }
+    EXPECT_EQ(code.value_or(-1), 4) << c.output();  // no daemon to answer
+    EXPECT_NE(c.output().find("sent to FUSION_CONTROL at utime 5050000"), std::string::npos) << c.output();
+    EXPECT_NE(c.output().find("more than fusion.max_time_jump (1.000 s) ahead of the daemon's newest output "
+                              "(utime 5000000)"), std::string::npos) << c.output();
+  }
 }

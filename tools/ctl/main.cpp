@@ -5,7 +5,9 @@
 // utime: by default one reorder window after the newest ODOMETRY / IMU / POSE / FUSION_STATUS
 // seen on the bus, i.e. just ahead of "now" in the daemon's time. (The newest POSE alone can lag
 // the daemon's processing by fusion.output_every - 1 odometry periods: a command at it came too
-// late.) The command is recorded by the logger like any message, and an offline
+// late.) An ODOMETRY or IMU time more than fusion.max_time_jump ahead of the daemon's own newest
+// POSE / FUSION_STATUS is not taken: the daemon holds such an input as a possible time jump, and a
+// command after a stray far-future message would wait for a time that never comes. The command is recorded by the logger like any message, and an offline
 // replay of the log performs it at the same point.
 #include <chrono>
 #include <cmath>
@@ -114,8 +116,9 @@ int main(int argc, char** argv) {
     }
 
     common::Bus bus(opts.lcm_url);
-    int64_t newest = -1;
+    int64_t newest = -1;       // the daemon's own POSE / FUSION_STATUS
     bool daemon_seen = false;  // a POSE or FUSION_STATUS: sensors alone do not answer commands
+    std::vector<int64_t> input_times;  // ODOMETRY / IMU while waiting (bounded by --timeout)
     bool sent = false;
     std::optional<lcmloc::fusion_status_t> answer;
     bus.subscribe<lcmloc::pose_t>(cfg.channels.pose, [&](const std::string&, const lcmloc::pose_t& m, int64_t) {
@@ -124,9 +127,11 @@ int main(int argc, char** argv) {
     });
     // The daemon's high-rate inputs: what it has received, not only what it has published.
     bus.subscribe<lcmloc::odometry_t>(cfg.channels.odometry, [&](const std::string&, const lcmloc::odometry_t& m,
-                                                                 int64_t) { newest = std::max(newest, m.utime); });
+                                                                 int64_t) {
+      if (!sent) input_times.push_back(m.utime);
+    });
     bus.subscribe<lcmloc::imu_t>(cfg.channels.imu, [&](const std::string&, const lcmloc::imu_t& m, int64_t) {
-      newest = std::max(newest, m.utime);
+      if (!sent) input_times.push_back(m.utime);
     });
     bus.subscribe<lcmloc::fusion_status_t>(
         cfg.channels.status, [&](const std::string&, const lcmloc::fusion_status_t& m, int64_t) {
@@ -151,6 +156,22 @@ int main(int argc, char** argv) {
                       "(or give --utime)", cfg.channels.pose, cfg.channels.status, timeout);
         return common::kExitRuntimeError;
       }
+      const int64_t jump = std::llround(cfg.fusion.max_time_jump * 1e6);  // 0: no guard
+      int64_t ignored = 0, ignored_max = 0;
+      const int64_t daemon_newest = newest;
+      for (const int64_t t : input_times) {
+        int64_t ahead = 0;
+        if (jump > 0 && (__builtin_sub_overflow(t, daemon_newest, &ahead) || ahead > jump)) {
+          ++ignored;
+          ignored_max = std::max(ignored_max, t);
+          continue;
+        }
+        newest = std::max(newest, t);
+      }
+      if (ignored > 0)
+        spdlog::warn("{} input message(s) more than fusion.max_time_jump ({:.3f} s) ahead of the daemon's newest "
+                     "output (utime {}) not taken for the command's time (the newest at utime {})",
+                     ignored, cfg.fusion.max_time_jump, daemon_newest, ignored_max);
       const int64_t window = std::max<int64_t>(1, std::llround(cfg.fusion.reorder_window * 1e6));
       // A stray message with a utime near INT64_MAX on the bus: no overflow into a negative time.
       if (__builtin_add_overflow(newest, window, &utime)) {
