@@ -116,6 +116,21 @@ TEST(Config, UnknownKeyNamesFileKeyPathAndValidKeys) {
   EXPECT_NE(in_list.find("faults[0].at: unknown key"), std::string::npos) << in_list;
 }
 
+// yaml-cpp reads the first of two equal keys and drops the other without a word: a second
+// `scenario:` appended to a file, or a flow map with `type` twice, was silently ignored.
+TEST(Config, AKeyGivenTwiceIsAnError) {
+  EXPECT_EQ(errorOf("scenario: {name: a}\nvehicle: {speed: 1}\nscenario: {name: b, seed: 7}\n"),
+            "test.yaml: scenario: given twice in one map (again at line 3)");
+  EXPECT_EQ(errorOf("fusion: {filter: {type: ukf, type: dead_reckoning}}"),
+            "test.yaml: fusion.filter.type: given twice in one map (again at line 1)");
+  EXPECT_NE(errorOf("faults: [{kind: phantom_marker, kind: wrong_offset, at_distance: 3}]").find("faults[0].kind: given twice"),
+            std::string::npos);
+  EXPECT_EQ(errorOf("fusion: {shadow: [ukf, dead_reckoning, ukf]}"),
+            "test.yaml: fusion.shadow[2]: 'ukf' is listed twice (both would publish on the same channel)");
+  // Equal values under different maps are fine.
+  EXPECT_EQ(errorOf("vehicle: {speed: 1}\nodometry: {rate_hz: 100}\nimu: {rate_hz: 100}\n"), "(no error)");
+}
+
 TEST(Config, WrongTypeAndRangeAreClear) {
   const std::string t = errorOf("vehicle: {speed: fast}");
   EXPECT_EQ(t, "test.yaml: vehicle.speed: expected a number, got 'fast'");

@@ -43,6 +43,7 @@ class KeyReader {
       : node_(std::move(node)), file_(std::move(file)), path_(std::move(path)) {
     if (node_ && !node_.IsNull() && !node_.IsMap())
       throw ConfigError(file_, path_, "expected a map, got " + nodeText(node_));
+    rejectDuplicateKeys();
   }
 
   std::string keyPath(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
@@ -132,6 +133,22 @@ class KeyReader {
       const std::string key = kv.first.as<std::string>();
       if (std::find(known_.begin(), known_.end(), key) == known_.end())
         throw ConfigError(file_, keyPath(key), "unknown key (valid keys: " + join(known_) + ")");
+    }
+  }
+
+  /// A key given twice in one map: yaml-cpp would silently read the first and drop the other.
+  void rejectDuplicateKeys() const {
+    if (!node_ || !node_.IsMap()) return;
+    std::vector<std::string> keys;
+    for (const auto& kv : node_) {
+      const std::string key = kv.first.Scalar();
+      if (std::find(keys.begin(), keys.end(), key) != keys.end()) {
+        const YAML::Mark m = kv.first.Mark();
+        throw ConfigError(file_, keyPath(key),
+                          "given twice in one map" +
+                              (m.is_null() ? std::string() : " (again at line " + std::to_string(m.line + 1) + ")"));
+      }
+      keys.push_back(key);
     }
   }
 
