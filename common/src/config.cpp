@@ -249,13 +249,26 @@ void checkFilterType(const std::string& type, const std::string& file, const std
     throw ConfigError(file, key, "unknown filter type '" + type + "' (valid: " + join(types) + ")");
 }
 
+}  // namespace
+
+void checkShadowFilters(const std::vector<std::string>& shadow, const std::string& file, const std::string& key) {
+  for (std::size_t i = 0; i < shadow.size(); ++i) {
+    const std::string k = key + "[" + std::to_string(i) + "]";
+    checkFilterType(shadow[i], file, k);
+    if (std::find(shadow.begin(), shadow.begin() + static_cast<std::ptrdiff_t>(i), shadow[i]) !=
+        shadow.begin() + static_cast<std::ptrdiff_t>(i))
+      throw ConfigError(file, k, "'" + shadow[i] + "' is listed twice (both would publish on the same channel)");
+  }
+}
+
+namespace {
+
 void parseFusion(KeyReader& root, FusionConfig& f) {
   KeyReader r(root.child("fusion"), root.file(), "fusion");
   YAML::Node filter = r.child("filter");
   if (filter) f.filter = parseFilterConfig(filter, f.filter, root.file(), "fusion.filter");
   r.getStrings("shadow", f.shadow);
-  for (std::size_t i = 0; i < f.shadow.size(); ++i)
-    checkFilterType(f.shadow[i], root.file(), "fusion.shadow[" + std::to_string(i) + "]");
+  checkShadowFilters(f.shadow, root.file(), "fusion.shadow");
   r.get("reorder_window", f.reorder_window, 0.0, 10.0);
   r.get("status_period", f.status_period, 0.01, 3600.0);
   r.get("max_time_jump", f.max_time_jump, 0.0, 1e9);

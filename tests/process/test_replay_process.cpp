@@ -461,6 +461,18 @@ TEST_F(ReplayProcessTest, HelpAndCtlWithoutDaemonOrWithBadArguments) {
   }
   Child noout(LCMLOC_REPLAY, {"in.lcmlog", "--config", LCMLOC_PAPER_YAML}, path("noout.out"));
   EXPECT_EQ(noout.wait(10s).value_or(-1), 2) << noout.output();
+  // Two shadows of one type would both publish on POSE_UKF; --no-shadow beside --shadow was ignored.
+  const std::pair<std::vector<std::string>, std::string> shadows[] = {
+      {{"--shadow", "ukf,dead_reckoning,ukf"}, "--shadow: shadow[2]: 'ukf' is listed twice"},
+      {{"--shadow", "ukf,bogus"}, "shadow[1]: unknown filter type 'bogus'"},
+      {{"--shadow", "ukf", "--no-shadow"}, "excludes"}};
+  for (const auto& [args, why] : shadows) {
+    std::vector<std::string> all{"in.lcmlog", "-o", path("o.lcmlog"), "--config", LCMLOC_PAPER_YAML};
+    all.insert(all.end(), args.begin(), args.end());
+    Child c(LCMLOC_REPLAY, all, path("shadow.out"));
+    EXPECT_EQ(c.wait(10s).value_or(-1), 2) << c.output();
+    EXPECT_NE(c.output().find(why), std::string::npos) << c.output();
+  }
 }
 
 TEST_F(ReplayProcessTest, CtlTakesOnlyTheAnswerToItsOwnCommandAndNoTimeBeyondInt64) {

@@ -37,8 +37,9 @@ int main(int argc, char** argv) {
   app.add_option("log", input, "input LCM log file");
   app.add_option("-o,--output", output, "output LCM log (the daemon's outputs)");
   app.add_option("--filter", filter, "override fusion.filter.type (" + core::filterTypeList() + ")");
-  app.add_option("--shadow", shadow, "override fusion.shadow: comma-separated filter types (POSE_<TYPE>)");
-  app.add_flag("--no-shadow", no_shadow, "run no shadow filters");
+  auto* o_shadow =
+      app.add_option("--shadow", shadow, "override fusion.shadow: comma-separated filter types (POSE_<TYPE>)");
+  app.add_flag("--no-shadow", no_shadow, "run no shadow filters")->excludes(o_shadow);
   app.add_flag("--with-inputs", with_inputs,
                "copy the input events to the output too (all but the old outputs, HEARTBEAT and LCM_SELF_TEST)");
   app.add_option("--progress", progress, "[s, wall] between progress lines; 0 = none")->capture_default_str()->check(lcmloc::common::nonNegative());
@@ -66,17 +67,13 @@ int main(int argc, char** argv) {
       std::string item;
       for (std::size_t i = 0; i <= shadow.size(); ++i) {
         if (i == shadow.size() || shadow[i] == ',') {
-          if (!item.empty()) {
-            YAML::Node n;
-            n["type"] = item;
-            common::parseFilterConfig(n, cfg.fusion.filter, "--shadow", "fusion.shadow");  // validates the name
-            cfg.fusion.shadow.push_back(item);
-          }
+          if (!item.empty()) cfg.fusion.shadow.push_back(item);
           item.clear();
         } else {
           item += shadow[i];
         }
       }
+      common::checkShadowFilters(cfg.fusion.shadow, "--shadow", "shadow");
     }
     if (bench) return replay::runBench(cfg, bo);
     if (input.empty() || output.empty()) {
