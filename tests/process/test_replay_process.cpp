@@ -525,3 +525,45 @@ TEST_F(ReplayProcessTest, CtlTakesOnlyTheAnswerToItsOwnCommandAndNoTimeBeyondInt
                               "(utime 5000000)"), std::string::npos) << c.output();
   }
 }
+
+// --bench on a long log: SIGINT while the synthetic log is generated stops it at once and leaves
+// no partial log behind (it went on for minutes, filling the disk); a kept log of another length
+// or a damaged one is generated again instead of being measured as the requested one.
+TEST_F(ReplayProcessTest, BenchStopsOnSigintAndChecksAKeptLog) {
+  const std::string dir = path("bench");
+  {
+    Child c(LCMLOC_REPLAY, {"--bench", "--bench-duration", "86400", "--bench-dir", dir}, path("bench_int.out"));
+    const auto deadline = std::chrono::steady_clock::now() + 10s;
+    while (c.output().find("generating 86400 s") == std::string::npos && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(20ms);
+    std::this_thread::sleep_for(300ms);
+    c.signal(SIGINT);
+    EXPECT_EQ(c.wait(10s).value_or(-1), 1) << c.output();
+    EXPECT_NE(c.output().find("stopped while generating the synthetic log; the partial log is removed"),
+              std::string::npos) << c.output();
+    EXPECT_FALSE(std::filesystem::exists(dir + "/synthetic.lcmlog"));
+  }
+  auto bench = [&](const std::string& seconds, const std::string& name) {
+    Child c(LCMLOC_REPLAY, {"--bench", "--bench-duration", seconds, "--bench-reps", "1", "--bench-dir", dir,
+                            "--bench-keep-log"}, path(name));
+    EXPECT_EQ(c.wait(60s).value_or(-1), 0) << c.output();
+    return c.output();
+  };
+  EXPECT_NE(bench("10", "b10.out").find("generated 1000 odometry"), std::string::npos);
+  std::string out = bench("10", "b10again.out");
+  EXPECT_EQ(out.find("generat"), std::string::npos) << out;  // kept: the same length
+  out = bench("20", "b20.out");
+  EXPECT_NE(out.find("covers 9.990 s of message time, not the 20.000 s of --bench-duration: generating it again"),
+            std::string::npos) << out;
+  EXPECT_NE(out.find("generated 2000 odometry"), std::string::npos) << out;
+  {
+    std::ofstream junk(dir + "/synthetic.lcmlog", std::ios::binary | std::ios::trunc);
+    junk << std::string(5000, '\x5a');
+  }
+  out = bench("20", "bjunk.out");
+  EXPECT_NE(out.find("is damaged"), std::string::npos) << out;
+  EXPECT_NE(out.find("generated 2000 odometry"), std::string::npos) << out;
+  Child big(LCMLOC_REPLAY, {"--bench", "--bench-duration", "1e7", "--bench-dir", dir}, path("big.out"));
+  EXPECT_EQ(big.wait(10s).value_or(-1), 2) << big.output();
+  EXPECT_NE(big.output().find("1e7 s is more than a day"), std::string::npos) << big.output();
+}

@@ -58,6 +58,28 @@ int64_t readAndDecode(const std::string& path, const common::ChannelConfig& ch, 
   return scanner.eventsRead();
 }
 
+/// Why a kept synthetic log does not fit this run ("" when it does): damaged, not the
+/// configured channels, or another length of message time than duration_s.
+std::string keptLogProblem(const std::string& path, const common::SystemConfig& cfg, double duration_s) {
+  std::vector<eval::LogIssue> issues;
+  eval::LogScanner scanner(path, &issues);
+  int64_t first = -1, last = -1, odometry = 0;
+  while (const lcm::LogEvent* ev = scanner.next()) {
+    if (ev->channel != cfg.channels.odometry) continue;
+    if (first < 0) first = ev->timestamp;
+    last = ev->timestamp;
+    ++odometry;
+  }
+  if (scanner.damaged()) return "is damaged (" + (issues.empty() ? std::string("unreadable bytes") : issues.front().describe()) + ")";
+  if (odometry < 2) return "has no " + cfg.channels.odometry + " messages";
+  // One odometry period short of duration_s at the most (the first message is at the start).
+  const double span = static_cast<double>(last - first) * 1e-6;
+  const double period = cfg.scenario.odometry.rate_hz > 0 ? 1.0 / cfg.scenario.odometry.rate_hz : 0.0;
+  if (std::abs(span - duration_s) > period + 1e-6)
+    return fmt::format("covers {:.3f} s of message time, not the {:.3f} s of --bench-duration", span, duration_s);
+  return "";
+}
+
 }  // namespace
 
 int runBench(const common::SystemConfig& base, const BenchOptions& opts) {
@@ -71,10 +93,31 @@ int runBench(const common::SystemConfig& base, const BenchOptions& opts) {
   cfg.scenario = ovalScenario(base.scenario, OvalTrack{}, opts.duration_s);
   cfg.fusion.shadow.clear();
 
-  if (!(opts.keep_log && fs::exists(log))) {
+  bool generate = !(opts.keep_log && fs::exists(log));
+  if (!generate) {
+    const std::string why = keptLogProblem(log, cfg, opts.duration_s);
+    if (!why.empty()) {
+      spdlog::warn("--bench-keep-log: {} {}: generating it again", log, why);
+      generate = true;
+    }
+  }
+  if (generate) {
     spdlog::info("generating {:.0f} s of synthetic odometry + ruler detections into {}", opts.duration_s, log);
     const auto t0 = Clock::now();
-    const auto st = writeSyntheticLog(cfg.scenario, opts.duration_s, log, cfg.channels);
+    auto last_line = t0;
+    const auto st = writeSyntheticLog(cfg.scenario, opts.duration_s, log, cfg.channels, [&](double done) {
+      if (Clock::now() - last_line >= std::chrono::seconds(2)) {
+        last_line = Clock::now();
+        spdlog::info("generating: {:.0f}%", 100.0 * done);
+      }
+      return !common::stopRequested();
+    });
+    if (st.stopped) {
+      std::error_code ec;
+      fs::remove(log, ec);
+      spdlog::warn("stopped while generating the synthetic log; the partial log is removed");
+      return common::kExitRuntimeError;
+    }
     spdlog::info("generated {} odometry, {} detections over {:.0f} m ({} markers) in {:.1f} s", st.odometry,
                  st.detections, st.distance_m, st.markers,
                  std::chrono::duration<double>(Clock::now() - t0).count());

@@ -46,7 +46,14 @@ int main(int argc, char** argv) {
   app.add_flag("--bench", bench,
                "benchmark instead: generate a synthetic log, measure read+decode, dead_reckoning and ukf_gated "
                "replay (messages/s, medians)");
-  app.add_option("--bench-duration", bo.duration_s, "[s] message time of the synthetic log")->capture_default_str()->check(lcmloc::common::positive());
+  app.add_option("--bench-duration", bo.duration_s, "[s] message time of the synthetic log (at most a day)")
+      ->capture_default_str()
+      ->check(lcmloc::common::positive())
+      ->check(CLI::Validator(
+          [](std::string& s) {
+            return std::stod(s) <= 86400.0 ? std::string() : s + " s is more than a day (86400 s)";
+          },
+          "<= 86400"));
   app.add_option("--bench-reps", bo.repetitions, "repetitions (medians are reported)")->capture_default_str()->check(lcmloc::common::positive());
   app.add_option("--bench-dir", bo.dir, "where the synthetic log and bench.json go")->capture_default_str();
   app.add_flag("--bench-keep-log", bo.keep_log, "reuse the synthetic log of an earlier run if present");

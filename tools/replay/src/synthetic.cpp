@@ -33,7 +33,8 @@ models::ScenarioConfig ovalScenario(const models::ScenarioConfig& base, const Ov
 }
 
 SyntheticLogStats writeSyntheticLog(const models::ScenarioConfig& sc, double duration_s, const std::string& path,
-                                    const common::ChannelConfig& channels) {
+                                    const common::ChannelConfig& channels,
+                                    const std::function<bool(double)>& progress) {
   SyntheticLogStats st;
   const models::Path track(sc.path);
   const auto map = models::makeMarkerMap(track, sc.markers);
@@ -73,7 +74,20 @@ SyntheticLogStats writeSyntheticLog(const models::ScenarioConfig& sc, double dur
     st.distance_m = t.distance;
   };
   process(vehicle.state());
-  while (!vehicle.finished() && vehicle.state().utime < end_utime) process(vehicle.step());
+  constexpr int64_t kProgressUs = 10000000;
+  int64_t next_progress = sc.vehicle.start_utime + kProgressUs;
+  while (!vehicle.finished() && vehicle.state().utime < end_utime) {
+    process(vehicle.step());
+    if (progress && vehicle.state().utime >= next_progress) {
+      next_progress += kProgressUs;
+      const double done = static_cast<double>(vehicle.state().utime - sc.vehicle.start_utime) /
+                          static_cast<double>(end_utime - sc.vehicle.start_utime);
+      if (!progress(done)) {
+        st.stopped = true;
+        break;
+      }
+    }
+  }
   return st;
 }
 

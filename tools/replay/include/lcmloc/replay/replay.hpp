@@ -63,6 +63,7 @@ struct SyntheticLogStats {
   int64_t odometry = 0, detections = 0, markers = 0;
   double distance_m = 0;
   int64_t first_utime = 0, last_utime = 0;
+  bool stopped = false;  ///< `progress` asked to stop: the log ends early
 };
 struct OvalTrack {
   double straight = 40.0;   ///< [m]
@@ -72,7 +73,10 @@ struct OvalTrack {
 /// The scenario of the synthetic log (path, markers) from base: the same oval for the replay's
 /// marker map. laps is chosen so that the track is long enough for duration_s.
 models::ScenarioConfig ovalScenario(const models::ScenarioConfig& base, const OvalTrack& track, double duration_s);
+/// progress (optional) is called every 10 s of message time with the fraction of duration_s
+/// written; it returns false to stop writing there.
 SyntheticLogStats writeSyntheticLog(const models::ScenarioConfig& scenario, double duration_s, const std::string& path,
-                                    const common::ChannelConfig& channels);
+                                    const common::ChannelConfig& channels,
+                                    const std::function<bool(double)>& progress = {});
 
 }  // namespace lcmloc::replay
