@@ -399,6 +399,28 @@ TEST_F(LogTools, CutKeepsTheTimeWindowAndChannelsAndLcmReadsTheResult) {
   EXPECT_EQ(fs::file_size(log), size);
 }
 
+// A CSV on stdout that cannot be written (a full disk behind a redirection, a closed pipe) was
+// reported as "N rows" with exit 0.
+TEST_F(LogTools, ToCsvOnAStdoutThatCannotBeWrittenFails) {
+  const std::string log = path("ref.lcmlog");
+  writeReference(log);
+  for (const std::string out : {"", " -o -"}) {
+    const std::string e = path("full.err");
+    const int st = std::system((std::string(LCMLOC_LOG_BIN) + " to-csv " + log + " -c ODOMETRY" + out +
+                                " > /dev/full 2>" + e).c_str());
+    EXPECT_EQ(WIFEXITED(st) ? WEXITSTATUS(st) : -1, 1) << out;
+    const std::string err = slurp(e);
+    EXPECT_NE(err.find("writing CSV to stdout failed"), std::string::npos) << err;
+    EXPECT_EQ(err.find(" rows, "), std::string::npos) << err;
+  }
+  const ToolRun ok = tool("to-csv " + log + " -c ODOMETRY");
+  EXPECT_EQ(ok.rc, 0) << ok.err;
+  // cut with nothing in its window writes an empty log and says so.
+  const ToolRun none = tool("cut " + log + " -o " + path("none.lcmlog") + " -c NOPE");
+  EXPECT_EQ(none.rc, 0) << none.err;
+  EXPECT_NE(none.err.find("none.lcmlog holds no events"), std::string::npos) << none.err;
+}
+
 TEST_F(LogTools, ToCsvAndCutNeverWriteOverTheLog) {
   const std::string log = path("ref.lcmlog");
   writeReference(log);

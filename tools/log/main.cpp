@@ -313,14 +313,16 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
     os << "\n";
     ++rows[*ev.channel];
   });
-  for (const auto& [ch, n] : rows)
-    spdlog::info("{}: {} rows, {} columns{}", core::printable(ch), n, columns[ch].names.size() + 1,
-                 to_dir ? " -> " + paths.at(ch)
-                        : (to_stdout ? "" : " -> " + output));
   for (auto& [ch, f] : files) {
     f->flush();
     if (!*f) throw std::runtime_error("writing CSV for " + ch + " failed (disk full?)");
   }
+  single->flush();
+  if (!*single) throw std::runtime_error(std::string("writing CSV to ") + (to_stdout ? "stdout" : output) + " failed");
+  for (const auto& [ch, n] : rows)
+    spdlog::info("{}: {} rows, {} columns{}", core::printable(ch), n, columns[ch].names.size() + 1,
+                 to_dir ? " -> " + paths.at(ch)
+                        : (to_stdout ? "" : " -> " + output));
   return s.damaged ? common::kExitInputDamaged : common::kExitOk;
 }
 
@@ -381,6 +383,8 @@ int cut(const std::string& path, const std::string& output, const CutOptions& o)
     throw std::runtime_error(fmt::format("writing {} failed: {} ({} whole events kept)", output,
                                          std::strerror(static_cast<int>(err)), out.eventsWritten()));
   spdlog::info("wrote {} of {} events to {}", kept, s.events_read, output);
+  if (kept == 0 && s.events_read > 0)
+    spdlog::warn("no event is inside the window and on the selected channels: {} holds no events", output);
   return s.damaged ? common::kExitInputDamaged : common::kExitOk;
 }
 
