@@ -106,6 +106,17 @@ CLI::Validator bound(const char* name, bool (*ok)(double), const char* what) {
 }  // namespace
 CLI::Validator positive() { return bound("POSITIVE", [](double v) { return v > 0.0; }, "> 0"); }
 CLI::Validator nonNegative() { return bound("NONNEGATIVE", [](double v) { return v >= 0.0; }, ">= 0"); }
+CLI::Validator seed() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        uint64_t v = 0;
+        // strtoull (and so a uint64_t option) takes "-1" as 2^64 - 1
+        if (s.empty() || s[0] == '-' || s[0] == '+' || !CLI::detail::lexical_cast(s, v))
+          return s + " is not a seed (an integer from 0 to 18446744073709551615)";
+        return std::string();
+      },
+      "SEED");
+}
 
 std::string fileProblem(const std::string& path, std::uintmax_t max_bytes) {
   namespace fs = std::filesystem;

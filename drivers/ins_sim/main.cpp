@@ -20,7 +20,8 @@ int main(int argc, char** argv) {
   app.add_option("--realtime-factor", rtf, "override scenario.realtime_factor (0 = as fast as possible)")
       ->check(CLI::Range(common::kRealtimeFactor.lo, common::kRealtimeFactor.hi));
   app.add_option("--duration", duration, "override ins_sim.duration [s]")->check(CLI::Range(common::kInsSimDuration.lo, common::kInsSimDuration.hi));
-  app.add_option("--seed", seed, "override ins_sim.seed");
+  app.add_option("--seed", seed, "override ins_sim.seed")
+      ->check(lcmloc::common::seed());
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-ins-sim", [&] {
     auto cfg = common::loadSystemConfig(opts.config);

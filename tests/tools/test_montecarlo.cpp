@@ -57,6 +57,11 @@ TEST_F(MonteCarloCommand, MarkerSpacingAndProcessNoiseOverrideTheConfig) {
   EXPECT_EQ(j["filters"]["ukf_gated"]["accepted"], 32);
   // Five times fewer markers: the estimate is worse than with every 2 m.
   EXPECT_GT(j["filters"]["ukf_gated"]["rmse_m"]["median"].get<double>(), 3.0 * rmse_paper);
+
+  std::tie(rc, out) = run(oval + " --runs 2 --filters ukf_gated --seed-base 18446744073709551614");
+  ASSERT_EQ(rc, 0) << out;
+  EXPECT_NE(out.find("(seeds 18446744073709551614..18446744073709551615)"), std::string::npos) << out;
+  EXPECT_EQ(report()["seed_base"], 18446744073709551614ULL);
 }
 
 TEST_F(MonteCarloCommand, BadOverridesAreRefusedWithTheirReason) {
@@ -67,6 +72,9 @@ TEST_F(MonteCarloCommand, BadOverridesAreRefusedWithTheirReason) {
       {"--pw-diag 1e-3,1e-3", "--pw-diag"},
       {"--pw-diag 1e-3,-1,1e-3", "--pw-diag: -1 is not >= 0"},
       {"--pw-diag 1e-3,nan,1e-3", "nan"},
+      // a uint64 option reads "-1" as 2^64 - 1; it was taken as "no seed given" here
+      {"--seed-base -1", "--seed-base: -1 is not a seed"},
+      {"--seed-base 2.5", "--seed-base: 2.5 is not a seed"},
   };
   for (const auto& [args, why] : cases) {
     const auto [rc, out] = run("--runs 1 " + args);

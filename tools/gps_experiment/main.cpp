@@ -20,7 +20,8 @@ int main(int argc, char** argv) {
   gps_experiment::Options eo;
   app.add_option("--out", out, "output directory")->capture_default_str();
   app.add_option("--filters", types, "filters to run")->delimiter(',')->capture_default_str();
-  app.add_option("--seed", seed, "override scenario.seed");
+  app.add_option("--seed", seed, "override scenario.seed")
+      ->check(lcmloc::common::seed());
   app.add_option("--converged", eo.converged_m, "convergence threshold [m]")->capture_default_str()->check(lcmloc::common::positive());
   app.add_option("--hold", eo.hold_s, "time the error must stay below it [s]")->capture_default_str()->check(lcmloc::common::nonNegative());
 

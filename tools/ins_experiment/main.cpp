@@ -28,7 +28,8 @@ int main(int argc, char** argv) {
   app.add_option("--out", out, "output directory")->capture_default_str();
   app.add_option("--starts", starts, "runs: start profiles (hard, gentle, gentle_turn, gentle_stopgo, steady)")->delimiter(',')->capture_default_str();
   app.add_option("--duration", duration, "override ins_sim.duration [s]")->check(CLI::Range(common::kInsSimDuration.lo, common::kInsSimDuration.hi));
-  app.add_option("--seed", seed, "override ins_sim.seed");
+  app.add_option("--seed", seed, "override ins_sim.seed")
+      ->check(lcmloc::common::seed());
   app.add_option("--calibration-stage", eo.calibration_stage,
                  "dead reckoning freezes the scale estimate this long after the start [s]")
       ->capture_default_str();

@@ -96,7 +96,8 @@ int main(int argc, char** argv) {
   std::vector<double> off_centre{eo.off_centre.x(), eo.off_centre.y()};
   app.add_option("--runs", eo.runs, "Monte Carlo runs per case (10000 for stable statistics)")
       ->check(CLI::Range(1, 10000000))->capture_default_str();
-  app.add_option("--seed", seed, "override the seed (default: vision.seed, else derived from scenario.seed)");
+  app.add_option("--seed", seed, "override the seed (default: vision.seed, else derived from scenario.seed)")
+      ->check(lcmloc::common::seed());
   app.add_option("--out", out, "output directory (report.json, figures)")->capture_default_str();
   app.add_option("--distance", eo.distance, "the paper's landmark distance [m]")
       ->check(CLI::Range(1.0, 1e6))->capture_default_str();

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include <CLI/CLI.hpp>
@@ -23,7 +24,7 @@ using lcmloc::common::ConfigError;
 struct Options {
   std::string config;  // empty: built-in defaults (the paper's scenario)
   int runs = 200;
-  int64_t seed_base = -1;  // -1: the config's seed
+  std::optional<uint64_t> seed_base;  // none: the config's seed
   double scale_error = 0.01;
   double steering_bias_deg = 0.5;
   bool no_faults = false;
@@ -127,7 +128,7 @@ int run(const Options& o) {
     f.type = n;
     filters.push_back(f);
   }
-  const uint64_t base = o.seed_base >= 0 ? static_cast<uint64_t>(o.seed_base) : sc.seed;
+  const uint64_t base = o.seed_base.value_or(sc.seed);
   spdlog::info("{} runs of '{}' (seeds {}..{}), scale error {}, steering bias {} rad, {} markers {} m apart, "
                "Pw ({}, {}, {}), filters {}",
                o.runs, sc.name, base, base + o.runs - 1, sc.odometry.scale_error, sc.odometry.steering_bias,
@@ -189,7 +190,8 @@ int main(int argc, char** argv) {
   lcmloc::common::addOfflineOptions(app, common, "system YAML file (default: built-in paper scenario)")
       ->check(CLI::ExistingFile);
   app.add_option("--runs", o.runs, "number of runs")->capture_default_str()->check(lcmloc::common::positive());
-  app.add_option("--seed-base", o.seed_base, "seed of the first run (default: the config's seed)");
+  app.add_option("--seed-base", o.seed_base, "seed of the first run (default: the config's seed)")
+      ->check(lcmloc::common::seed());
   app.add_option("--scale-error", o.scale_error, "odometer scale error k [-]")->capture_default_str()->check(CLI::Range(lcmloc::common::kOdometryScaleError.lo, lcmloc::common::kOdometryScaleError.hi));
   app.add_option("--steering-bias-deg", o.steering_bias_deg, "steering-encoder bias [deg]")
       ->capture_default_str()

@@ -56,6 +56,7 @@ int stopSignal();
 /// for every floating-point option by runProcess.
 CLI::Validator positive();     ///< > 0
 CLI::Validator nonNegative();  ///< >= 0
+CLI::Validator seed();         ///< an unsigned 64-bit integer, without a sign ("-1" is not 2^64 - 1)
 
 /// What stops path from being read as a file of at most max_bytes ("" when nothing): it does not
 /// exist ("no such file"), "is a directory", "is not a regular file" (a device or a FIFO:
