@@ -12,6 +12,8 @@
 #include <set>
 #include <sstream>
 
+#include <fmt/format.h>
+
 #include "lcmloc/common/process.hpp"
 #include "lcmloc/common/yaml_reader.hpp"
 #include "config_ins.hpp"
@@ -437,7 +439,19 @@ SystemConfig parseSystemConfig(const std::string& yaml_text, const std::string& 
   if (cfg.fusion.landmarks.empty())
     for (const auto& l : cfg.scenario.landmarks) cfg.fusion.landmarks[l.id] = core::Vec2(l.x, l.y);
   root.finish();
+  checkSampledRate(cfg.scenario.odometry.rate_hz, cfg.scenario, file, "odometry.rate_hz");
+  checkSampledRate(cfg.scenario.imu.rate_hz, cfg.scenario, file, "imu.rate_hz");
+  checkSampledRate(cfg.scenario.magruler.publish_rate_hz, cfg.scenario, file, "magruler.publish_rate_hz");
   return cfg;
+}
+
+void checkSampledRate(double rate_hz, const models::ScenarioConfig& sc, const std::string& file,
+                      const std::string& key) {
+  if (rate_hz > sc.vehicle.rate_hz)
+    throw ConfigError(file, key,
+                      fmt::format("{} Hz is above the ground-truth rate vehicle.rate_hz ({} Hz) the sensor samples: it "
+                                  "would publish at {} Hz",
+                                  rate_hz, sc.vehicle.rate_hz, sc.vehicle.rate_hz));
 }
 
 std::string readConfigFile(const std::string& path, const std::string& what) {

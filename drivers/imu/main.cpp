@@ -24,7 +24,10 @@ int main(int argc, char** argv) {
   return common::runProcess(app, argc, argv, opts, "lcmloc-imu", [&] {
     auto cfg = common::loadSystemConfig(opts.config);
     auto& sc = cfg.scenario;
-    if (rate > 0) sc.imu.rate_hz = rate;
+    if (rate > 0) {
+      sc.imu.rate_hz = rate;
+      common::checkSampledRate(rate, sc, "--rate", "imu.rate_hz");
+    }
     std::optional<models::ImuSensor> sensor;
     auto start = [&] { sensor.emplace(sc.imu, sc.vehicle.wheelbase, models::componentSeed(sc.seed, "imu")); };
     start();

@@ -131,6 +131,17 @@ TEST(Config, AKeyGivenTwiceIsAnError) {
   EXPECT_EQ(errorOf("vehicle: {speed: 1}\nodometry: {rate_hz: 100}\nimu: {rate_hz: 100}\n"), "(no error)");
 }
 
+// The simulated sensors sample GROUND_TRUTH: a rate above it was accepted and logged ("ODOMETRY
+// at 1000 Hz") while the driver published at the truth's 100 Hz.
+TEST(Config, ASensorRateAboveTheGroundTruthRateIsAnError) {
+  EXPECT_EQ(errorOf("odometry: {rate_hz: 1000}"),
+            "test.yaml: odometry.rate_hz: 1000 Hz is above the ground-truth rate vehicle.rate_hz (100 Hz) the "
+            "sensor samples: it would publish at 100 Hz");
+  EXPECT_NE(errorOf("imu: {rate_hz: 200}").find("imu.rate_hz: 200 Hz is above"), std::string::npos);
+  EXPECT_NE(errorOf("magruler: {publish_rate_hz: 150}").find("magruler.publish_rate_hz: 150 Hz"), std::string::npos);
+  EXPECT_EQ(errorOf("vehicle: {rate_hz: 1000}\nodometry: {rate_hz: 1000}\nimu: {rate_hz: 500}"), "(no error)");
+}
+
 TEST(Config, WrongTypeAndRangeAreClear) {
   const std::string t = errorOf("vehicle: {speed: fast}");
   EXPECT_EQ(t, "test.yaml: vehicle.speed: expected a number, got 'fast'");

@@ -131,6 +131,11 @@ SystemConfig parseSystemConfig(const std::string& yaml_text, const std::string& 
 core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterConfig& base,
                                      const std::string& file, const std::string& key_prefix);
 
+/// A simulated sensor samples GROUND_TRUTH: its rate (key) cannot be above vehicle.rate_hz.
+/// Throws ConfigError.
+void checkSampledRate(double rate_hz, const models::ScenarioConfig& sc, const std::string& file,
+                      const std::string& key);
+
 /// Shadow filter types (`fusion.shadow`, `lcmloc-replay --shadow`): each a known type, none twice
 /// (a shadow publishes on POSE_<TYPE>). Throws ConfigError naming key[i].
 void checkShadowFilters(const std::vector<std::string>& shadow, const std::string& file, const std::string& key);
