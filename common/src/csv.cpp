@@ -3,11 +3,14 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 
 #include <fmt/format.h>
+
+#include "lcmloc/common/process.hpp"
 
 namespace lcmloc::common::csv {
 
@@ -65,12 +68,21 @@ bool parseRow(const std::string& line, std::size_t n, std::vector<double>& out, 
   return true;
 }
 
-std::ifstream openWithHeader(const std::string& path, const std::string& header) {
+std::ifstream openCsv(const std::string& path, std::string& header) {
+  if (const std::string problem = fileProblem(path); !problem.empty())
+    throw std::runtime_error("'" + path + "': " + (problem == kNoSuchFile ? "cannot open (does it exist?)" : problem));
   std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot open '" + path + "'");
+  if (!in) throw std::runtime_error("'" + path + "': cannot open: " + std::strerror(errno));
+  header.clear();
+  std::getline(in, header);
+  if (header.rfind("\xEF\xBB\xBF", 0) == 0) header.erase(0, 3);  // UTF-8 byte-order mark
+  if (!header.empty() && header.back() == '\r') header.pop_back();
+  return in;
+}
+
+std::ifstream openWithHeader(const std::string& path, const std::string& header) {
   std::string h;
-  std::getline(in, h);
-  if (!h.empty() && h.back() == '\r') h.pop_back();
+  auto in = openCsv(path, h);
   if (h != header)
     throw std::runtime_error(fmt::format("'{}': line 1: expected the header '{}', got '{}'", path, header, h));
   return in;

@@ -26,6 +26,7 @@
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
 #include "lcmloc/replay/replay.hpp"
+#include "run_command.hpp"
 
 using namespace lcmloc;
 namespace fs = std::filesystem;
@@ -389,13 +390,7 @@ TEST(Import, TheSummaryListsAtMostShowRefusedRowsAndTheOptionRefusesANegativeCou
     EXPECT_NE(s.find("... and 3 more refused rows"), std::string::npos) << max << "\n" << s;
   }
   // The command line refuses a negative count (exit 2, the option named); 0 lists none.
-  const std::string log = (d / "cli.log").string();
-  auto run = [&](const std::string& n) {
-    const int st = std::system((std::string(LCMLOC_IMPORT_BIN) + " " + d.string() + " --show-refused " + n + " > " +
-                                log + " 2>&1").c_str());
-    std::ifstream in(log);
-    return std::make_pair(WEXITSTATUS(st), std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()));
-  };
+  auto run = [&](const std::string& n) { return runCommand(LCMLOC_IMPORT_BIN, d.string() + " --show-refused " + n, d); };
   auto [code, text] = run("-1");
   EXPECT_EQ(code, 2) << text;
   EXPECT_NE(text.find("--show-refused"), std::string::npos) << text;
@@ -425,6 +420,32 @@ TEST(Import, NothingUsableMixedClocksAndBadMapAreErrors) {
   o.dir = e.string();
   o.base = import::TimeBase::Auto;
   EXPECT_THROW(import::importDirectory(o), std::runtime_error);  // speed,steering without --wheelbase
+}
+
+TEST(Import, AByteOrderMarkIsSkippedAndADirectoryIsListedAsSkipped) {
+  const auto d = tempDir("bom");
+  // Spreadsheet programs start a UTF-8 CSV with a byte-order mark (EF BB BF): the header was
+  // "none of the formats" and the file skipped.
+  write(d / "odometry.csv", "\xEF\xBB\xBFtime,delta_s,delta_theta\r\n1.0,0.1,0\r\n2.0,0.1,0\r\n");
+  write(d / "gps.csv", "\xEF\xBB\xBFtime,x,y\n1.5,2.0,3.0\n");
+  // A directory named like a CSV file: listed as skipped with the reason (it was left out unsaid).
+  fs::create_directory(d / "map.csv");
+  import::ImportOptions o;
+  o.dir = d.string();
+  const auto r = import::importDirectory(o);
+  ASSERT_NE(file(r, "odometry.csv"), nullptr);
+  EXPECT_EQ(file(r, "odometry.csv")->header, "time,delta_s,delta_theta");
+  EXPECT_EQ(file(r, "odometry.csv")->written, 2);
+  ASSERT_NE(file(r, "gps.csv"), nullptr);
+  EXPECT_EQ(file(r, "gps.csv")->written, 1);
+  EXPECT_TRUE(r.refusals.empty());
+  ASSERT_EQ(r.skipped.size(), 1u);
+  EXPECT_EQ(r.skipped[0], "'" + (d / "map.csv").string() + "': is a directory");
+  // The map file too (it was skipped, and the run imported without its map).
+  fs::remove(d / "map.csv");
+  write(d / "map.csv", "\xEF\xBB\xBFid,x,y\r\n1,2.0,3.0\r\n");
+  EXPECT_EQ(import::importDirectory(o).map_size, 1);
+  fs::remove_all(d);
 }
 
 TEST(Import, MicrosecondsAreDetectedAndStartAtZeroShifts) {
@@ -561,6 +582,28 @@ TEST(MagnetGrid, OneWrongTimeIsRefusedAloneAndBadFlagsAreNamed) {
   EXPECT_THROW(import::importMagnetGrid(bad), common::ConfigError);
   EXPECT_EQ(fs::file_size(d / "map.csv"), fs::file_size(d / "run.txt"));
   EXPECT_EQ(import::importMagnetGrid(mo).odometry, 196);
+}
+
+TEST(MagnetGrid, TwoRunsOfOneNameAreRefusedBeforeAnythingIsWritten) {
+  // --run line2magnets and --run DIR/line2magnets.txt both wrote OUT/line2magnets, the second over
+  // the first, and summary.json kept the second only (exit 0).
+  const auto d = tempDir("magnet_same_name");
+  fs::copy_file(std::string(LCMLOC_MAGNET_GRID_DIR) + "/line2magnets.txt", d / "line2magnets.txt");
+  auto run = [&](const std::string& args) {
+    return runCommand(LCMLOC_MAGNET_GRID_BIN, "--data " + d.string() + " " + args, d);
+  };
+  const std::string other = (d / "line2magnets.txt").string();
+  for (const std::string flags : {"", "--import-only "}) {
+    auto [code, text] = run(flags + "--run line2magnets --run " + other + " -o " + (d / "out").string());
+    EXPECT_EQ(code, 2) << text;
+    EXPECT_NE(text.find("--run: 'line2magnets' and '" + other + "' are both run 'line2magnets'"), std::string::npos)
+        << text;
+    EXPECT_FALSE(fs::exists(d / "out")) << flags;
+  }
+  auto [code, text] = run("--import-only --run line2magnets -o " + (d / "out").string());
+  EXPECT_EQ(code, 0) << text;
+  EXPECT_TRUE(fs::exists(d / "out" / "line2magnets" / "run.lcmlog"));
+  fs::remove_all(d);
 }
 
 TEST(MagnetGrid, TheReedBitOrderIsTheOneTheLoopDataSupports) {

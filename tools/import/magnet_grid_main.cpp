@@ -53,11 +53,26 @@ int main(int argc, char** argv) {
     if (pw.size() == 3) mo.pw_diag = core::Vec3(pw[0], pw[1], pw[2]);
     if (runs.empty())
       runs = {"line1magnet", "line2magnets", "diagonal45degrees", "circles", "oneloop", "twoloops"};
-    nlohmann::json summary;
-    for (const auto& run : runs) {
+    // Each run's input file and output name (OUT/<name>), all before anything is written: two
+    // runs of one name would write the same directory and summary entry.
+    std::vector<std::pair<std::string, std::string>> inputs;  // (input file, name)
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      const std::string& run = runs[i];
       const bool path = run.find('/') != std::string::npos || run.find(".txt") != std::string::npos;
-      mo.input = path ? run : data + "/" + run + ".txt";
-      mo.name = std::filesystem::path(mo.input).stem().string();
+      const std::string input = path ? run : data + "/" + run + ".txt";
+      const std::string name = std::filesystem::path(input).stem().string();
+      for (std::size_t k = 0; k < i; ++k)
+        if (inputs[k].second == name)
+          throw common::ConfigError("--run", "",
+                                    fmt::format("'{}' and '{}' are both run '{}' (output {}/{}): give each run once, "
+                                                "or copy one under another name",
+                                                runs[k], run, name, out, name));
+      inputs.emplace_back(input, name);
+    }
+    nlohmann::json summary;
+    for (const auto& [input, name] : inputs) {
+      mo.input = input;
+      mo.name = name;
       mo.out_dir = out + "/" + mo.name;
       mo.grid_angle = grid_angle ? *grid_angle : mo.name == "diagonal45degrees" ? 0.7853981633974483 : 0.0;
       if (import_only) {

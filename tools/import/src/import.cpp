@@ -175,8 +175,8 @@ ImportResult importDirectory(const ImportOptions& opt) {
   std::error_code ec;
   if (!fs::is_directory(opt.dir, ec)) throw std::runtime_error("'" + opt.dir + "' is not a directory");
   std::vector<fs::path> paths;
-  for (const auto& e : fs::directory_iterator(opt.dir, ec))
-    if (e.is_regular_file() && e.path().extension() == ".csv") paths.push_back(e.path());
+  for (const auto& e : fs::directory_iterator(opt.dir, ec))  // (a directory named *.csv: skipped, saying so)
+    if (e.path().extension() == ".csv") paths.push_back(e.path());
   if (ec) throw std::runtime_error("cannot list '" + opt.dir + "': " + ec.message());
   std::sort(paths.begin(), paths.end());
   checkOptions(opt);
@@ -196,10 +196,16 @@ ImportResult importDirectory(const ImportOptions& opt) {
   std::string map_source;
   std::vector<DataFile> files;
   for (const auto& p : paths) {
-    std::ifstream in(p);
     std::string header;
-    if (!in || !std::getline(in, header)) {
-      r.skipped.push_back(p.string() + ": cannot read or empty");
+    std::ifstream in;
+    try {
+      in = common::csv::openCsv(p.string(), header);
+    } catch (const std::runtime_error& e) {
+      r.skipped.push_back(e.what());
+      continue;
+    }
+    if (!in) {
+      r.skipped.push_back(p.string() + ": empty");
       continue;
     }
     const auto h = common::csv::split(header);

@@ -23,6 +23,12 @@ bool parseRow(const std::string& line, std::size_t n, std::vector<double>& out, 
 /// Opens path and checks that its first line is exactly header. Throws std::runtime_error.
 std::ifstream openWithHeader(const std::string& path, const std::string& header);
 
+/// Opens a CSV file and reads its first line into header, without a leading UTF-8 byte-order
+/// mark (EF BB BF, as spreadsheet programs write) and a trailing '\r'; the stream is left at the
+/// second line (failed when the file is empty). Throws std::runtime_error "'path': reason" when
+/// path is missing, a directory or not a regular file, or cannot be opened.
+std::ifstream openCsv(const std::string& path, std::string& header);
+
 /// A map file: header "id,x,y", one marker / landmark / beacon per row, id an integer >= 0,
 /// x and y in metres in the local frame. Throws std::runtime_error naming file, line and reason
 /// for any bad row or a duplicate id (a map is configuration: nothing is skipped).
