@@ -253,13 +253,13 @@ void checkFilterType(const std::string& type, const std::string& file, const std
 
 }  // namespace
 
-void checkShadowFilters(const std::vector<std::string>& shadow, const std::string& file, const std::string& key) {
-  for (std::size_t i = 0; i < shadow.size(); ++i) {
+void checkFilterList(const std::vector<std::string>& types, const std::string& file, const std::string& key) {
+  for (std::size_t i = 0; i < types.size(); ++i) {
     const std::string k = key + "[" + std::to_string(i) + "]";
-    checkFilterType(shadow[i], file, k);
-    if (std::find(shadow.begin(), shadow.begin() + static_cast<std::ptrdiff_t>(i), shadow[i]) !=
-        shadow.begin() + static_cast<std::ptrdiff_t>(i))
-      throw ConfigError(file, k, "'" + shadow[i] + "' is listed twice (both would publish on the same channel)");
+    checkFilterType(types[i], file, k);
+    if (std::find(types.begin(), types.begin() + static_cast<std::ptrdiff_t>(i), types[i]) !=
+        types.begin() + static_cast<std::ptrdiff_t>(i))
+      throw ConfigError(file, k, "'" + types[i] + "' is listed twice");
   }
 }
 
@@ -270,7 +270,7 @@ void parseFusion(KeyReader& root, FusionConfig& f) {
   YAML::Node filter = r.child("filter");
   if (filter) f.filter = parseFilterConfig(filter, f.filter, root.file(), "fusion.filter");
   r.getStrings("shadow", f.shadow);
-  checkShadowFilters(f.shadow, root.file(), "fusion.shadow");
+  checkFilterList(f.shadow, root.file(), "fusion.shadow");  // a shadow publishes on POSE_<TYPE>
   r.get("reorder_window", f.reorder_window, 0.0, 10.0);
   r.get("status_period", f.status_period, 0.01, 3600.0);
   r.get("max_time_jump", f.max_time_jump, 0.0, 1e9);

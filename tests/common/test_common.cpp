@@ -126,7 +126,7 @@ TEST(Config, AKeyGivenTwiceIsAnError) {
   EXPECT_NE(errorOf("faults: [{kind: phantom_marker, kind: wrong_offset, at_distance: 3}]").find("faults[0].kind: given twice"),
             std::string::npos);
   EXPECT_EQ(errorOf("fusion: {shadow: [ukf, dead_reckoning, ukf]}"),
-            "test.yaml: fusion.shadow[2]: 'ukf' is listed twice (both would publish on the same channel)");
+            "test.yaml: fusion.shadow[2]: 'ukf' is listed twice");
   // Equal values under different maps are fine.
   EXPECT_EQ(errorOf("vehicle: {speed: 1}\nodometry: {rate_hz: 100}\nimu: {rate_hz: 100}\n"), "(no error)");
 }

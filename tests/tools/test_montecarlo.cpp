@@ -74,6 +74,8 @@ TEST_F(MonteCarloCommand, BadOverridesAreRefusedWithTheirReason) {
       {"--pw-diag 1e-3,nan,1e-3", "nan"},
       // a uint64 option reads "-1" as 2^64 - 1; it was taken as "no seed given" here
       {"--seed-base -1", "--seed-base: -1 is not a seed"},
+      {"--filters ukf_gated,ukf_gated", "--filters: filters[1]: 'ukf_gated' is listed twice"},
+      {"--filters ukf_gated,bogus", "--filters: filters[1]: unknown filter type 'bogus'"},
       {"--seed-base 2.5", "--seed-base: 2.5 is not a seed"},
   };
   for (const auto& [args, why] : cases) {

@@ -13,6 +13,7 @@
 #include "lcmloc/common/convert.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/vp/vp.hpp"
+#include "run_command.hpp"
 
 using namespace lcmloc;
 namespace fs = std::filesystem;
@@ -34,6 +35,18 @@ vp::ImportOptions csvsIn(const fs::path& d) {
   o.odometry_csv = (d / "odo.csv").string();
   o.gps_csv = (d / "gps.csv").string();
   return o;
+}
+
+/// The message of the common::ConfigError f throws ("" and a failure when it throws none).
+template <typename F>
+std::string configError(F&& f) {
+  try {
+    f();
+  } catch (const common::ConfigError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "accepted";
+  return "";
 }
 
 }  // namespace
@@ -184,6 +197,147 @@ TEST(VpImport, WrongHeaderOrMissingFileIsAnError) {
   EXPECT_THROW(vp::importVictoriaPark(o), std::runtime_error);
   o.odometry_csv = (d / "missing.csv").string();
   EXPECT_THROW(vp::importVictoriaPark(o), std::runtime_error);
+  fs::remove_all(d);
+}
+
+TEST(VpImport, ADirectoryOrAByteOrderMarkIsToldApartFromAWrongHeader) {
+  const auto d = tempDir("bom");
+  // A UTF-8 byte-order mark (spreadsheet programs write one) and CRLF line ends: the header is the
+  // right one; it used to be refused as "expected the header ..., got '<BOM>time_ms,...'".
+  write(d / "odo.csv", "\xEF\xBB\xBFtime_ms,speed_mps,steering_rad\r\n1000.0,2.0,0.0\r\n1025.0,2.0,0.0\r\n");
+  write(d / "gps.csv", "\xEF\xBB\xBFtime_ms,Lo_m,La_m\n1000.0,10.0,20.0\n");
+  vp::ImportOptions o = csvsIn(d);
+  o.holdout_every = 0;
+  const auto r = vp::importVictoriaPark(o);
+  EXPECT_EQ(r.odometry_written, 2);
+  EXPECT_EQ(r.gps_written, 1);
+  EXPECT_TRUE(r.refusals.empty());
+  // A directory where a file is expected: said so (it used to be "line 1: expected the header
+  // ..., got ''").
+  fs::create_directory(d / "dir.csv");
+  for (std::string* file : {&o.odometry_csv, &o.gps_csv}) {
+    const std::string keep = *file;
+    *file = (d / "dir.csv").string();
+    try {
+      vp::importVictoriaPark(o);
+      ADD_FAILURE() << "a directory accepted";
+    } catch (const std::runtime_error& e) {
+      EXPECT_EQ(std::string(e.what()), "'" + *file + "': is a directory");
+    }
+    *file = keep;
+  }
+  fs::remove_all(d);
+}
+
+TEST(VpImport, OptionsThatMakeAWrongLogAreRefusedWithTheFlagBeforeAnythingIsWritten) {
+  const auto d = tempDir("options");
+  write(d / "odo.csv", "time_ms,speed_mps,steering_rad\n1000.0,2.0,0.1\n1025.0,2.0,0.1\n");
+  write(d / "gps.csv", "time_ms,Lo_m,La_m\n1000.0,10.0,20.0\n1020.0,11.0,20.0\n");
+  vp::ImportOptions o = csvsIn(d);
+  o.output = (d / "out.lcmlog").string();
+  auto refused = [&](const vp::ImportOptions& bad) {
+    const std::string what = configError([&] { vp::importVictoriaPark(bad); });
+    EXPECT_FALSE(fs::exists(bad.output)) << what;
+    return what;
+  };
+  // The held-out fixes on the filters' GPS channel (nothing held out), on the odometry channel
+  // (gps_fix_t among odometry_t) or on a channel without a name: all used to be accepted.
+  auto bad = o;
+  bad.heldout_channel = "GPS";
+  EXPECT_EQ(refused(bad).rfind("--heldout-channel: 'GPS' is the GPS channel", 0), 0u) << refused(bad);
+  bad.heldout_channel = "ODOMETRY";
+  EXPECT_EQ(refused(bad).rfind("--heldout-channel: 'ODOMETRY' is the odometry channel", 0), 0u) << refused(bad);
+  bad.heldout_channel = "";
+  EXPECT_EQ(refused(bad).rfind("--heldout-channel: '': a channel name must be non-empty", 0), 0u) << refused(bad);
+  bad = o;
+  bad.gps_channel = "FIX";  // the channels of the config: FIX is the filters' GPS
+  bad.heldout_channel = "FIX";
+  EXPECT_EQ(refused(bad).rfind("--heldout-channel: 'FIX' is the GPS channel", 0), 0u) << refused(bad);
+  // The encoder offset: 1e300 m made every speed 0 ("0.0 m travelled"); within the range but
+  // with a short wheelbase the correction 1 / (1 - tan(psi) H / L) divides by zero.
+  bad = o;
+  bad.encoder_offset = 1e300;
+  EXPECT_EQ(refused(bad).rfind("--encoder-offset: 1e+300 m is not in [-1.5, 1.5] m", 0), 0u) << refused(bad);
+  bad.encoder_offset = 0.76;
+  bad.wheelbase = 1.0;
+  EXPECT_EQ(refused(bad).rfind("--encoder-offset: 0.76 m with --wheelbase 1 m", 0), 0u) << refused(bad);
+  // The phase of the held-out fixes: the message names the flag and the range (it used to be
+  // "holdout: every must be >= 0 ...", exit 1).
+  bad = o;
+  bad.holdout_phase = 7;
+  EXPECT_EQ(refused(bad).rfind("--holdout-phase: 7 is not in [0, 4]", 0), 0u) << refused(bad);
+  bad.holdout_phase = -1;
+  bad.holdout_every = 0;
+  EXPECT_EQ(refused(bad).rfind("--holdout-phase: -1 is not >= 0", 0), 0u) << refused(bad);
+  o.heldout_channel = "REFERENCE";
+  o.encoder_offset = -1.5;
+  EXPECT_EQ(vp::importVictoriaPark(o).heldout_written, 1);
+  EXPECT_TRUE(fs::exists(o.output));
+
+  // The command line: exit 2, the option named, no log.
+  const std::string bin = LCMLOC_IMPORT_VP_BIN;
+  const std::string files =
+      "--odometry " + o.odometry_csv + " --gps " + o.gps_csv + " -o " + (d / "cli.lcmlog").string();
+  for (const std::string args : {"--encoder-offset 1e300", "--gps-std -1", "--max-rows -5", "--holdout-phase 7",
+                                 "--heldout-channel GPS", "--heldout-channel ODOMETRY", "--heldout-channel ''"}) {
+    const auto [code, text] = runCommand(bin, files + " " + args, d);
+    EXPECT_EQ(code, 2) << args << "\n" << text;
+    EXPECT_NE(text.find(args.substr(0, args.find(' ')) + ":"), std::string::npos) << args << "\n" << text;
+    EXPECT_FALSE(fs::exists(d / "cli.lcmlog")) << args;
+  }
+  const auto [code, text] = runCommand(bin, files + " --gps-std 0 --max-rows 0 --encoder-offset 1.5", d);
+  EXPECT_EQ(code, 0) << text;
+  fs::remove_all(d);
+}
+
+TEST(VpExperiment, OptionsAreCheckedBeforeAnythingIsWritten) {
+  const auto d = tempDir("experiment_options");
+  write(d / "vp_odometry.csv", "time_ms,speed_mps,steering_rad\n1000.0,2.0,0.1\n1025.0,2.0,0.1\n");
+  write(d / "vp_gps.csv", "time_ms,Lo_m,La_m\n1000.0,10.0,20.0\n1020.0,11.0,20.0\n");
+  const auto cfg = common::loadSystemConfig(LCMLOC_VP_YAML);
+  vp::ImportOptions o;
+  o.odometry_csv = (d / "vp_odometry.csv").string();
+  o.gps_csv = (d / "vp_gps.csv").string();
+  vp::ExperimentOptions eo;
+  eo.out_dir = (d / "out").string();
+  auto refused = [&](const vp::ImportOptions& imp, const vp::ExperimentOptions& exp) {
+    const std::string what = configError([&] { vp::runExperiment(cfg, imp, exp); });
+    EXPECT_FALSE(fs::exists(exp.out_dir)) << what;  // vp.lcmlog used to be written before a bad filter name
+    return what;
+  };
+  auto bad = eo;
+  bad.filters = {"tvekf", "bogus"};
+  EXPECT_NE(refused(o, bad).find("--filters: filters[1]: unknown filter type 'bogus'"), std::string::npos)
+      << refused(o, bad);
+  bad.filters = {"tvekf", "ukf_gps", "tvekf"};  // one track file and one score would be overwritten
+  EXPECT_EQ(refused(o, bad).rfind("--filters: filters[2]: 'tvekf' is listed twice", 0), 0u) << refused(o, bad);
+  bad.filters.clear();
+  EXPECT_EQ(refused(o, bad).rfind("--filters: no filter given", 0), 0u) << refused(o, bad);
+  // Every fix held out: the filters would run without GPS (it used to run and exit 0).
+  auto imp = o;
+  imp.holdout_every = 1;
+  EXPECT_EQ(refused(imp, eo).rfind("--holdout-every: 1 is not >= 2: every fix would be held out", 0), 0u)
+      << refused(imp, eo);
+  imp.holdout_every = 0;
+  EXPECT_EQ(refused(imp, eo).rfind("--holdout-every: 0 is not >= 2", 0), 0u) << refused(imp, eo);
+  imp.holdout_every = 5;
+  imp.holdout_phase = 7;
+  EXPECT_EQ(refused(imp, eo).rfind("--holdout-phase: 7 is not in [0, 4]", 0), 0u) << refused(imp, eo);
+  // The config's GPS channel as the held-out channel: the same check as lcmloc-import-vp's.
+  auto gps_heldout = cfg;
+  gps_heldout.channels.gps = o.heldout_channel;
+  EXPECT_THROW(vp::checkExperimentOptions(gps_heldout, o, eo), common::ConfigError);
+
+  // The command line: exit 2 before the output directory is made.
+  const std::string bin = LCMLOC_VP_EXPERIMENT_BIN;
+  const std::string base = "--dir " + d.string() + " --out " + eo.out_dir;
+  for (const std::string args : {"--filters bogus", "--filters tvekf,tvekf", "--holdout-every 1", "--holdout-phase 7",
+                                 "--max-rows -1", "--gps-std -1"}) {
+    const auto [code, text] = runCommand(bin, base + " " + args, d);
+    EXPECT_EQ(code, 2) << args << "\n" << text;
+    EXPECT_NE(text.find(args.substr(0, args.find(' ')) + ":"), std::string::npos) << args << "\n" << text;
+    EXPECT_FALSE(fs::exists(eo.out_dir)) << args;
+  }
   fs::remove_all(d);
 }
 

@@ -119,11 +119,9 @@ int run(const Options& o) {
 
   const auto names = splitList(o.filters);
   if (names.empty()) throw ConfigError("--filters", "filters", "no filter given");
-  const auto known = lcmloc::core::filterTypes();
+  lcmloc::common::checkFilterList(names, "--filters", "filters");  // the report has one entry per type
   std::vector<lcmloc::core::FilterConfig> filters;
   for (const auto& n : names) {
-    if (std::find(known.begin(), known.end(), n) == known.end())
-      throw ConfigError("--filters", "filters", "unknown filter type '" + n + "'");
     auto f = base_filter;
     f.type = n;
     filters.push_back(f);

@@ -80,7 +80,7 @@ int main(int argc, char** argv) {
           item += shadow[i];
         }
       }
-      common::checkShadowFilters(cfg.fusion.shadow, "--shadow", "shadow");
+      common::checkFilterList(cfg.fusion.shadow, "--shadow", "shadow");
     }
     if (bench) return replay::runBench(cfg, bo);
     if (input.empty() || output.empty()) {

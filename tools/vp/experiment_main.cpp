@@ -25,10 +25,14 @@ int main(int argc, char** argv) {
   app.add_option("--dir", dir, "data directory holding vp_odometry.csv and vp_gps.csv")->capture_default_str();
   app.add_option("--out", eo.out_dir, "output directory")->capture_default_str();
   app.add_option("--filters", eo.filters, "filters to run")->delimiter(',')->capture_default_str();
-  app.add_option("--holdout-every", io.holdout_every, "hold every k-th fix out")->capture_default_str()
-      ->check(lcmloc::common::positive());
-  app.add_option("--holdout-phase", io.holdout_phase, "fix i is held out when i % k == phase")->capture_default_str();
-  app.add_option("--max-rows", io.max_rows, "a slice: the first N odometry rows and the GPS rows of their time span (0 = all)")->capture_default_str();
+  app.add_option("--holdout-every", io.holdout_every,
+                 "hold every k-th fix out, k >= 2 (the filters get the others and are scored at these)")
+      ->capture_default_str();
+  app.add_option("--holdout-phase", io.holdout_phase, "fix i is held out when i % k == phase, phase in [0, k)")
+      ->capture_default_str();
+  app.add_option("--max-rows", io.max_rows,
+                 "a slice: the first N odometry rows and the GPS rows of their time span (0 = all)")
+      ->capture_default_str()->check(lcmloc::common::nonNegative());
   app.add_option("--gps-std", io.gps_std, "position_std written into the fixes [m] (0 = gnss.gps_std)")
       ->capture_default_str()
       ->check(lcmloc::common::nonNegative());
@@ -36,6 +40,7 @@ int main(int argc, char** argv) {
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-vp-experiment", [&]() -> int {
     const auto cfg = common::loadSystemConfig(opts.config);
+    vp::checkExperimentOptions(cfg, io, eo);  // before the output directory is made
     common::prepareOutputDir(eo.out_dir);
     io.odometry_csv = dir + "/vp_odometry.csv";
     io.gps_csv = dir + "/vp_gps.csv";

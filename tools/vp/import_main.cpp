@@ -26,16 +26,19 @@ int main(int argc, char** argv) {
   app.add_option("--gps", io.gps_csv, "GPS CSV (overrides --dir)");
   app.add_option("-o,--output", io.output, "output LCM log")->required();
   app.add_option("--wheelbase", io.wheelbase, "L [m]")->capture_default_str()->check(lcmloc::common::positive());
-  app.add_option("--encoder-offset", io.encoder_offset, "H: speed encoder left of the rear axle centre [m]")
-      ->capture_default_str();
+  app.add_option("--encoder-offset", io.encoder_offset,
+                 "H: speed encoder left of the rear axle centre [m], at most half a vehicle's track")
+      ->capture_default_str()->check(CLI::Range(vp::kEncoderOffset.lo, vp::kEncoderOffset.hi));
   app.add_option("--holdout-every", io.holdout_every, "hold every k-th fix out on GPS_HELDOUT (0 = none)")
       ->capture_default_str()->check(lcmloc::common::nonNegative());
-  app.add_option("--holdout-phase", io.holdout_phase, "fix i is held out when i % k == phase")->capture_default_str();
-  app.add_option("--heldout-channel", io.heldout_channel, "channel of the held-out fixes")->capture_default_str();
+  app.add_option("--holdout-phase", io.holdout_phase, "fix i is held out when i % k == phase, phase in [0, k)")
+      ->capture_default_str();
+  app.add_option("--heldout-channel", io.heldout_channel,
+                 "channel of the held-out fixes (not the config's odometry or GPS channel)")->capture_default_str();
   app.add_option("--gps-std", io.gps_std, "position_std written into the fixes [m] (0 = the filter's gnss.gps_std)")
-      ->capture_default_str();
+      ->capture_default_str()->check(lcmloc::common::nonNegative());
   app.add_option("--max-rows", io.max_rows, "a slice: the first N odometry rows and the GPS rows of their time span (0 = all)")
-      ->capture_default_str();
+      ->capture_default_str()->check(lcmloc::common::nonNegative());
   app.add_option("--show-refused", show, "list at most this many refused rows")
       ->capture_default_str()
       ->check(lcmloc::common::nonNegative());

@@ -38,16 +38,37 @@ bool interpolate(const std::vector<std::array<double, 3>>& tr, double t, double&
   return true;
 }
 
+namespace {
+/// The import options of the experiment: its log in out_dir, the datum and channels of cfg.
+ImportOptions experimentImport(const common::SystemConfig& cfg, ImportOptions imp, const ExperimentOptions& opt) {
+  imp.output = opt.out_dir + "/vp.lcmlog";
+  imp.datum = cfg.datum;
+  imp.odometry_channel = cfg.channels.odometry;
+  imp.gps_channel = cfg.channels.gps;
+  return imp;
+}
+}  // namespace
+
+void checkExperimentOptions(const common::SystemConfig& cfg, const ImportOptions& imp, const ExperimentOptions& opt) {
+  if (opt.filters.empty()) throw common::ConfigError("--filters", "", "no filter given");
+  common::checkFilterList(opt.filters, "--filters", "filters");
+  if (imp.holdout_every < 2)
+    throw common::ConfigError(
+        "--holdout-every", "",
+        fmt::format("{} is not >= 2: {}", imp.holdout_every,
+                    imp.holdout_every == 1 ? "every fix would be held out and the filters would run without GPS"
+                                           : "no fix would be held out and nothing scored"));
+  checkImportOptions(experimentImport(cfg, imp, opt));
+}
+
 ExperimentResult runExperiment(const common::SystemConfig& cfg0, ImportOptions imp, const ExperimentOptions& opt) {
   namespace fs = std::filesystem;
   const auto t_start = std::chrono::steady_clock::now();
+  checkExperimentOptions(cfg0, imp, opt);
   fs::create_directories(opt.out_dir);
   ExperimentResult res;
-  res.log_path = opt.out_dir + "/vp.lcmlog";
-  imp.output = res.log_path;
-  imp.datum = cfg0.datum;
-  imp.odometry_channel = cfg0.channels.odometry;
-  imp.gps_channel = cfg0.channels.gps;
+  imp = experimentImport(cfg0, imp, opt);
+  res.log_path = imp.output;
   res.import = importVictoriaPark(imp);
   spdlog::info("imported -> {}\n{}", res.log_path, importSummary(imp, res.import, 5));
   const auto& fixes = res.import.fixes;

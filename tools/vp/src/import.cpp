@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "lcmloc/common/config.hpp"
 #include "lcmloc/common/csv.hpp"
 #include "lcmloc/common/geodesy.hpp"
 #include "lcmloc/import/checks.hpp"
@@ -63,11 +64,37 @@ Rows readRows(const std::string& path, const std::string& header, int64_t max_ro
 
 }  // namespace
 
+void checkImportOptions(const ImportOptions& opt) {
+  auto refuse = [](const std::string& flag, const std::string& why) { throw common::ConfigError(flag, "", why); };
+  if (!(opt.wheelbase > 0)) refuse("--wheelbase", fmt::format("{} is not > 0", opt.wheelbase));
+  const double h = opt.encoder_offset;
+  if (!(h >= kEncoderOffset.lo && h <= kEncoderOffset.hi))
+    refuse("--encoder-offset", fmt::format("{} m is not in [{}, {}] m (half a vehicle's track at most)", h,
+                                           kEncoderOffset.lo, kEncoderOffset.hi));
+  // v_M = v_e / (1 - tan(psi) H / L): finite for every steering angle the import accepts
+  if (std::abs(h) * std::tan(opt.max_steering) >= opt.wheelbase)
+    refuse("--encoder-offset", fmt::format("{} m with --wheelbase {} m: the speed correction 1 / (1 - tan(psi) H / L) "
+                                           "is infinite at a steering angle within {} rad",
+                                           h, opt.wheelbase, opt.max_steering));
+  if (opt.holdout_every < 0) refuse("--holdout-every", fmt::format("{} is not >= 0", opt.holdout_every));
+  if (opt.holdout_phase < 0 || (opt.holdout_every > 0 && opt.holdout_phase >= opt.holdout_every))
+    refuse("--holdout-phase",
+           opt.holdout_every > 0 ? fmt::format("{} is not in [0, {}] (fix i is held out when i % --holdout-every {} == "
+                                               "phase)", opt.holdout_phase, opt.holdout_every - 1, opt.holdout_every)
+                                 : fmt::format("{} is not >= 0", opt.holdout_phase));
+  const std::string& held = opt.heldout_channel;
+  if (held.empty() || held.find_first_of(" \t\n") != std::string::npos)
+    refuse("--heldout-channel", "'" + held + "': a channel name must be non-empty and without blanks");
+  if (held == opt.gps_channel)
+    refuse("--heldout-channel",
+           "'" + held + "' is the GPS channel (channels.gps) the filters read: nothing would be held out");
+  if (held == opt.odometry_channel)
+    refuse("--heldout-channel",
+           "'" + held + "' is the odometry channel (channels.odometry): the held-out fixes would be mixed into it");
+}
+
 ImportResult importVictoriaPark(const ImportOptions& opt) {
-  if (!(opt.wheelbase > 0) || !std::isfinite(opt.encoder_offset))
-    throw std::invalid_argument("wheelbase must be > 0 and the encoder offset finite");
-  if (opt.holdout_every < 0 || (opt.holdout_every > 0 && (opt.holdout_phase < 0 || opt.holdout_phase >= opt.holdout_every)))
-    throw std::invalid_argument("holdout: every must be >= 0 and phase in [0, every)");
+  checkImportOptions(opt);
   if (!opt.output.empty()) common::refuseOutputOverInputs("--output", opt.output, {opt.odometry_csv, opt.gps_csv});
   ImportResult r;
   import::EventLog events;

@@ -136,8 +136,9 @@ core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterC
 void checkSampledRate(double rate_hz, const models::ScenarioConfig& sc, const std::string& file,
                       const std::string& key);
 
-/// Shadow filter types (`fusion.shadow`, `lcmloc-replay --shadow`): each a known type, none twice
-/// (a shadow publishes on POSE_<TYPE>). Throws ConfigError naming key[i].
-void checkShadowFilters(const std::vector<std::string>& shadow, const std::string& file, const std::string& key);
+/// A list of filter types (`fusion.shadow`, `lcmloc-replay --shadow`, the experiments' --filters):
+/// each a known type, none twice (a shadow publishes on POSE_<TYPE>, an experiment writes one
+/// track per filter). Throws ConfigError naming key[i].
+void checkFilterList(const std::vector<std::string>& types, const std::string& file, const std::string& key);
 
 }  // namespace lcmloc::common

@@ -13,6 +13,11 @@
 
 namespace lcmloc::vp {
 
+/// --encoder-offset H [m]: the encoder wheel is half a vehicle's track from the axle centre, so
+/// |H| is at most 1.5 m (within it the correction 1 / (1 - tan(psi) H / L) stays finite for the
+/// default wheelbase and every accepted steering angle).
+inline constexpr common::Bounds kEncoderOffset{-1.5, 1.5};
+
 struct ImportOptions {
   std::string odometry_csv;           ///< vp_odometry.csv: time_ms, speed_mps, steering_rad
   std::string gps_csv;                ///< vp_gps.csv: time_ms, Lo_m (east), La_m (north)
@@ -57,9 +62,18 @@ struct ImportResult {
   bool interrupted = false;
 };
 
+/// Throws common::ConfigError naming the flag for an option that would make a wrong log:
+/// --wheelbase not > 0, --encoder-offset outside kEncoderOffset, --holdout-every < 0,
+/// --holdout-phase outside [0, every) (>= 0 when every is 0), and a --heldout-channel that is
+/// empty, holds a blank or is a channel the import writes (odometry or GPS: the held-out fixes
+/// would reach the filters or be read as odometry).
+void checkImportOptions(const ImportOptions& opt);
+
 /// Reads both files, converts and (when output is set) writes the log in time order. Refused
-/// rows are listed with file, line and reason. Throws std::runtime_error when a file cannot be
-/// opened, its header is not the expected one, or the output cannot be written.
+/// rows are listed with file, line and reason. Throws common::ConfigError for the options
+/// (checkImportOptions) or an output that is an input file, std::runtime_error when a file is
+/// missing, a directory or cannot be opened, its header is not the expected one (a leading UTF-8
+/// byte-order mark is skipped), or the output cannot be written.
 ImportResult importVictoriaPark(const ImportOptions& opt);
 
 /// Human report of an import (counts, time span, the first refusals).
@@ -93,10 +107,16 @@ struct ExperimentResult {
   double seconds = 0;
 };
 
-/// Imports (into out_dir/vp.lcmlog), replays the log through the fusion daemon's code once per
-/// filter (lcmloc-replay's replayLog: the active filter subscribes to ODOMETRY and GPS only,
-/// never to GPS_HELDOUT) and scores each estimate at the held-out fixes (linear interpolation
-/// of the pose stream at the fix time). Writes report.json, data files, plot.gp, drive.png
+/// Throws common::ConfigError naming the flag for options that make no experiment, before
+/// anything is written: an empty --filters, a filter type cfg does not know or one listed
+/// twice, --holdout-every below 2 (0 holds no fix out: nothing to score; 1 holds every fix out:
+/// the filters get no GPS) and the import options (checkImportOptions, with cfg's channels).
+void checkExperimentOptions(const common::SystemConfig& cfg, const ImportOptions& imp, const ExperimentOptions& opt);
+
+/// Checks the options (checkExperimentOptions), imports (into out_dir/vp.lcmlog), replays the log
+/// through the fusion daemon's code once per filter (lcmloc-replay's replayLog: the active filter
+/// subscribes to ODOMETRY and GPS only, never to GPS_HELDOUT) and scores each estimate at the
+/// held-out fixes (linear interpolation of the pose stream at the fix time). Writes report.json, data files, plot.gp, drive.png
 /// and error.png into out_dir.
 ExperimentResult runExperiment(const common::SystemConfig& cfg, ImportOptions imp, const ExperimentOptions& opt);
 
