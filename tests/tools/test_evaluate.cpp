@@ -560,6 +560,44 @@ TEST_F(EvaluateTest, BadInputsGiveClearErrors) {
   EXPECT_EQ(evaluate(file("apart.lcmlog") + out + " --all-poses --truth-channel POSE_DEAD_RECKONING"), 2);
   EXPECT_NE(evaluate(file("apart.lcmlog") + out + " --log-level loud"), 0);
   EXPECT_NE(output_.find("--log-level: loud not in"), std::string::npos) << output_;
+  // A channel of another type: --gate-channel GROUND_TRUTH printed one "undecodable" warning per
+  // message and exited 0; --pose-channel too before its error.
+  {
+    LogWriter w(file("run.lcmlog"));
+    for (int i = 0; i < 30; ++i) {
+      w.add("GROUND_TRUTH", truthMsg(kT0 + i * 1000, 0.01 * i, 0, 0), kT0 + i * 1000);
+      w.add("POSE", poseMsg(kT0 + i * 1000, 0.01 * i, 0, 0, Eigen::Matrix3d::Identity()), kT0 + i * 1000);
+      w.add("TRUTH_COPY", truthMsg(kT0 + i * 1000, 0.01 * i, 0, 0), kT0 + i * 1000);
+    }
+  }
+  EXPECT_EQ(evaluate(file("run.lcmlog") + out), 0) << output_;
+  EXPECT_EQ(evaluate(file("run.lcmlog") + out + " --gate-channel TRUTH_COPY"), 2);
+  EXPECT_NE(output_.find("--gate-channel TRUTH_COPY: none of its 30 messages is of the type that option reads "
+                         "(gate_decision_t): is it the right channel?"), std::string::npos) << output_;
+  EXPECT_EQ(output_.find("undecodable"), std::string::npos) << output_;
+  EXPECT_EQ(evaluate(file("run.lcmlog") + out + " --pose-channel TRUTH_COPY"), 2);
+  EXPECT_NE(output_.find("--pose-channel TRUTH_COPY: none of its 30 messages"), std::string::npos) << output_;
+}
+
+// Many bad messages: the first ten are warned about, then how many more (report.json has all).
+TEST_F(EvaluateTest, ManyIssuesAreWarnedAboutTenAtATime) {
+  {
+    LogWriter w(file("run.lcmlog"));
+    for (int i = 0; i < 40; ++i) {
+      const int64_t t = kT0 + i * 10000;
+      w.add("GROUND_TRUTH", truthMsg(t, 0.01 * i, 0, 0), t);
+      w.add("POSE", poseMsg(t, 0.01 * i, 0, 0, Eigen::Matrix3d::Identity()), t);
+      w.add("POSE", truthMsg(t, 0, 0, 0), t);  // 40 messages of another type on POSE
+    }
+  }
+  ASSERT_EQ(evaluate(file("run.lcmlog") + " --no-plots -o " + file("out")), 0) << output_;
+  std::size_t warned = 0;
+  for (std::size_t p = output_.find("undecodable POSE message"); p != std::string::npos;
+       p = output_.find("undecodable POSE message", p + 1))
+    ++warned;
+  EXPECT_EQ(warned, 10u + 10u) << output_;  // the warnings, and the summary's list of the first ten
+  EXPECT_NE(output_.find("... and 30 more issue(s) (report.json lists them all)"), std::string::npos) << output_;
+  EXPECT_EQ(report(file("out"))["log"]["issues"].size(), 40u);
 }
 
 TEST_F(EvaluateTest, DamagedLogIsReportedAndTheRestUsed) {

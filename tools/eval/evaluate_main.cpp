@@ -12,6 +12,7 @@
 
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/process.hpp"
+#include "lcmloc/core/text.hpp"
 #include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/trajectory.hpp"
 #include "lcmloc/eval/trajectory_report.hpp"
@@ -142,8 +143,27 @@ int main(int argc, char** argv) {
       spdlog::error("{}", e.what());
       return kExitNothingUsable;
     }
-    for (const auto& i : log.issues)
-      spdlog::warn("{}: {}", log_path, i.describe());
+    // A channel none of whose messages is of the type it should carry: the wrong channel given.
+    const std::pair<std::string, std::string> expected[] = {{"--pose-channel", lo.pose_channel},
+                                                            {"--truth-channel", lo.truth_channel},
+                                                            {"--gate-channel", lo.gate_channel}};
+    for (const auto& [flag, ch] : expected) {
+      const auto n = log.channel_counts.find(ch);
+      const auto bad = log.undecodable.find(ch);
+      if (n != log.channel_counts.end() && bad != log.undecodable.end() && bad->second == n->second) {
+        spdlog::error("{} {}: none of its {} messages is of the type that option reads ({}): is it the right "
+                      "channel?", flag, core::printable(ch), n->second,
+                      flag == "--pose-channel" ? "pose_t" : flag == "--truth-channel" ? "ground_truth_t or gps_fix_t"
+                                                                                      : "gate_decision_t");
+        return kExitBadConfig;
+      }
+    }
+    constexpr std::size_t kShownIssues = 10;
+    for (std::size_t i = 0; i < log.issues.size() && i < kShownIssues; ++i)
+      spdlog::warn("{}: {}", log_path, log.issues[i].describe());
+    if (log.issues.size() > kShownIssues)
+      spdlog::warn("{}: ... and {} more issue(s) (report.json lists them all)", log_path,
+                   log.issues.size() - kShownIssues);
     if (log.damaged)
       spdlog::warn("{}: damaged log: {} of {} bytes unreadable; evaluating the {} intact events", log_path,
                    log.bytes_unreadable, log.file_size, log.events_read);

@@ -69,9 +69,11 @@ class TrajectoryDecoder {
   template <typename T>
   bool decode(const lcm::LogEvent& ev, T& msg, bool report = true) {
     if (msg.decode(ev.data, 0, ev.datalen) >= 0) return true;
-    if (report)
+    if (report) {
+      ++out_.undecodable[ev.channel];
       issue("undecodable " + ev.channel + " message (" + std::to_string(ev.datalen) + " bytes, not a " +
             T::getTypeName() + ")");
+    }
     return false;
   }
 
@@ -120,6 +122,7 @@ class TrajectoryDecoder {
     }
     lcmloc::gps_fix_t f{};
     if (!decode(ev, f, false)) {
+      ++out_.undecodable[ev.channel];
       issue("undecodable " + ev.channel + " message (" + std::to_string(ev.datalen) +
             " bytes, neither a ground_truth_t nor a gps_fix_t)");
       return;

@@ -66,6 +66,7 @@ struct TrajectoryLog {
   int64_t file_size = 0, events_read = 0, bytes_unreadable = 0;
   bool damaged = false, interrupted = false;
   std::map<std::string, int64_t> channel_counts;
+  std::map<std::string, int64_t> undecodable;  ///< per pose, truth or gate channel: messages not of its type
   std::vector<EstimateTrack> tracks; ///< the pose channel first (even when empty), then POSE_* by name
   std::vector<TruthPose> truth;      ///< sorted by utime, one sample per utime
   std::string truth_type;            ///< "ground_truth_t", "gps_fix_t" or "" (none decoded)
