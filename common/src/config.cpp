@@ -404,6 +404,16 @@ core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterC
   }
   ins_config::parseInsFilter(r, c.ins);
   r.finish();
+  // What only the values together decide (p0_diag > 0 where a range allows 0, the sigma-point
+  // parameters, ...): the filter's own checks, so that the file and key are named here rather
+  // than when a process builds the filter.
+  try {
+    core::makeFilter(c, core::MarkerMap{});
+  } catch (const std::invalid_argument& e) {
+    std::string why = e.what();
+    if (why.rfind("filter config: ", 0) == 0) why.erase(0, 15);
+    throw ConfigError(file, key_prefix, why);
+  }
   return c;
 }
 

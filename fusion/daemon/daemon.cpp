@@ -64,9 +64,16 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
     spdlog::info("{}: {}", event, core::printable(detail));
     publishStatus(event, detail, utime);
   };
-  const auto map = cfg.fusion.map_file.empty()
-                       ? models::makeMarkerMap(models::Path(cfg.scenario.path), cfg.scenario.markers)
-                       : common::csv::loadMap(cfg.fusion.map_file);
+  core::MarkerMap map;
+  if (cfg.fusion.map_file.empty()) {
+    map = models::makeMarkerMap(models::Path(cfg.scenario.path), cfg.scenario.markers);
+  } else {
+    try {
+      map = common::csv::loadMap(cfg.fusion.map_file);
+    } catch (const std::runtime_error& e) {  // a configuration error: the key that names the file
+      throw common::ConfigError(cfg.file, "fusion.map_file", e.what());
+    }
+  }
   engine_ = std::make_unique<core::FusionEngine>(ec, map, out);
 
   const auto& ch = cfg.channels;

@@ -142,6 +142,14 @@ TEST(Config, ASensorRateAboveTheGroundTruthRateIsAnError) {
   EXPECT_EQ(errorOf("vehicle: {rate_hz: 1000}\nodometry: {rate_hz: 1000}\nimu: {rate_hz: 500}"), "(no error)");
 }
 
+// What only the filter judges (p0_diag > 0 where the key's range allows 0): its own check at load
+// time, with the file and key named (it said "filter config: p0_diag must be > 0", exit 1, when
+// the daemon built the filter).
+TEST(Config, TheFiltersOwnChecksRunWhenTheConfigIsRead) {
+  EXPECT_EQ(errorOf("fusion: {filter: {p0_diag: [0, 0, 0]}}"), "test.yaml: fusion.filter: p0_diag must be > 0");
+  EXPECT_EQ(errorOf("fusion: {filter: {p0_diag: [1.0e-2, 1.0e-2, 1.0e-2]}}"), "(no error)");
+}
+
 TEST(Config, WrongTypeAndRangeAreClear) {
   const std::string t = errorOf("vehicle: {speed: fast}");
   EXPECT_EQ(t, "test.yaml: vehicle.speed: expected a number, got 'fast'");

@@ -461,6 +461,12 @@ TEST_F(ReplayProcessTest, HelpAndCtlWithoutDaemonOrWithBadArguments) {
   }
   Child noout(LCMLOC_REPLAY, {"in.lcmlog", "--config", LCMLOC_PAPER_YAML}, path("noout.out"));
   EXPECT_EQ(noout.wait(10s).value_or(-1), 2) << noout.output();
+  // A map file that cannot be read is a configuration error naming the key (it was exit 1 without).
+  const std::string no_map = writeFile("no_map.yaml", "fusion: {map_file: /nonexistent/map.csv}\n");
+  Child map(LCMLOC_REPLAY, {"in.lcmlog", "-o", path("o.lcmlog"), "--config", no_map}, path("map.out"));
+  EXPECT_EQ(map.wait(10s).value_or(-1), 2) << map.output();
+  EXPECT_NE(map.output().find("fusion.map_file: '/nonexistent/map.csv': cannot open"), std::string::npos)
+      << map.output();
   // Two shadows of one type would both publish on POSE_UKF; --no-shadow beside --shadow was ignored.
   const std::pair<std::vector<std::string>, std::string> shadows[] = {
       {{"--shadow", "ukf,dead_reckoning,ukf"}, "--shadow: shadow[2]: 'ukf' is listed twice"},
