@@ -463,7 +463,8 @@ TEST_F(ReplayProcessTest, HelpAndCtlWithoutDaemonOrWithBadArguments) {
   EXPECT_EQ(noout.wait(10s).value_or(-1), 2) << noout.output();
   // A map file that cannot be read is a configuration error naming the key (it was exit 1 without).
   const std::string no_map = writeFile("no_map.yaml", "fusion: {map_file: /nonexistent/map.csv}\n");
-  Child map(LCMLOC_REPLAY, {"in.lcmlog", "-o", path("o.lcmlog"), "--config", no_map}, path("map.out"));
+  const std::string one_second = ovalConfigAndLog(1.0).second;
+  Child map(LCMLOC_REPLAY, {one_second, "-o", path("o.lcmlog"), "--config", no_map}, path("map.out"));
   EXPECT_EQ(map.wait(10s).value_or(-1), 2) << map.output();
   EXPECT_NE(map.output().find("fusion.map_file: '/nonexistent/map.csv': cannot open"), std::string::npos)
       << map.output();
