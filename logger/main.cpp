@@ -12,6 +12,7 @@
 #include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 
 #include <spdlog/spdlog.h>
 
@@ -160,6 +161,12 @@ int main(int argc, char** argv) {
     wo.flush_period = flush_period > 0 ? flush_period : cfg.logger.flush_period;
     wo.overwrite = overwrite;
     const std::string regex = channelRegex(channels.empty() ? cfg.logger.channels : channels);
+    try {
+      std::regex check(regex, std::regex::extended);  // LCM compiles it as a POSIX extended regex
+    } catch (const std::regex_error& e) {
+      throw common::ConfigError(channels.empty() ? cfg.file : "--channel", channels.empty() ? "logger.channels" : "",
+                                "bad channel regex '" + regex + "': " + e.what());
+    }
     const std::string hb_channel = cfg.channels.heartbeat;
     const std::string status_channel = cfg.logger.status_channel;
     const std::string url = withReceiveBuffer(opts.lcm_url, cfg.logger.recv_buf_size);

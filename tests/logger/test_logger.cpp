@@ -447,4 +447,16 @@ TEST_F(LoggerTest, BadConfigIsAClearErrorWithExitTwo) {
   Child logger(LCMLOC_LOGGER, {"--lcm-url", url_, "--config", config_}, path("logger.out"));
   ASSERT_EQ(logger.wait(10s), std::optional<int>(2)) << logger.output();
   EXPECT_NE(logger.output().find("logger.flush_period"), std::string::npos) << logger.output();
+  // A channel regex LCM cannot compile: exit 2 naming it, before any file is made (it was exit 1
+  // after the log file had been created).
+  std::ofstream(config_) << "logger: {channels: [\"[\"]}\n";
+  Child bad_key(LCMLOC_LOGGER, {"--lcm-url", url_, "--config", config_, "-o", path("never.lcmlog")}, path("key.out"));
+  ASSERT_EQ(bad_key.wait(10s), std::optional<int>(2)) << bad_key.output();
+  EXPECT_NE(bad_key.output().find("logger.channels: bad channel regex"), std::string::npos) << bad_key.output();
+  std::ofstream(config_) << "logger: {}\n";
+  Child bad_flag(LCMLOC_LOGGER, {"--lcm-url", url_, "--config", config_, "-o", path("never.lcmlog"), "--channel", "(A"},
+                 path("flag.out"));
+  ASSERT_EQ(bad_flag.wait(10s), std::optional<int>(2)) << bad_flag.output();
+  EXPECT_NE(bad_flag.output().find("--channel: bad channel regex"), std::string::npos) << bad_flag.output();
+  EXPECT_FALSE(std::filesystem::exists(path("never.lcmlog")));
 }

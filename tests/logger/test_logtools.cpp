@@ -415,6 +415,12 @@ TEST_F(LogTools, ToCsvOnAStdoutThatCannotBeWrittenFails) {
   }
   const ToolRun ok = tool("to-csv " + log + " -c ODOMETRY");
   EXPECT_EQ(ok.rc, 0) << ok.err;
+  // A channel regex that does not compile is a bad argument (exit 2; it was 1).
+  for (const std::string& cmd : {"to-csv " + log + " -c '['", "cut " + log + " -o " + path("x.lcmlog") + " -c '('"}) {
+    const ToolRun r = tool(cmd);
+    EXPECT_EQ(r.rc, 2) << cmd << "\n" << r.err;
+    EXPECT_NE(r.err.find("--channel: bad channel regex"), std::string::npos) << r.err;
+  }
   // cut with nothing in its window writes an empty log and says so.
   const ToolRun none = tool("cut " + log + " -o " + path("none.lcmlog") + " -c NOPE");
   EXPECT_EQ(none.rc, 0) << none.err;

@@ -100,7 +100,7 @@ class ChannelFilter {
     try {
       if (!all_) re_ = std::regex(r);
     } catch (const std::regex_error& e) {
-      throw std::runtime_error("bad channel regex '" + r + "': " + e.what());
+      throw common::ConfigError("--channel", "", "bad channel regex '" + r + "': " + e.what());
     }
   }
   bool operator()(const std::string& channel) const { return all_ || std::regex_match(channel, re_); }
