@@ -271,5 +271,12 @@ TEST(LandmarkExperiment, CommandSolvesARecordedLog) {
                              "' --out '" + (dir / "r3").string() + "'");
   EXPECT_EQ(rc, 1) << out;
   EXPECT_NE(out.find("has no VISION message"), std::string::npos) << out;
+  // An off-centre position outside the triangle's safe circle: a bad argument, nothing written
+  // (it was exit 1 after the output directory had been made).
+  std::tie(rc, out) = runCmd("--config '" + (dir / "map.yaml").string() + "' --off-centre 100,100 --out '" +
+                             (dir / "r4").string() + "'");
+  EXPECT_EQ(rc, 2) << out;
+  EXPECT_NE(out.find("--off-centre: 100,100 is not inside 0.9 circumradius"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "r4"));
   fs::remove_all(dir);
 }

@@ -32,7 +32,8 @@ int main(int argc, char** argv) {
       ->check(lcmloc::common::seed());
   app.add_option("--calibration-stage", eo.calibration_stage,
                  "dead reckoning freezes the scale estimate this long after the start [s]")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(lcmloc::common::nonNegative());
   app.add_flag("--fixes", eo.fixes,
                "three-landmark fixes: lcmloc-vision's model (config `vision`, top-level `landmarks`) "
                "re-initializes both filters; the report gives the error before/after each fix");

@@ -117,6 +117,10 @@ int main(int argc, char** argv) {
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-landmark-experiment", [&] {
     const auto cfg = common::loadSystemConfig(opts.config);
+    if (std::hypot(off_centre[0], off_centre[1]) >= 0.9)
+      throw common::ConfigError("--off-centre", "",
+                                fmt::format("{},{} is not inside 0.9 circumradius (the danger circle is at 1)",
+                                            off_centre[0], off_centre[1]));
     common::prepareOutputDir(out);
     const auto& v = cfg.scenario.vision;
     eo.seed = seed ? seed : v.seed ? v.seed : models::componentSeed(cfg.scenario.seed, "vision");
