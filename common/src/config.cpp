@@ -150,6 +150,12 @@ void parseGps(KeyReader& root, models::GpsSensorConfig& g, GpsDriverConfig& d) {
     throw ConfigError(root.file(), "gps.source", "unknown source '" + d.source + "' (valid: sim, gpsd)");
   r.get("gpsd_host", d.gpsd_host);
   r.get("gpsd_port", d.gpsd_port);
+  {
+    const std::string& p = d.gpsd_port;
+    const bool digits = !p.empty() && p.size() <= 5 && std::all_of(p.begin(), p.end(), [](char c) { return c >= '0' && c <= '9'; });
+    if (!digits || std::stoi(p) < 1 || std::stoi(p) > 65535)
+      throw ConfigError(root.file(), "gps.gpsd_port", "'" + p + "' is not a TCP port number (1-65535; gpsd's is 2947)");
+  }
   r.get("time_source", d.time_source);
   if (d.time_source != "fix" && d.time_source != "receive")
     throw ConfigError(root.file(), "gps.time_source",

@@ -150,6 +150,13 @@ TEST(Config, TheFiltersOwnChecksRunWhenTheConfigIsRead) {
   EXPECT_EQ(errorOf("fusion: {filter: {p0_diag: [1.0e-2, 1.0e-2, 1.0e-2]}}"), "(no error)");
 }
 
+// gps.gpsd_port was taken as any string and failed only when lcmloc-gps connected.
+TEST(Config, TheGpsdPortIsANumber) {
+  EXPECT_EQ(errorOf("gps: {gpsd_port: abc}"), "test.yaml: gps.gpsd_port: 'abc' is not a TCP port number (1-65535; gpsd's is 2947)");
+  EXPECT_NE(errorOf("gps: {gpsd_port: 70000}").find("gps.gpsd_port: '70000' is not a TCP port"), std::string::npos);
+  EXPECT_EQ(errorOf("gps: {gpsd_port: 2948}"), "(no error)");
+}
+
 TEST(Config, WrongTypeAndRangeAreClear) {
   const std::string t = errorOf("vehicle: {speed: fast}");
   EXPECT_EQ(t, "test.yaml: vehicle.speed: expected a number, got 'fast'");
