@@ -154,6 +154,10 @@ int main(int argc, char** argv) {
 
     logger::WriterOptions wo;
     wo.pattern = output.empty() ? cfg.logger.output : output;
+    if (std::error_code ec; std::filesystem::is_directory(wo.pattern, ec))
+      throw common::ConfigError(output.empty() ? cfg.file : "--output", output.empty() ? "logger.output" : "",
+                                "'" + wo.pattern + "' is a directory: give a file name in it, e.g. '" +
+                                    (std::filesystem::path(wo.pattern) / "run.lcmlog").string() + "'");
     wo.capacity = static_cast<std::size_t>(cfg.logger.queue_capacity);
     wo.queue_bytes = cfg.logger.queue_bytes;
     wo.max_file_bytes = max_mb >= 0 ? static_cast<int64_t>(max_mb * 1e6) : cfg.logger.max_file_bytes;

@@ -459,4 +459,11 @@ TEST_F(LoggerTest, BadConfigIsAClearErrorWithExitTwo) {
   ASSERT_EQ(bad_flag.wait(10s), std::optional<int>(2)) << bad_flag.output();
   EXPECT_NE(bad_flag.output().find("--channel: bad channel regex"), std::string::npos) << bad_flag.output();
   EXPECT_FALSE(std::filesystem::exists(path("never.lcmlog")));
+  // A directory as the output: it wrote DIR-001 beside it, saying DIR was "an earlier recording".
+  std::filesystem::create_directories(path("logs"));
+  Child dir(LCMLOC_LOGGER, {"--lcm-url", url_, "--config", config_, "-o", path("logs")}, path("dir.out"));
+  ASSERT_EQ(dir.wait(10s), std::optional<int>(2)) << dir.output();
+  EXPECT_NE(dir.output().find("--output: '" + path("logs") + "' is a directory: give a file name in it"),
+            std::string::npos) << dir.output();
+  EXPECT_FALSE(std::filesystem::exists(path("logs-001")));
 }
