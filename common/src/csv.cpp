@@ -41,7 +41,8 @@ bool parseNumber(const std::string& f, std::size_t column, double& out, std::str
   char* e = nullptr;
   errno = 0;
   const double v = std::strtod(b, &e);
-  if (e == b || *e != '\0' || errno == ERANGE) {
+  // strtod also reads C hexadecimal ("0x10" = 16): no CSV writer means that, so it is refused
+  if (e == b || *e != '\0' || errno == ERANGE || f.find_first_of("xX") != std::string::npos) {
     why = fmt::format("column {}: not a number: '{}'", column, f);
     return false;
   }

@@ -332,7 +332,8 @@ TEST(Import, BadRowsAreRefusedWithFileLineAndReason) {
         "1.2,abc,0.0\n"      // 4 non-numeric
         "1.3,nan,0.0\n"      // 5 NaN
         "0.95,0.1,0.0\n"     // 6 time backwards (before line 2, the last accepted row)
-        "1.4,0.1,0.0\n");    // 7 ok
+        "1.4,0.1,0.0\n"      // 7 ok
+        "1.5,0x10,0.0\n");   // 8 C hexadecimal (strtod reads 16)
   write(d / "landmarks.csv",
         "time,landmark_id,range,bearing\n"
         "1.0,1,5.0,0.1\n"    // 2 ok
@@ -350,6 +351,7 @@ TEST(Import, BadRowsAreRefusedWithFileLineAndReason) {
   EXPECT_TRUE(refused(r, "odometry.csv", 4, "not a number: 'abc'"));
   EXPECT_TRUE(refused(r, "odometry.csv", 5, "not finite: 'nan'"));
   EXPECT_TRUE(refused(r, "odometry.csv", 6, "time going backwards"));
+  EXPECT_TRUE(refused(r, "odometry.csv", 8, "not a number: '0x10'"));
   EXPECT_TRUE(refused(r, "landmarks.csv", 3, "landmark id 7 not in the map"));
   EXPECT_TRUE(refused(r, "landmarks.csv", 5, "not a number: 'two'"));
   EXPECT_TRUE(refused(r, "landmarks.csv", 6, "before the previous row"));
@@ -357,9 +359,9 @@ TEST(Import, BadRowsAreRefusedWithFileLineAndReason) {
   EXPECT_TRUE(refused(r, "beacons.csv", 2, "beacon id 3 not in the map"));
   EXPECT_TRUE(refused(r, "beacons.csv", 3, "negative range"));
   EXPECT_TRUE(refused(r, "truth.csv", 3, "not after"));
-  EXPECT_EQ(r.refusals.size(), 11u);
-  EXPECT_EQ(file(r, "odometry.csv")->rows, 6);
-  EXPECT_EQ(file(r, "odometry.csv")->refused, 4);
+  EXPECT_EQ(r.refusals.size(), 12u);
+  EXPECT_EQ(file(r, "odometry.csv")->rows, 7);
+  EXPECT_EQ(file(r, "odometry.csv")->refused, 5);
   EXPECT_EQ(file(r, "odometry.csv")->written, 2);
   EXPECT_EQ(file(r, "landmarks.csv")->written, 2);
   EXPECT_EQ(r.messages, 2 + 2 + 1 + 1);
