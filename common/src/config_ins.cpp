@@ -94,10 +94,16 @@ void parseLandmarkList(KeyReader& parent, const std::string& key, std::vector<mo
     r.get("x", l.x, -1e7, 1e7);
     r.get("y", l.y, -1e7, 1e7);
     r.finish();
-    for (std::size_t j = 0; j < out.size(); ++j)
+    for (std::size_t j = 0; j < out.size(); ++j) {
       if (out[j].id == l.id)
         throw ConfigError(parent.file(), ip + ".id",
                           "duplicate landmark id " + std::to_string(l.id) + " (also " + kp + "[" + std::to_string(j) + "])");
+      // Two ids at one place: a bearing to either is the same, and a fix from both is singular.
+      if (std::hypot(out[j].x - l.x, out[j].y - l.y) < 1e-3)
+        throw ConfigError(parent.file(), ip,
+                          "landmark " + std::to_string(l.id) + " is at the place of landmark " + std::to_string(out[j].id) +
+                              " (" + kp + "[" + std::to_string(j) + "]), less than 1 mm apart");
+    }
     out.push_back(l);
   }
 }

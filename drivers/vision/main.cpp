@@ -25,8 +25,10 @@ int main(int argc, char** argv) {
     auto cfg = common::loadSystemConfig(opts.config);
     auto& sc = cfg.scenario;
     if (rate > 0) sc.vision.rate_hz = rate;
-    if (sc.landmarks.empty())
-      throw common::ConfigError(cfg.file, "landmarks", "the vision driver needs a landmark map (list of {id, x, y})");
+    if (sc.landmarks.size() < 3)
+      throw common::ConfigError(cfg.file, "landmarks",
+                                fmt::format("{} landmark(s): the three-landmark fix needs at least 3 (list of {{id, x, y}})",
+                                            sc.landmarks.size()));
     const uint64_t seed = sc.vision.seed ? sc.vision.seed : models::componentSeed(sc.seed, "vision");
     std::optional<models::VisionSensor> sensor;
     auto start = [&] { sensor.emplace(sc.vision, sc.landmarks, seed); };

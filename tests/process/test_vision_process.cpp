@@ -140,7 +140,11 @@ TEST_F(VisionProcess, HelpAndBadConfig) {
   const std::pair<const char*, const char*> cases[] = {
       {"landmarks: [{id: 1, x: 0, y: 0}, {id: 1, x: 5, y: 5}]\n", "landmarks[1].id: duplicate landmark id 1"},
       {"landmarks: [{id: 1, x: .nan, y: 0}]\n", "landmarks[0].x: expected a finite number"},
-      {"vision: {rate_hz: 1}\n", "landmarks: the vision driver needs a landmark map"},
+      {"vision: {rate_hz: 1}\n", "landmarks: 0 landmark(s): the three-landmark fix needs at least 3"},
+      // one landmark: every VISION message went unused; two at one place: "landmark 2 used twice"
+      {"landmarks: [{id: 1, x: 0, y: 0}]\n", "landmarks: 1 landmark(s): the three-landmark fix needs at least 3"},
+      {"landmarks: [{id: 1, x: 0, y: 0}, {id: 2, x: 5, y: 5}, {id: 3, x: 0.0001, y: 0}]\n",
+       "landmarks[2]: landmark 3 is at the place of landmark 1 (landmarks[0]), less than 1 mm apart"},
       {"vision: {rate_hz: 0}\nlandmarks: [{id: 1, x: 0, y: 0}]\n", "vision.rate_hz"}};
   for (const auto& [yaml, want] : cases) {
     const std::string bad = writeFile("bad.yaml", yaml);
