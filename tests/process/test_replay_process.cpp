@@ -503,6 +503,18 @@ TEST_F(ReplayProcessTest, CtlTakesOnlyTheAnswerToItsOwnCommandAndNoTimeBeyondInt
   auto [rc, out] = ctlWhile({"--utime", "5000000", "reset"}, "FUSION_STATUS", ack, "foreign_ack.out");
   EXPECT_EQ(rc, 4) << out;
   EXPECT_NE(out.find("no answer"), std::string::npos) << out;
+  // Nor is the rejection of another FUSION_CONTROL input (it used to be taken: exit 3 with several
+  // ctl at once, though this command was applied).
+  lcmloc::fusion_status_t rejected{};
+  rejected.utime = 123;
+  rejected.event = "rejected_input";
+  rejected.detail = "too old: FUSION_CONTROL seq 0 utime 123: duplicate";
+  std::tie(rc, out) = ctlWhile({"--utime", "5000000", "reset"}, "FUSION_STATUS", rejected, "foreign_reject.out");
+  EXPECT_EQ(rc, 4) << out;
+  rejected.utime = 5000000;  // at this command's time: its own rejection
+  std::tie(rc, out) = ctlWhile({"--utime", "5000000", "reset"}, "FUSION_STATUS", rejected, "own_reject.out");
+  EXPECT_EQ(rc, 3) << out;
+  EXPECT_NE(out.find("rejected_input"), std::string::npos) << out;
   // A POSE with a utime at the end of the int64 range: the command's time would overflow into a
   // negative one (it was sent at utime -9223372036854726808).
   lcmloc::pose_t pose{};

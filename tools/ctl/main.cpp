@@ -140,10 +140,11 @@ int main(int argc, char** argv) {
             daemon_seen = true;
             return;
           }
-          // The daemon answers a command at the command's utime: an ack or refusal at another
-          // time answers someone else's command.
-          const bool mine = ((m.event == "ack" || m.event == "refused") && m.utime == utime) ||
-                            (m.event == "rejected_input" && m.detail.find(cfg.channels.control) != std::string::npos);
+          // The daemon answers a command at the command's utime (a rejection of the input too): an
+          // answer at another time is to someone else's command.
+          const bool mine = m.utime == utime &&
+                            (m.event == "ack" || m.event == "refused" ||
+                             (m.event == "rejected_input" && m.detail.find(cfg.channels.control) != std::string::npos));
           if (mine && !answer) answer = m;
         });
     using Clock = std::chrono::steady_clock;
