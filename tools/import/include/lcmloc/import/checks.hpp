@@ -1,8 +1,8 @@
 #pragma once
 // What the three importers (lcmloc-import, lcmloc-import-vp, lcmloc-magnet-grid) check the same
-// way: the order of a file's time column (docs/import_formats.md,
-// "Time order"), times that fit the microsecond clock of the log, outputs that would overwrite
-// an input, and command-line values that go into a generated config.yaml.
+// way: the order of a file's time column (docs/import_formats.md, "Time order"), times that fit
+// the microsecond clock of the log, outputs that would overwrite an input, and command-line
+// values that go into a generated config.yaml.
 #include <cstddef>
 #include <cstdint>
 #include <functional>
