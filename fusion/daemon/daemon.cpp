@@ -105,7 +105,8 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
   if (!hold_) publishStatus("started", "filter " + engine_->activeFilter(), 0);
 }
 
-void FusionDaemon::release(const std::optional<core::FilterState>& init, const std::string& source) {
+void FusionDaemon::release(const std::optional<core::FilterState>& init, const std::string& source,
+                           bool saw_queued) {
   if (!hold_) return;
   hold_ = false;
   std::string detail = "filter " + engine_->activeFilter();
@@ -128,7 +129,14 @@ void FusionDaemon::release(const std::optional<core::FilterState>& init, const s
   publishStatus("started", detail, utime);
   auto held = std::move(held_);
   held_.clear();
+  releasing_seen_ = saw_queued && init.has_value();
   for (auto& in : held) push(std::move(in));
+  releasing_seen_ = false;
+}
+
+void FusionDaemon::warn(const std::string& event, const std::string& detail) {
+  spdlog::warn("{}", core::printable(detail));
+  publishStatus(event, detail, last_utime_);
 }
 
 bool FusionDaemon::received(const std::string& ch, int64_t seq) {
@@ -188,7 +196,8 @@ void FusionDaemon::push(core::EngineInput&& in) {
     return;
   }
   if (init_utime_) {
-    if (in.utime <= *init_utime_ && !(max_jump_us_ > 0 && core::apartBy(*init_utime_, in.utime, max_jump_us_))) {
+    if (in.utime <= *init_utime_ &&
+        (releasing_seen_ || !(max_jump_us_ > 0 && core::apartBy(*init_utime_, in.utime, max_jump_us_)))) {
       ++covered_;  // already in the state handed over (far older: another time base, taken)
       return;
     }
@@ -259,7 +268,8 @@ void FusionDaemon::onBearings(const std::string& ch, const lcmloc::landmark_bear
 }
 
 void FusionDaemon::onControl(const std::string& ch, const lcmloc::fusion_control_t& m) {
-  received(ch, m.seq);
+  // Not seq-tracked: every lcmloc-ctl (and any other tool) sends on it, each with its own seq.
+  ++messages_in_;
   if (m.utime < 0) return reject(ch, m.seq, m.utime, "utime is negative");
   core::ControlCommand cmd;
   switch (m.command) {
@@ -271,7 +281,8 @@ void FusionDaemon::onControl(const std::string& ch, const lcmloc::fusion_control
         fc = common::parseFilterConfig(params, fc, ch, "parameters");
       } catch (const std::exception& e) {
         spdlog::warn("refused switch to '{}': {}", core::printable(m.filter), core::printable(e.what()));
-        publishStatus("refused", std::string("switch to '") + m.filter + "': " + e.what(), m.utime);
+        publishStatus("refused", ch + " seq " + std::to_string(m.seq) + ": switch to '" + m.filter + "': " + e.what(),
+                      m.utime);
         return;
       }
       cmd = core::SwitchFilter{fc};

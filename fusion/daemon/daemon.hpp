@@ -40,10 +40,17 @@ class FusionDaemon {
   FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& bus);
   FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& bus, Options opts);
   /// Ends the hold: starts every filter from init (if given; source says where it came from),
-  /// drops the queued inputs that init already covers (utime <= init.utime) and processes the
-  /// rest. Inputs arriving later that init covers are dropped too (counted, not rejected).
-  void release(const std::optional<core::FilterState>& init, const std::string& source);
+  /// drops the queued inputs that init already covers and processes the rest. Inputs arriving
+  /// later that init covers are dropped too (counted, not rejected). Covered: utime <= init.utime,
+  /// except an input more than fusion.max_time_jump older (a source that started over since
+  /// init, e.g. a checkpoint of an earlier run). With saw_queued (init is the last POSE of the
+  /// daemon handed over from, which received what was queued here), every queued input at or
+  /// before init.utime is covered, however much older: they were queued while it ran.
+  void release(const std::optional<core::FilterState>& init, const std::string& source, bool saw_queued = false);
   bool holding() const { return hold_; }
+  /// Something the operator must know (e.g. a hand-over that found nothing to start from): a
+  /// warning log line and a status event at the daemon's latest time.
+  void warn(const std::string& event, const std::string& detail);
   /// Processes everything still in the reorder window and publishes a final status.
   void shutdown();
   common::Heartbeat::Counters counters() const;
@@ -109,6 +116,7 @@ class FusionDaemon {
   /// Inputs at or before this (and within fusion.max_time_jump of it) were covered by the init state.
   std::optional<int64_t> init_utime_;
   bool resumed_ = false;  ///< the first input after the init state was seen (resume_gap checked)
+  bool releasing_seen_ = false;  ///< release(saw_queued = true) is processing the queue
   int64_t max_jump_us_ = 0;  ///< fusion.max_time_jump
   int64_t covered_ = 0;
 };

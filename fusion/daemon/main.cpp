@@ -98,16 +98,25 @@ int main(int argc, char** argv) {
     if (hold) {
       std::optional<core::FilterState> init;
       std::string source, from_filter;
+      bool from_bus = false;
       if (init_from_bus > 0) {
         init = lastPoseOnBus(bus, cfg, hb, init_from_bus, &from_filter);
         if (init) source = "the last " + cfg.channels.pose + " on the bus (filter " + from_filter + ")";
+        from_bus = init.has_value();
       }
       if (!init && saved) {
         init = saved->state;
         source = "checkpoint " + checkpoint + " (filter " + saved->filter + ")";
       }
       if (!init) source = init_from_bus > 0 ? "no POSE on the bus and no checkpoint" : "no checkpoint yet";
-      daemon.release(init, source);
+      daemon.release(init, source, from_bus);  // the daemon handed over from saw what was queued
+      if (!init && init_from_bus > 0)
+        daemon.warn("no_handover",
+                    fmt::format("no {} on the bus within {:.1f} s{}: the filters start from the configured initial "
+                                "state, which is wrong if the vehicle is elsewhere (a daemon started again after a "
+                                "crash finds no POSE: run it with --checkpoint). Give the pose with lcmloc-ctl "
+                                "set-pose X Y THETA",
+                                cfg.channels.pose, init_from_bus, checkpoint.empty() ? "" : " and no checkpoint"));
     }
     // A failing write is logged when it starts failing and when it works again (not every period).
     bool checkpoint_failing = false, checkpoint_written = false;

@@ -234,6 +234,51 @@ TEST(Engine, SwitchFilterKeepsStateContinuity) {
   EXPECT_TRUE(rec.decisions.back().accepted);
 }
 
+TEST(Engine, CommandsWaitForTheSensorsTimeAndNeverCarryItAhead) {
+  // Several tools sending at once each time their command one reorder window after the newest
+  // answer they saw: the commands' times climb ahead of the sensors. They used to move the reorder
+  // window's time with them, so the odometry after them came "too old" and was lost.
+  Recorder rec;
+  EngineConfig cfg = engineConfig("ukf_gated");  // reorder window 50 ms, max_time_jump 1 s
+  FusionEngine e(cfg, straightMap(10), rec.outputs());
+  int64_t t = 1000000, seq = 0;
+  double s = 0;
+  driveWithMarkers(e, 2.0, t, seq, s);  // t = 2 s
+  const int64_t sent_at = t;
+  for (int k = 1; k <= 5; ++k) {
+    SwitchFilter sw;
+    sw.config = cfg.filter;
+    sw.config.type = k % 2 ? "ukf" : "ukf_gated";
+    ASSERT_TRUE(e.push(controlIn(sent_at + k * cfg.reorder_window_us, 100 + k, sw)));
+  }
+  driveWithMarkers(e, 1.0, t, seq, s);  // 0.5 s more odometry, all of it older than the last command
+  EXPECT_EQ(e.counters().too_old, 0);
+  EXPECT_EQ(rec.count("too_old"), 0);
+  ASSERT_EQ(rec.count("ack"), 5) << "each applied once the odometry passed it by the window";
+  int k = 0;
+  for (const auto& ev : rec.events)
+    if (ev.name == "ack") {
+      ++k;
+      EXPECT_EQ(ev.utime, sent_at + k * cfg.reorder_window_us);
+      EXPECT_EQ(ev.detail.rfind("FUSION_CONTROL seq " + std::to_string(100 + k) + ": switched ", 0), 0u) << ev.detail;
+    }
+  EXPECT_EQ(e.activeFilter(), "ukf");
+  // A command alone never releases anything: it waits for the sensors' time, or the end.
+  SwitchFilter back;
+  back.config = cfg.filter;
+  ASSERT_TRUE(e.push(controlIn(t + 20000, 200, back)));
+  ASSERT_TRUE(e.push(controlIn(t + 900000, 201, ResetFilter{})));
+  EXPECT_EQ(rec.count("ack"), 5);
+  // One beyond fusion.max_time_jump would wait for a time that may never come: refused at once.
+  EXPECT_FALSE(e.push(controlIn(t + 1500000, 202, ResetFilter{})));
+  ASSERT_EQ(rec.events.back().name, "too_new");
+  EXPECT_NE(rec.events.back().detail.find("FUSION_CONTROL seq 202 utime"), std::string::npos) << rec.events.back().detail;
+  EXPECT_EQ(e.counters().too_new, 1);
+  e.flush();
+  EXPECT_EQ(rec.count("ack"), 7);
+  EXPECT_EQ(e.activeFilter(), "ukf_gated");
+}
+
 TEST(Engine, UnknownFilterIsRefusedAndTheRunningFilterContinues) {
   Recorder rec;
   EngineConfig cfg = engineConfig("ukf_gated");

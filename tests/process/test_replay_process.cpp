@@ -17,6 +17,7 @@
 #include "process_fixture.hpp"
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/transport.hpp"
+#include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/odometry_t.hpp"
@@ -439,6 +440,72 @@ TEST_F(ReplayProcessTest, HandOverFromTheBusAndFromACheckpoint) {
   ASSERT_TRUE(waitFor(bus, [&] { return w.poses.size() > e_count && w.poses.back().utime >= t0 + 10 * dt; }, 10s))
       << f.output();
   EXPECT_EQ(w.poses[e_count].utime, t0);
+  f.signal(SIGTERM);
+  ASSERT_EQ(f.wait(10s).value_or(-1), 0) << f.output();
+
+  // A hand-over that finds no POSE (a daemon started again after a crash, without --checkpoint)
+  // starts from the configured initial state: a warning and a status event, not an info line.
+  Child g(LCMLOC_FUSION, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML, "--init-from-bus", "0.3"}, path("g.out"));
+  ASSERT_TRUE(waitFor(bus, [&] { return w.has("no_handover", "no POSE on the bus within 0.3 s"); }, 10s))
+      << g.output();
+  EXPECT_TRUE(w.has("no_handover", "lcmloc-ctl set-pose")) << g.output();
+  g.signal(SIGTERM);
+  ASSERT_EQ(g.wait(10s).value_or(-1), 0) << g.output();
+  EXPECT_NE(g.output().find("warning: no POSE on the bus within 0.3 s"), std::string::npos) << g.output();
+}
+
+// Several lcmloc-ctl at once: each is answered for its own command, and the sensors' time stays
+// the daemon's time. All used to send seq 0 (duplicates of each other at one utime), to time their
+// commands after each other's answers, climbing ahead of the odometry, which the daemon then
+// rejected as too old while it restarted the filters.
+TEST_F(ReplayProcessTest, SeveralCtlAtOnceAreEachAnsweredAndTheOdometryGoesOn) {
+  Bus bus(url_);
+  Watch w(bus);
+  Child daemon(LCMLOC_FUSION, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML}, path("fusion.out"));
+  ASSERT_TRUE(waitFor(bus, [&] { return w.alive.count(daemon.pid()) > 0; }, 10s)) << daemon.output();
+  const int64_t t0 = 1000000, dt = 10000;
+  int64_t seq = 0;
+  auto tick = [&] {  // 100 Hz of message time in real time
+    bus.publish("ODOMETRY", odo(seq, t0 + seq * dt));
+    ++seq;
+    std::this_thread::sleep_for(10ms);
+    bus.drain();
+  };
+  for (int i = 0; i < 50; ++i) tick();
+  std::vector<std::unique_ptr<Child>> ctls;
+  for (int i = 0; i < 6; ++i)
+    ctls.push_back(std::make_unique<Child>(
+        LCMLOC_CTL,
+        std::vector<std::string>{"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML, "--timeout", "5", "switch",
+                                 i % 2 ? "ukf_gated" : "ukf"},
+        path("ctl" + std::to_string(i) + ".out")));
+  std::vector<std::optional<int>> rc(ctls.size());
+  const auto deadline = std::chrono::steady_clock::now() + 20s;
+  auto running = [&] {
+    bool any = false;
+    for (std::size_t i = 0; i < ctls.size(); ++i)
+      if (!rc[i] && !(rc[i] = ctls[i]->wait(0ms))) any = true;
+    return any;
+  };
+  while (running() && std::chrono::steady_clock::now() < deadline) tick();
+  for (int i = 0; i < 50; ++i) tick();
+  for (std::size_t i = 0; i < ctls.size(); ++i) {
+    EXPECT_EQ(rc[i].value_or(-1), 0) << ctls[i]->output();
+    EXPECT_NE(ctls[i]->output().find("ack: switched "), std::string::npos) << ctls[i]->output();
+  }
+  daemon.signal(SIGTERM);
+  ASSERT_EQ(daemon.wait(10s).value_or(-1), 0) << daemon.output();
+  waitFor(bus, [&] { return !w.status.empty() && w.status.back().event == "stopped"; }, 5s);
+  int acks = 0;
+  for (const auto& st : w.status) {
+    acks += st.event == "ack";
+    EXPECT_NE(st.event, "rejected_input") << st.detail;
+    EXPECT_NE(st.event, "time_jump") << st.detail;
+  }
+  EXPECT_EQ(acks, 6);
+  ASSERT_FALSE(w.poses.empty());
+  EXPECT_EQ(w.poses.back().utime, t0 + (seq - 1) * dt) << "every odometry message was used, the last one too";
+  for (std::size_t i = 1; i < w.poses.size(); ++i) ASSERT_GE(w.poses[i].utime, w.poses[i - 1].utime);
 }
 
 TEST_F(ReplayProcessTest, HelpAndCtlWithoutDaemonOrWithBadArguments) {
@@ -495,26 +562,52 @@ TEST_F(ReplayProcessTest, CtlTakesOnlyTheAnswerToItsOwnCommandAndNoTimeBeyondInt
     while (!(rc = c.wait(20ms)) && std::chrono::steady_clock::now() < deadline) bus.publish(channel, msg);
     return std::make_pair(rc.value_or(-1), c.output());
   };
-  // An ack of another command (another utime) is no answer to this one: it used to exit 0.
-  lcmloc::fusion_status_t ack{};
-  ack.utime = 123;
-  ack.event = "ack";
-  ack.detail = "reset ukf_gated";
-  auto [rc, out] = ctlWhile({"--utime", "5000000", "reset"}, "FUSION_STATUS", ack, "foreign_ack.out");
+  // A fake daemon: answers each command on FUSION_CONTROL with `answer` (its event and detail,
+  // "{seq}" replaced by the command's seq), at the command's utime.
+  lcmloc::fusion_status_t answer{};
+  std::vector<lcmloc::fusion_control_t> commands;
+  bus.subscribe<lcmloc::fusion_control_t>(
+      "FUSION_CONTROL", [&](const std::string&, const lcmloc::fusion_control_t& m, int64_t) {
+        commands.push_back(m);
+        if (answer.event.empty()) return;
+        lcmloc::fusion_status_t a = answer;
+        a.utime = m.utime;
+        const auto at = a.detail.find("{seq}");
+        if (at != std::string::npos) a.detail.replace(at, 5, std::to_string(m.seq));
+        bus.publish("FUSION_STATUS", a);
+      });
+  auto ctlAnswered = [&](const std::string& event, const std::string& detail, const std::string& name) {
+    answer.event = event;
+    answer.detail = detail;
+    std::vector<std::string> all{"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML, "--timeout", "1", "--utime",
+                                 "5000000", "reset"};
+    Child c(LCMLOC_CTL, all, path(name));
+    const auto deadline = std::chrono::steady_clock::now() + 10s;
+    std::optional<int> rc;
+    while (!(rc = c.wait(0ms)) && std::chrono::steady_clock::now() < deadline) bus.handle(20);
+    return std::make_pair(rc.value_or(-1), c.output());
+  };
+  // An ack of another command, even at this command's time, is no answer to this one: it used to
+  // exit 0 (several lcmloc-ctl at once all took the first ack).
+  auto [rc, out] = ctlAnswered("ack", "FUSION_CONTROL seq 7: reset ukf_gated", "foreign_ack.out");
   EXPECT_EQ(rc, 4) << out;
   EXPECT_NE(out.find("no answer"), std::string::npos) << out;
   // Nor is the rejection of another FUSION_CONTROL input (it used to be taken: exit 3 with several
   // ctl at once, though this command was applied).
-  lcmloc::fusion_status_t rejected{};
-  rejected.utime = 123;
-  rejected.event = "rejected_input";
-  rejected.detail = "too old: FUSION_CONTROL seq 0 utime 123: duplicate";
-  std::tie(rc, out) = ctlWhile({"--utime", "5000000", "reset"}, "FUSION_STATUS", rejected, "foreign_reject.out");
+  std::tie(rc, out) = ctlAnswered("rejected_input", "too old: FUSION_CONTROL seq 0 utime 5000000: duplicate",
+                                  "foreign_reject.out");
   EXPECT_EQ(rc, 4) << out;
-  rejected.utime = 5000000;  // at this command's time: its own rejection
-  std::tie(rc, out) = ctlWhile({"--utime", "5000000", "reset"}, "FUSION_STATUS", rejected, "own_reject.out");
+  std::tie(rc, out) = ctlAnswered("rejected_input", "too old: FUSION_CONTROL seq {seq} utime 5000000: duplicate",
+                                  "own_reject.out");
   EXPECT_EQ(rc, 3) << out;
   EXPECT_NE(out.find("rejected_input"), std::string::npos) << out;
+  std::tie(rc, out) = ctlAnswered("ack", "FUSION_CONTROL seq {seq}: reset ukf_gated", "own_ack.out");
+  EXPECT_EQ(rc, 0) << out;
+  EXPECT_NE(out.find("ack: reset ukf_gated (filter"), std::string::npos) << out;  // its own seq is not repeated
+  // Each command has its own seq: two commands at one utime are not duplicates of each other.
+  ASSERT_EQ(commands.size(), 4u);
+  for (std::size_t i = 1; i < commands.size(); ++i) EXPECT_NE(commands[i].seq, commands[i - 1].seq);
+  answer.event = "";  // (no more answers below: the commands there get none)
   // A POSE with a utime at the end of the int64 range: the command's time would overflow into a
   // negative one (it was sent at utime -9223372036854726808).
   lcmloc::pose_t pose{};
@@ -539,7 +632,7 @@ TEST_F(ReplayProcessTest, CtlTakesOnlyTheAnswerToItsOwnCommandAndNoTimeBeyondInt
       bus.publish("POSE", pose);
     }
     EXPECT_EQ(code.value_or(-1), 4) << c.output();  // no daemon to answer
-    EXPECT_NE(c.output().find("sent to FUSION_CONTROL at utime 5050000"), std::string::npos) << c.output();
+    EXPECT_NE(c.output().find("sent to FUSION_CONTROL at utime 5050000 (seq "), std::string::npos) << c.output();
     EXPECT_NE(c.output().find("more than fusion.max_time_jump (1.000 s) ahead of the daemon's newest output "
                               "(utime 5000000)"), std::string::npos) << c.output();
   }

@@ -386,6 +386,52 @@ TEST_F(ReplayTest, CheckpointRoundTripsExactlyAndRejectsGarbage) {
   EXPECT_NE(fusion::checkpointUnwritable(path("no/such/dir/ck")).find("No such file or directory"), std::string::npos);
 }
 
+TEST_F(ReplayTest, AHandOverFromTheBusCoversEveryQueuedInputHoweverOld) {
+  // Make before break: the new daemon queues the inputs for as long as the old one keeps running,
+  // which may be many seconds. Those more than fusion.max_time_jump older than the old daemon's
+  // last POSE were taken as another time base and processed again: POSE went back in time.
+  auto run = [&](bool saw_queued, const std::string& out) {
+    replay::LogBus bus(out);
+    fusion::FusionDaemon daemon(cfg_, bus, fusion::FusionDaemon::Options{true});
+    lcmloc::odometry_t o{};
+    o.delta_s = 0.1;
+    std::vector<uint8_t> buf;
+    auto send = [&](int64_t k) {
+      o.utime = 1000000 + k * 10000;
+      o.seq = k;
+      buf.resize(static_cast<std::size_t>(o.getEncodedSize()));
+      o.encode(buf.data(), 0, static_cast<int>(buf.size()));
+      EXPECT_EQ(bus.dispatch(cfg_.channels.odometry, buf.data(), buf.size(), o.utime), 1);
+    };
+    for (int64_t k = 0; k < 500; ++k) send(k);  // 5 s queued
+    core::FilterState init;
+    init.utime = 1000000 + 499 * 10000;  // the old daemon's last POSE: after the last queued input
+    init.x = Eigen::Vector3d(50.0, 2.0, 0.0);
+    init.P = Eigen::Matrix3d::Identity() * 1e-4;
+    init.names = {"x", "y", "theta"};
+    daemon.release(init, "test", saw_queued);
+    const int64_t processed = daemon.processed(), covered = daemon.covered();
+    send(500);
+    daemon.shutdown();
+    bus.close();
+    std::vector<int64_t> pose_times;
+    for (const auto& ev : readLog(out))
+      if (ev.channel == cfg_.channels.pose) pose_times.push_back(decode<lcmloc::pose_t>(ev).utime);
+    return std::make_tuple(processed, covered, pose_times);
+  };
+  const auto [processed, covered, poses] = run(true, path("handover.lcmlog"));
+  EXPECT_EQ(processed, 0);
+  EXPECT_EQ(covered, 500);
+  ASSERT_EQ(poses.size(), 1u);
+  EXPECT_EQ(poses[0], 1000000 + 500 * 10000) << "the first POSE is the input after the state handed over";
+  // A checkpoint's daemon did not see the queue: inputs far older than its state are a source
+  // that started over, and are processed (the 0.95 s within max_time_jump are taken as covered).
+  const auto [ck_processed, ck_covered, ck_poses] = run(false, path("checkpoint.lcmlog"));
+  EXPECT_EQ(ck_covered, 101);
+  EXPECT_GE(ck_processed, 390);  // (the last reorder window of them is processed at shutdown)
+  EXPECT_LT(ck_poses.front(), 1000000 + 100 * 10000);
+}
+
 TEST_F(ReplayTest, AFloodWhileHoldingForAHandOverKeepsTheNewestInputsAndSaysSo) {
   // Inputs queued while a daemon waits for the running one's last POSE (--init-from-bus) used to
   // have no bound: a flood took the memory.

@@ -7,13 +7,18 @@
 // the daemon's processing by fusion.output_every - 1 odometry periods: a command at it came too
 // late.) An ODOMETRY or IMU time more than fusion.max_time_jump ahead of the daemon's own newest
 // POSE / FUSION_STATUS is not taken: the daemon holds such an input as a possible time jump, and a
-// command after a stray far-future message would wait for a time that never comes. The command is recorded by the logger like any message, and an offline
-// replay of the log performs it at the same point.
+// command after a stray far-future message would wait for a time that never comes. Nor is the time
+// of an answer to another command (it is that command's time, ahead of the inputs). The command's
+// seq is unique (process id and clock), and the daemon's answer names it: several tools may send
+// at once. The command is recorded by the logger like any message, and an offline replay of the
+// log performs it at the same point.
 #include <chrono>
 #include <cmath>
 #include <iostream>
 #include <string>
 #include <vector>
+
+#include <unistd.h>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -115,6 +120,15 @@ int main(int argc, char** argv) {
       cmd.command = lcmloc::fusion_control_t::CMD_RESET;
     }
 
+    // The command's seq tells its answer from those of other commands (several tools at once):
+    // the process id in the low 22 bits (Linux's pid_max is at most 2^22), the wall clock in us
+    // above them (40 bits: 12.7 days, then it wraps; seq only tells commands apart).
+    const auto now_us = std::chrono::duration_cast<std::chrono::microseconds>(
+                            std::chrono::system_clock::now().time_since_epoch()).count();
+    cmd.seq = ((static_cast<int64_t>(now_us) & ((int64_t{1} << 40) - 1)) << 22) |
+              (static_cast<int64_t>(::getpid()) & ((int64_t{1} << 22) - 1));
+    const std::string tag = cfg.channels.control + " seq " + std::to_string(cmd.seq);
+
     common::Bus bus(opts.lcm_url);
     int64_t newest = -1;       // the daemon's own POSE / FUSION_STATUS
     bool daemon_seen = false;  // a POSE or FUSION_STATUS: sensors alone do not answer commands
@@ -136,15 +150,19 @@ int main(int argc, char** argv) {
     bus.subscribe<lcmloc::fusion_status_t>(
         cfg.channels.status, [&](const std::string&, const lcmloc::fusion_status_t& m, int64_t) {
           if (!sent) {
+            // An answer to a command (another tool's) is at that command's time, which may be
+            // ahead of the daemon's inputs: not the daemon's time.
+            if (m.event == "ack" || m.event == "refused" || m.detail.find(cfg.channels.control) != std::string::npos)
+              return;
             newest = std::max(newest, m.utime);
             daemon_seen = true;
             return;
           }
-          // The daemon answers a command at the command's utime (a rejection of the input too): an
-          // answer at another time is to someone else's command.
-          const bool mine = m.utime == utime &&
-                            (m.event == "ack" || m.event == "refused" ||
-                             (m.event == "rejected_input" && m.detail.find(cfg.channels.control) != std::string::npos));
+          // The daemon's answer (ack, refused, rejected_input) names the command: "CHANNEL seq N: ..."
+          // or "CHANNEL seq N utime U: ...". Another command's answer names another seq.
+          const bool mine = (m.event == "ack" || m.event == "refused" || m.event == "rejected_input") &&
+                            (m.detail.find(tag + ":") != std::string::npos ||
+                             m.detail.find(tag + " utime ") != std::string::npos);
           if (mine && !answer) answer = m;
         });
     using Clock = std::chrono::steady_clock;
@@ -182,10 +200,9 @@ int main(int argc, char** argv) {
       }
     }
     cmd.utime = utime;
-    cmd.seq = 0;
     sent = true;
     if (!bus.publish(cfg.channels.control, cmd)) return common::kExitRuntimeError;
-    spdlog::info("sent to {} at utime {}", cfg.channels.control, utime);
+    spdlog::info("sent to {} at utime {} (seq {})", cfg.channels.control, utime, cmd.seq);
     const auto answer_deadline = Clock::now() + std::chrono::duration<double>(timeout);
     while (!answer && Clock::now() < answer_deadline && !common::stopRequested()) bus.handle(50);
     if (!answer) {
@@ -193,7 +210,9 @@ int main(int argc, char** argv) {
                                "than the command by the reorder window)\n", timeout);
       return kExitNoAnswer;
     }
-    std::cout << fmt::format("{}: {} (filter {})\n", answer->event, core::printable(answer->detail),
+    std::string detail = answer->detail;  // without the "CHANNEL seq N: " naming this command
+    if (const auto at = detail.find(tag + ": "); at != std::string::npos) detail.erase(at, tag.size() + 2);
+    std::cout << fmt::format("{}: {} (filter {})\n", answer->event, core::printable(detail),
                              core::printable(answer->filter));
     return answer->event == "ack" ? common::kExitOk : kExitRefused;
   });

@@ -282,7 +282,14 @@ struct FusionEngine::Impl {
   void handle(const EngineInput& in, const BearingsInput& b) { landmarkFix(in, b); }
 
   void handle(const EngineInput& in, const Boxed<ControlCommand>& cmd) {
+    command = in.channel + " seq " + std::to_string(in.seq) + ": ";
     std::visit([&](const auto& c) { control(in.utime, c); }, *cmd);
+  }
+  /// "CHANNEL seq N: " of the command being applied: its answer ("ack", "refused") names it, so
+  /// that a sender tells its own answer from that of another command at the same time.
+  std::string command;
+  void answer(const std::string& name, const std::string& detail, int64_t utime) const {
+    event(name, command + detail, utime);
   }
 
   void control(int64_t utime, const SwitchFilter& c) {
@@ -290,7 +297,7 @@ struct FusionEngine::Impl {
     try {
       next = makeFilter(c.config, map);
     } catch (const std::invalid_argument& e) {
-      event("refused", std::string("switch to '") + c.config.type + "': " + e.what(), utime);
+      answer("refused", std::string("switch to '") + c.config.type + "': " + e.what(), utime);
       return;
     }
     FilterState from = active->state();
@@ -306,7 +313,7 @@ struct FusionEngine::Impl {
     active = std::move(next);
     active_cfg = c.config;
     refused_fixes.erase(filterKey(*active, true));
-    event("ack", "switched " + old + " -> " + active->name() + note, utime);
+    answer("ack", "switched " + old + " -> " + active->name() + note, utime);
   }
 
   /// The configuration a running filter was made from.
@@ -339,7 +346,7 @@ struct FusionEngine::Impl {
   void control(int64_t utime, const ResetFilter&) {
     forEachFilter([&](Filter& f, bool is_active) { startFresh(f, configOf(f, is_active), utime); });
     refused_fixes.clear();
-    event("ack", "reset " + active->name(), utime);
+    answer("ack", "reset " + active->name(), utime);
   }
 
   void landmarkFix(const EngineInput& in, const BearingsInput& b);
@@ -359,16 +366,16 @@ struct FusionEngine::Impl {
     fix.pose = c.pose;
     fix.cov = c.stddev.array().square().matrix().asDiagonal();
     fix.source = "set_pose";
-    if (!(c.stddev.array() > 0).all()) return event("refused", "set_pose: stddev must be > 0", utime);
+    if (!(c.stddev.array() > 0).all()) return answer("refused", "set_pose: stddev must be > 0", utime);
     if (const std::string why = detail::fixProblem(fix); !why.empty())
-      return event("refused", "set_pose: " + why + " (pose and stddev must be finite, stddev > 0)", utime);
+      return answer("refused", "set_pose: " + why + " (pose and stddev must be finite, stddev > 0)", utime);
     std::string not_taken;
     forEachFilter([&](Filter& f, bool is_active) {
       if (!applyFixTo(f, is_active, fix)) not_taken += (not_taken.empty() ? "" : ", ") + f.name();
     });
     refused_fixes.clear();
-    if (!not_taken.empty()) return event("refused", "set_pose: not taken by " + not_taken, utime);
-    event("ack", "set_pose", utime);
+    if (!not_taken.empty()) return answer("refused", "set_pose: not taken by " + not_taken, utime);
+    answer("ack", "set_pose", utime);
   }
 };
 
@@ -473,15 +480,33 @@ FusionEngine& FusionEngine::operator=(FusionEngine&&) noexcept = default;
 bool FusionEngine::push(EngineInput&& in) {
   Impl& m = *impl_;
   const int64_t utime = in.utime;
+  if (std::holds_alternative<Boxed<ControlCommand>>(in.payload)) {
+    // A command waits for the sensors' time, it never makes it: it neither releases the inputs
+    // before it nor takes part in the time-jump guard (commands sent at once by several tools
+    // each one reorder window after the newest answer would otherwise carry the time ahead of the
+    // sensors, whose inputs then came too late). One beyond the guard would wait for a time that
+    // may never come: refused.
+    const int64_t newest = m.guard.newest(), jump = m.cfg.max_time_jump_us;
+    if (jump > 0 && newest != INT64_MIN && apartBy(utime, newest, jump)) {
+      ++m.counters.too_new;
+      m.event("too_new",
+              in.channel + " seq " + std::to_string(in.seq) + " utime " + std::to_string(utime) + ": a command " +
+                  std::to_string(secondsApart(utime, newest)) + " s ahead of the newest input (utime " +
+                  std::to_string(newest) + "), more than fusion.max_time_jump",
+              utime);
+      return false;
+    }
+    return take(std::move(in), false);
+  }
   return m.guard.offer(
       std::move(in), utime, [this](EngineInput&& e) { return take(std::move(e)); },
       [&m](const EngineInput& s, int side, int64_t newest) { m.dropHeld(s, side, newest); },
       [&m](int side, const EngineInput& first, int64_t newest) { m.newTimeBase(side, first, newest); });
 }
 
-bool FusionEngine::take(EngineInput&& in) {
+bool FusionEngine::take(EngineInput&& in, bool advance) {
   const OrderKey key = impl_->orderKey(in);
-  if (!impl_->buffer.push(key, std::move(in))) {  // refused: `in` is untouched
+  if (!impl_->buffer.push(key, std::move(in), advance)) {  // refused: `in` is untouched
     ++impl_->counters.too_old;
     const bool duplicate = impl_->buffer.contains(key);
     const std::string& channel = in.channel;
@@ -496,6 +521,7 @@ bool FusionEngine::take(EngineInput&& in) {
     impl_->event("too_old", detail, utime);
     return false;
   }
+  if (!advance) return true;
   impl_->guard.took(key.utime);
   impl_->buffer.releaseReady([this](const OrderKey&, const EngineInput& e) { impl_->process(e); });
   return true;

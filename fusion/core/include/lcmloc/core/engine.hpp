@@ -128,7 +128,9 @@ class FusionEngine {
   /// Queues an input; processes whatever the reorder window releases. Returns false (and emits
   /// "too_old") when the input is older than what was already processed; a refused input is
   /// left as it was. An input beyond the time-jump guard is held (true) and taken or dropped
-  /// later (see EngineConfig::max_time_jump_us).
+  /// later (see EngineConfig::max_time_jump_us). A command waits in the window until an input
+  /// other than a command is newer than it by the window (or flush()); one more than
+  /// max_time_jump_us ahead of the newest input is refused ("too_new").
   bool push(EngineInput&& in);
   bool push(const EngineInput& in) { return push(EngineInput(in)); }
   /// Processes everything still queued (end of log / shutdown).
@@ -142,7 +144,9 @@ class FusionEngine {
   struct Counters { int64_t processed = 0, too_old = 0, too_new = 0, accepted = 0, rejected = 0; };
   Counters counters() const;
  private:
-  bool take(EngineInput&& in);  ///< past the time-jump guard: into the reorder window
+  /// Past the time-jump guard: into the reorder window; an input that does not `advance` (a
+  /// command) does not move the window's time.
+  bool take(EngineInput&& in, bool advance = true);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

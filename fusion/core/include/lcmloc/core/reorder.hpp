@@ -28,8 +28,10 @@ class ReorderBuffer {
 
   /// Inserts an item. Returns false (and drops it) when it is older than what has already been
   /// released (key <= last released), or is a duplicate key; a refused item is left untouched.
-  bool push(const OrderKey& key, const T& item) { return push(key, T(item)); }
-  bool push(const OrderKey& key, T&& item) {
+  /// An item that does not `advance` (a command) waits for the others: it does not move the
+  /// newest time that releases items.
+  bool push(const OrderKey& key, const T& item, bool advance = true) { return push(key, T(item), advance); }
+  bool push(const OrderKey& key, T&& item, bool advance = true) {
     if (released_any_ && !(last_released_ < key)) return false;
     // Before either insert: one out of order (at equal utimes from two sources) that found the
     // storage full would otherwise grow it with the released items still in it, for good.
@@ -41,7 +43,7 @@ class ReorderBuffer {
       if (!(key < it->first)) return false;  // duplicate
       items_.emplace(it, key, std::move(item));
     }
-    newest_utime_ = std::max(newest_utime_, key.utime);
+    if (advance) newest_utime_ = std::max(newest_utime_, key.utime);
     return true;
   }
 
