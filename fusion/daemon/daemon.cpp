@@ -16,6 +16,18 @@ namespace lcmloc::fusion {
 
 namespace {
 
+/// FNV-1a over a POSE's utime, filter and state: what tells this daemon's POSE from another's.
+uint64_t fingerprint(const lcmloc::pose_t& m) {
+  uint64_t h = 14695981039346656037ull;
+  auto add = [&h](const void* p, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ static_cast<const unsigned char*>(p)[i]) * 1099511628211ull;
+  };
+  add(&m.utime, sizeof m.utime);
+  add(m.filter.data(), m.filter.size());
+  add(m.state.data(), m.state.size() * sizeof(double));
+  return h;
+}
+
 std::string upper(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::toupper(c); });
   return s;
@@ -28,6 +40,8 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
 
 FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& bus, Options opts)
     : cfg_(cfg), bus_(bus), hold_(opts.hold), frame_(cfg.datum) {
+  echo_ = opts.echo;
+  if (echo_) echoes_.resize(kEchoSeqs);
   core::EngineConfig ec;
   ec.filter = cfg.fusion.filter;
   ec.shadow = cfg.fusion.shadow;
@@ -132,6 +146,29 @@ void FusionDaemon::release(const std::optional<core::FilterState>& init, const s
   releasing_seen_ = saw_queued && init.has_value();
   for (auto& in : held) push(std::move(in));
   releasing_seen_ = false;
+}
+
+bool FusionDaemon::checkEcho(const lcmloc::pose_t& m) {
+  if (hold_ || !echo_) return false;  // (waiting for the previous daemon's POSE: that one is expected)
+  bool foreign = false;
+  if (m.seq < 0 || m.seq >= pose_seqs_) {
+    foreign = true;  // a seq this daemon has not published (yet)
+  } else if (pose_seqs_ - m.seq <= kEchoSeqs) {
+    Echo& e = echoes_[static_cast<std::size_t>(m.seq % kEchoSeqs)];
+    foreign = e.heard || e.fingerprint != fingerprint(m);
+    if (!foreign) e.heard = true;
+  }
+  if (!foreign) return false;
+  ++foreign_outputs_;
+  if (log_throttle_.allow("foreign_output")) {
+    const std::string detail = fmt::format(
+        "another process publishes on {} (seq {}, utime {}, filter {}; this daemon's next seq is {}): a second fusion "
+        "daemon on this bus? Its poses interleave with these; stop one ({} so far)",
+        cfg_.channels.pose, m.seq, m.utime, m.filter, pose_seqs_, foreign_outputs_);
+    spdlog::warn("{}", core::printable(detail));
+    publishStatus("foreign_output", detail, last_utime_);
+  }
+  return true;
 }
 
 void FusionDaemon::warn(const std::string& event, const std::string& detail) {
@@ -324,6 +361,10 @@ void FusionDaemon::publishState(const std::string& filter, bool active, const co
   common::toLcm(s, filter, (*po->seq)++, &po->msg);
   bus_.publish(po->channel, po->msg);
   if (!active) return;
+  if (echo_) {
+    echoes_[static_cast<std::size_t>(po->msg.seq % kEchoSeqs)] = Echo{fingerprint(po->msg), false};
+    pose_seqs_ = po->msg.seq + 1;
+  }
   last_utime_ = s.utime;
   last_status_ = s.status;
   const auto period = static_cast<int64_t>(std::llround(cfg_.fusion.status_period * 1e6));

@@ -36,6 +36,8 @@ class FusionDaemon {
     /// Queue every input until release() (process-level hand-over: wait for the previous
     /// daemon's last POSE first). "started" is published by release() then.
     bool hold = false;
+    /// Remember what it publishes on POSE, for checkEcho (live only).
+    bool echo = false;
   };
   FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& bus);
   FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& bus, Options opts);
@@ -48,6 +50,16 @@ class FusionDaemon {
   /// before init.utime is covered, however much older: they were queued while it ran.
   void release(const std::optional<core::FilterState>& init, const std::string& source, bool saw_queued = false);
   bool holding() const { return hold_; }
+  /// A POSE received on the active output channel (live only: lcmloc-fusion subscribes to its
+  /// own output, Options::echo): this daemon's own echo, or another publisher's, i.e. a second
+  /// daemon on the bus, whose poses interleave with these. A foreign one is reported: a warning
+  /// and the status event foreign_output (the first five, then one in 1000). Returns whether it
+  /// was foreign. Own: a seq this daemon published on that channel, with the same utime, filter
+  /// and state, heard once (the last kEchoSeqs seqs are remembered; an older one is not judged).
+  /// A second daemon publishing the very same poses (same filter, same inputs, started together)
+  /// is told by each seq then coming twice.
+  bool checkEcho(const lcmloc::pose_t& m);
+  int64_t foreignOutputs() const { return foreign_outputs_; }
   /// Something the operator must know (e.g. a hand-over that found nothing to start from): a
   /// warning log line and a status event at the daemon's latest time.
   void warn(const std::string& event, const std::string& detail);
@@ -101,6 +113,17 @@ class FusionDaemon {
     lcmloc::pose_t msg;
   };
   std::vector<PoseOut> pose_out_;
+  /// The last kEchoSeqs POSE this daemon published on the active channel, by seq: a fingerprint
+  /// of utime, filter and state, and whether it came back already.
+  static constexpr int64_t kEchoSeqs = 8192;
+  struct Echo {
+    uint64_t fingerprint = 0;
+    bool heard = false;
+  };
+  bool echo_ = false;  ///< Options::echo
+  std::vector<Echo> echoes_;
+  int64_t pose_seqs_ = 0;  ///< seqs published on the active POSE channel (the next one's seq)
+  int64_t foreign_outputs_ = 0;
   common::LogThrottle log_throttle_;  ///< per kind of problem: first 5, then 1 in 1000
   int64_t messages_in_ = 0, rejected_ = 0, last_utime_ = 0, next_status_utime_ = INT64_MIN;
   core::FilterStatus last_status_ = core::FilterStatus::Uninitialized;

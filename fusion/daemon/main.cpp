@@ -93,7 +93,7 @@ int main(int argc, char** argv) {
     }
     common::Bus bus(opts.lcm_url);
     const bool hold = init_from_bus > 0 || !checkpoint.empty();
-    fusion::FusionDaemon daemon(cfg, bus, fusion::FusionDaemon::Options{hold});
+    fusion::FusionDaemon daemon(cfg, bus, fusion::FusionDaemon::Options{hold, true});
     common::Heartbeat hb(bus, cfg.channels.heartbeat, "lcmloc-fusion", [&] { return daemon.counters(); });
     if (hold) {
       std::optional<core::FilterState> init;
@@ -118,6 +118,10 @@ int main(int argc, char** argv) {
                                 "set-pose X Y THETA",
                                 cfg.channels.pose, init_from_bus, checkpoint.empty() ? "" : " and no checkpoint"));
     }
+    // Its own POSE comes back (loopback); one it did not publish is another daemon's.
+    bus.subscribe<lcmloc::pose_t>(cfg.channels.pose, [&daemon](const std::string&, const lcmloc::pose_t& m, int64_t) {
+      daemon.checkEcho(m);
+    });
     // A failing write is logged when it starts failing and when it works again (not every period).
     bool checkpoint_failing = false, checkpoint_written = false;
     auto saveCheckpoint = [&] {

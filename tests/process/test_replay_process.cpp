@@ -417,8 +417,12 @@ TEST_F(ReplayProcessTest, HandOverFromTheBusAndFromACheckpoint) {
   EXPECT_EQ(d.wait(10s).value_or(-1), 2) << d.output();
   EXPECT_NE(d.output().find("--checkpoint: cannot create"), std::string::npos) << d.output();
 
-  // The hand-overs above went on with the next message: no resume gap was reported.
-  for (const auto& st : w.status) EXPECT_NE(st.event, "resume_gap") << st.detail;
+  // The hand-overs above went on with the next message: no resume gap was reported, and the
+  // daemon handed over from was never taken for a second one on the bus.
+  for (const auto& st : w.status) {
+    EXPECT_NE(st.event, "resume_gap") << st.detail;
+    EXPECT_NE(st.event, "foreign_output") << st.detail;
+  }
 
   // A checkpoint of another time base (written at utime ~4.2 s; the source then started over at
   // 1 s): the new inputs are taken, not counted as already in the checkpoint.
@@ -501,11 +505,42 @@ TEST_F(ReplayProcessTest, SeveralCtlAtOnceAreEachAnsweredAndTheOdometryGoesOn) {
     acks += st.event == "ack";
     EXPECT_NE(st.event, "rejected_input") << st.detail;
     EXPECT_NE(st.event, "time_jump") << st.detail;
+    EXPECT_NE(st.event, "foreign_output") << st.detail;  // its own POSE coming back is not another's
   }
   EXPECT_EQ(acks, 6);
   ASSERT_FALSE(w.poses.empty());
   EXPECT_EQ(w.poses.back().utime, t0 + (seq - 1) * dt) << "every odometry message was used, the last one too";
   for (std::size_t i = 1; i < w.poses.size(); ++i) ASSERT_GE(w.poses[i].utime, w.poses[i - 1].utime);
+}
+
+// Two daemons on one bus: their POSE interleave (jumps of hundreds of metres on a vehicle), and
+// nothing said so. Each now sees the other's POSE among its own and reports it.
+TEST_F(ReplayProcessTest, TwoDaemonsOnOneBusEachReportTheOther) {
+  // B with another filter (other states), then B a twin of A (the very same poses: each seq
+  // comes twice).
+  for (const std::string b_filter : {"dead_reckoning", "ukf_gated"}) {
+    SCOPED_TRACE(b_filter);
+    Bus bus(url_);
+    Watch w(bus);
+    Child a(LCMLOC_FUSION, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML, "--filter", "ukf_gated"},
+            path("a.out"));
+    Child b(LCMLOC_FUSION, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML, "--filter", b_filter}, path("b.out"));
+    ASSERT_TRUE(waitFor(bus, [&] { return w.alive.count(a.pid()) > 0 && w.alive.count(b.pid()) > 0; }, 10s));
+    const int64_t t0 = 1000000, dt = 10000;
+    for (int64_t seq = 0; seq < 50; ++seq) {
+      bus.publish("ODOMETRY", odo(seq, t0 + seq * dt));
+      std::this_thread::sleep_for(5ms);
+      bus.drain();
+    }
+    ASSERT_TRUE(waitFor(bus, [&] { return w.has("foreign_output", "another process publishes on POSE"); }, 10s));
+    a.signal(SIGTERM);
+    b.signal(SIGTERM);
+    ASSERT_EQ(a.wait(10s).value_or(-1), 0) << a.output();
+    ASSERT_EQ(b.wait(10s).value_or(-1), 0) << b.output();
+    for (Child* c : {&a, &b})
+      EXPECT_NE(c->output().find("warning: another process publishes on POSE"), std::string::npos) << c->output();
+    EXPECT_NE(a.output().find("filter " + b_filter), std::string::npos) << "A names B's filter\n" << a.output();
+  }
 }
 
 TEST_F(ReplayProcessTest, HelpAndCtlWithoutDaemonOrWithBadArguments) {
