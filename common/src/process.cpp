@@ -106,6 +106,9 @@ CLI::Validator bound(const char* name, bool (*ok)(double), const char* what) {
 }  // namespace
 CLI::Validator positive() { return bound("POSITIVE", [](double v) { return v > 0.0; }, "> 0"); }
 CLI::Validator nonNegative() { return bound("NONNEGATIVE", [](double v) { return v >= 0.0; }, ">= 0"); }
+CLI::Validator wallSeconds() {
+  return bound("SECONDS", [](double v) { return v >= 0.0 && v <= 86400.0; }, "in [0, 86400] (a day at most)");
+}
 CLI::Validator seed() {
   return CLI::Validator(
       [](std::string& s) -> std::string {

@@ -71,12 +71,13 @@ int main(int argc, char** argv) {
   app.add_option("--init-from-bus", init_from_bus,
                  "hand-over from a running daemon: wait up to SECONDS for its POSE, until it reports stopped, "
                  "and start from its last POSE (inputs are queued meanwhile); 0 = off")
-      ->check(lcmloc::common::nonNegative());
+      ->check(lcmloc::common::wallSeconds());
   app.add_option("--checkpoint", checkpoint,
                  "checkpoint FILE: start from it if it exists (after --init-from-bus found nothing), write the "
                  "active filter's state to it periodically and at exit");
   app.add_option("--checkpoint-period", checkpoint_period, "[s, wall] between checkpoint writes")
-      ->check(lcmloc::common::positive());
+      ->check(lcmloc::common::positive())
+      ->check(lcmloc::common::wallSeconds());
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-fusion", [&] {
     auto cfg = common::loadSystemConfig(opts.config);

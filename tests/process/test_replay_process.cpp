@@ -553,6 +553,20 @@ TEST_F(ReplayProcessTest, HelpAndCtlWithoutDaemonOrWithBadArguments) {
              path("none.out"));
   EXPECT_EQ(none.wait(10s).value_or(-1), 1) << none.output();
   EXPECT_NE(none.output().find("is lcmloc-fusion running"), std::string::npos) << none.output();
+  // The common options after the subcommand and its positionals, too (CLI11 took --timeout for a
+  // fourth number of the pose: exit 2).
+  Child after(LCMLOC_CTL, {"--lcm-url", url_, "set-pose", "1", "2", "0.5", "--timeout", "0.5", "--config",
+                           LCMLOC_PAPER_YAML}, path("after.out"));
+  EXPECT_EQ(after.wait(10s).value_or(-1), 1) << after.output();
+  EXPECT_NE(after.output().find("within 0.5 s: is lcmloc-fusion running"), std::string::npos) << after.output();
+  // A wall-clock wait beyond a day is refused (1e300 s overflowed the deadline's clock arithmetic).
+  for (const auto& [exe, args, why] : std::vector<std::tuple<std::string, std::vector<std::string>, std::string>>{
+           {LCMLOC_CTL, {"--timeout", "1e300", "reset"}, "--timeout: 1e300 is not in [0, 86400]"},
+           {LCMLOC_REPLAY, {"--progress", "1e300", "x.lcmlog"}, "--progress: 1e300 is not in [0, 86400]"}}) {
+    Child c(exe, args, path("day.out"));
+    EXPECT_EQ(c.wait(10s).value_or(-1), 2) << c.output();
+    EXPECT_NE(c.output().find(why), std::string::npos) << c.output();
+  }
   Child bad(LCMLOC_CTL, {"--lcm-url", url_, "switch", "ukf", "--param", "novalue"}, path("bad.out"));
   EXPECT_EQ(bad.wait(10s).value_or(0), 2) << bad.output();  // bad arguments (it was 1)
   EXPECT_NE(bad.output().find("KEY=VALUE"), std::string::npos) << bad.output();

@@ -81,12 +81,14 @@ int main(int argc, char** argv) {
   double timeout = 5.0;
   int64_t utime = -1;
   app.add_option("--timeout", timeout, "[s] to wait for the daemon (its time, then its answer)")
-      ->check(lcmloc::common::positive());
+      ->check(lcmloc::common::positive())
+      ->check(lcmloc::common::wallSeconds());
   app.add_option("--utime", utime,
                  "message time of the command [us] (default: one reorder window after the newest ODOMETRY, IMU, "
                  "POSE or FUSION_STATUS on the bus)")
       ->check(lcmloc::common::nonNegative());
   app.require_subcommand(1);
+  app.fallthrough();  // the options above may come after the subcommand too (set-pose 1 2 0 --timeout 1)
 
   std::string filter, params_yaml;
   std::vector<std::string> params;

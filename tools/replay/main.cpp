@@ -42,7 +42,7 @@ int main(int argc, char** argv) {
   app.add_flag("--no-shadow", no_shadow, "run no shadow filters")->excludes(o_shadow);
   app.add_flag("--with-inputs", with_inputs,
                "copy the input events to the output too (all but the old outputs, HEARTBEAT and LCM_SELF_TEST)");
-  app.add_option("--progress", progress, "[s, wall] between progress lines; 0 = none")->capture_default_str()->check(lcmloc::common::nonNegative());
+  app.add_option("--progress", progress, "[s, wall] between progress lines; 0 = none")->capture_default_str()->check(lcmloc::common::wallSeconds());
   app.add_flag("--bench", bench,
                "benchmark instead: generate a synthetic log, measure read+decode, dead_reckoning and ukf_gated "
                "replay (messages/s, medians)");

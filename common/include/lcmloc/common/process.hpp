@@ -56,6 +56,9 @@ int stopSignal();
 /// for every floating-point option by runProcess.
 CLI::Validator positive();     ///< > 0
 CLI::Validator nonNegative();  ///< >= 0
+/// A wall-clock duration [s] in [0, 86400]: a day at most (1e300 s overflowed the clock's
+/// deadline arithmetic). Combine with positive() where 0 is not allowed.
+CLI::Validator wallSeconds();
 CLI::Validator seed();         ///< an unsigned 64-bit integer, without a sign ("-1" is not 2^64 - 1)
 
 /// What stops path from being read as a file of at most max_bytes ("" when nothing): it does not
