@@ -42,8 +42,9 @@ std::string fileName(const std::string& pattern, int index, std::time_t t, bool 
 }
 
 LogWriter::LogWriter(WriterOptions opts) : opts_(std::move(opts)) {
-  openNext();
-  if (stats_.failed) throw std::runtime_error(stats_.error);
+  std::string error;
+  file_ = openNext(&error);
+  if (!file_) throw std::runtime_error(error);
   thread_ = std::thread([this] { run(); });
 }
 
@@ -97,7 +98,7 @@ void LogWriter::finishFile() {
   file_.reset();
 }
 
-void LogWriter::openNext() {
+std::unique_ptr<EventFile> LogWriter::openNext(std::string* error) {
   std::vector<std::string> own;
   {
     std::lock_guard<std::mutex> lock(mu_);
@@ -106,24 +107,61 @@ void LogWriter::openNext() {
   const int index = static_cast<int>(own.size());
   const std::time_t now = std::time(nullptr);
   const std::string name = fileName(opts_.pattern, index, now, opts_.overwrite, own);
+  std::unique_ptr<EventFile> file;
+  try {
+    file = std::make_unique<EventFile>(name);
+  } catch (const std::exception& e) {
+    *error = e.what();
+    return nullptr;
+  }
   // (a name this run wrote already, from a pattern without {index}, is no earlier recording)
   if (const std::string wanted = fileName(opts_.pattern, index, now, true);
       wanted != name && std::find(own.begin(), own.end(), wanted) == own.end())
     spdlog::warn("{} exists (an earlier recording): writing {} instead (--overwrite replaces it)", wanted, name);
-  try {
-    file_ = std::make_unique<EventFile>(name);
-  } catch (const std::exception& e) {
-    std::lock_guard<std::mutex> lock(mu_);
-    stats_.failed = true;
-    stats_.error = e.what();
-    return;
-  }
   file_opened_ = std::chrono::steady_clock::now();
   std::lock_guard<std::mutex> lock(mu_);
   paths_.push_back(name);
   stats_.files = static_cast<int32_t>(paths_.size());
   stats_.file = name;
-  if (index > 0) spdlog::info("new log file {}", name);
+  return file;
+}
+
+void LogWriter::rotate(bool requested) {
+  std::string error;
+  auto next = openNext(&error);
+  if (!next) {
+    ++failed_in_a_row_;
+    rotate_retry_at_ = std::chrono::steady_clock::now() +
+                       std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(kRotateRetry));
+    std::string current;
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      ++stats_.rotate_failures;
+      stats_.rotate_error = error;
+      current = stats_.file;
+    }
+    // (a request is the operator's: each one is answered; the automatic retries of size and time
+    // rotation, one per kRotateRetry, are logged the first 5 times, then 1 in 1000)
+    if (requested || failed_in_a_row_ <= 5 || failed_in_a_row_ % 1000 == 0)
+      spdlog::error("cannot start a new log file: {}; still recording into {} (attempt {}; tried again {})", error,
+                    current, failed_in_a_row_,
+                    requested ? "at the next SIGHUP, or by size/time rotation"
+                              : fmt::format("in {} s, or at SIGHUP", kRotateRetry));
+    return;
+  }
+  finishFile();
+  file_ = std::move(next);
+  std::string name;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    stats_.rotate_error.clear();
+    name = stats_.file;
+  }
+  if (failed_in_a_row_ > 0)
+    spdlog::info("new log file {} (after {} failed attempt(s) to start one)", name, failed_in_a_row_);
+  else
+    spdlog::info("new log file {}", name);
+  failed_in_a_row_ = 0;
 }
 
 void LogWriter::run() {
@@ -145,22 +183,23 @@ void LogWriter::run() {
     lock.unlock();
 
     int64_t lost = 0;
-    auto rotateNow = [&] {
-      finishFile();
-      if (!stats_.failed) openNext();
-      failed = !file_;
+    auto rotateNow = [&](bool requested) {
+      rotate(requested);
+      lock.lock();
+      failed = stats_.failed;
+      lock.unlock();
+      failed = failed || !file_;
     };
     for (std::size_t k = 0; k < batch.size(); ++k) {
       auto& ev = batch[k];
-      if (k == rotate_at && !failed && file_) rotateNow();
+      if (k == rotate_at && !failed && file_) rotateNow(true);
       if (failed || !file_) { ++lost; continue; }
       const int64_t size = 28 + static_cast<int64_t>(ev.channel.size() + ev.data.size());
       if (file_->events() > 0 &&
           ((opts_.max_file_bytes > 0 && file_->size() + size > opts_.max_file_bytes) ||
-           (opts_.max_file_seconds > 0 && clock::now() - file_opened_ >= max_age))) {
-        finishFile();
-        if (!stats_.failed) openNext();
-        failed = !file_;
+           (opts_.max_file_seconds > 0 && clock::now() - file_opened_ >= max_age)) &&
+          clock::now() >= rotate_retry_at_) {
+        rotateNow(false);
         if (failed) { ++lost; continue; }
       }
       ++appended_;
@@ -169,7 +208,7 @@ void LogWriter::run() {
         failed = true;
       }
     }
-    if (rotate_at != SIZE_MAX && rotate_at >= batch.size() && !failed && file_) rotateNow();
+    if (rotate_at != SIZE_MAX && rotate_at >= batch.size() && !failed && file_) rotateNow(true);
     batch.clear();
     if (!failed && file_) {
       const bool sync = clock::now() >= next_flush || closing;

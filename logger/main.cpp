@@ -1,7 +1,9 @@
 // lcmloc-logger: records channels to standard LCM log files (lcm-logplayer plays them). The LCM
 // thread only enqueues; a writer thread writes (see log_writer.hpp). Rotation by size and time,
 // SIGHUP starts a new file, fsync every flush period, clean close on SIGINT/SIGTERM, a clear
-// error and exit 1 when the disk fills up. Per-channel accounting from the messages' seq:
+// error and exit 1 when the disk fills up. A new file that cannot be opened (SIGHUP, size, time)
+// is reported (error log, LOGGER_STATUS state "rotate_failed", heartbeat counter) while the
+// logger goes on recording into its current file, and tried again. Per-channel accounting from the messages' seq:
 // upstream gaps apart from the logger's own drops, periodically on LOGGER_STATUS and at exit
 // (for at most logger::kMaxChannels channels; the rest are counted as one bucket). Channel and
 // process names from the bus are printed with their control characters as '?'.
@@ -38,12 +40,6 @@ std::string channelRegex(const std::vector<std::string>& regexes) {
   std::string r;
   for (std::size_t i = 0; i < regexes.size(); ++i) r += (i ? "|" : "") + ("(" + regexes[i] + ")");
   return "(" + r + ")";
-}
-
-/// A udpm URL without recv_buf_size gets one: the kernel default drops bursts.
-std::string withReceiveBuffer(const std::string& url, int bytes) {
-  if (url.rfind("udpm://", 0) != 0 || url.find("recv_buf_size=") != std::string::npos) return url;
-  return url + (url.find('?') == std::string::npos ? "?" : "&") + "recv_buf_size=" + std::to_string(bytes);
 }
 
 /// Sizes the receive buffer of every UDP socket LCM opened (LCM 1.3.1 hides its socket, so they
@@ -119,7 +115,8 @@ std::vector<std::pair<std::string, ChannelStats>> channelRows(const std::map<std
 
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-logger: records LCM channels to log files that lcm-logplayer plays.\n"
-               "SIGINT/SIGTERM: write what is queued, close and exit; SIGHUP: start a new file."};
+               "SIGINT/SIGTERM: write what is queued, close and exit; SIGHUP: start a new file (one that cannot be "
+               "opened is reported, and recording goes on into the current file; tried again at the next SIGHUP)."};
   common::CommonOptions opts;
   common::addCommonOptions(app, opts);
   std::string output;
@@ -173,7 +170,7 @@ int main(int argc, char** argv) {
     }
     const std::string hb_channel = cfg.channels.heartbeat;
     const std::string status_channel = cfg.logger.status_channel;
-    const std::string url = withReceiveBuffer(opts.lcm_url, cfg.logger.recv_buf_size);
+    const std::string url = common::withReceiveBuffer(opts.lcm_url, cfg.logger.recv_buf_size);
 
     common::Bus bus(url);
     sizeReceiveBuffer(url, cfg.logger.recv_buf_size);
@@ -266,8 +263,11 @@ int main(int argc, char** argv) {
 
     common::Heartbeat hb(bus, hb_channel, "lcmloc-logger", [&] {
       const auto w = writer.stats();
-      return common::Heartbeat::Counters{{"received", received}, {"written", w.written},
-                                         {"dropped", w.dropped + w.write_lost}, {"gaps", gaps.gaps()}};
+      return common::Heartbeat::Counters{{"received", received},
+                                         {"written", w.written},
+                                         {"dropped", w.dropped + w.write_lost},
+                                         {"gaps", gaps.gaps()},
+                                         {"rotate_failures", w.rotate_failures}};
     });
     spdlog::info("recording '{}' to {} (queue {} messages / {} MB; new file at {}; fsync every {} s)", regex,
                  writer.stats().file, wo.capacity, wo.queue_bytes >> 20,
@@ -284,7 +284,8 @@ int main(int argc, char** argv) {
       }
       hb.tick();
       if (std::chrono::steady_clock::now() >= next_status) {
-        publishStatus("running");
+        // (still recording, into the file it has: a new one could not be opened)
+        publishStatus(writer.stats().rotate_error.empty() ? "running" : "rotate_failed");
         next_status += std::chrono::duration_cast<std::chrono::steady_clock::duration>(status_period);
       }
       bus.handle(100);
@@ -322,6 +323,10 @@ int main(int argc, char** argv) {
       spdlog::warn("{} seq(s) ignored: each broke its sequence and the next message did not go on from it (a "
                    "corrupt seq, or a message out of order); not counted as gaps",
                    gaps.ignored());
+    if (w.rotate_failures > 0)
+      spdlog::warn("{} attempt(s) to start a new file failed{}; meanwhile everything was recorded into the file "
+                   "open then (larger or longer than asked, nothing lost)",
+                   w.rotate_failures, w.rotate_error.empty() ? "" : " (the last one: " + w.rotate_error + ")");
     if (w.failed) {
       spdlog::error("{}; stopped recording. {} holds {} whole events up to byte {} and stays readable",
                     w.error, w.file, w.written, w.bytes_written);

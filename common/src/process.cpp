@@ -209,7 +209,7 @@ Heartbeat::Heartbeat(Bus& bus, std::string channel, std::string process,
 
 void Heartbeat::tick() {
   const auto now = std::chrono::steady_clock::now();
-  if (sent_ && now - last_ < std::chrono::seconds(1)) return;
+  if (sent_ && now - last_ < std::chrono::duration<double>(kPeriodSeconds)) return;
   publish(stopRequested() ? "stopping" : "running");
 }
 

@@ -1,6 +1,7 @@
 #include "lcmloc/common/transport.hpp"
 
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 
 #include <spdlog/spdlog.h>
@@ -11,6 +12,38 @@ std::string defaultLcmUrl() {
   const char* env = std::getenv("LCM_DEFAULT_URL");
   if (env && *env) return env;
   return "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+}
+
+std::string withReceiveBuffer(const std::string& url, int bytes) {
+  if (bytes <= 0 || url.rfind("udpm://", 0) != 0 || receiveBufferOf(url) > 0 ||
+      url.find("recv_buf_size=") != std::string::npos)
+    return url;
+  const auto q = url.find('?');
+  const char* sep = q == std::string::npos ? "?" : (q + 1 == url.size() || url.back() == '&' ? "" : "&");
+  return url + sep + "recv_buf_size=" + std::to_string(bytes);
+}
+
+long long receiveBufferOf(const std::string& url) {
+  if (url.rfind("udpm://", 0) != 0) return 0;
+  const auto q = url.find('?');
+  if (q == std::string::npos) return 0;
+  for (std::size_t pos = q + 1; pos < url.size();) {
+    std::size_t end = url.find('&', pos);
+    if (end == std::string::npos) end = url.size();
+    const std::string opt = url.substr(pos, end - pos);
+    if (opt.rfind("recv_buf_size=", 0) == 0) return std::atoll(opt.c_str() + 14);
+    pos = end + 1;
+  }
+  return 0;
+}
+
+long long kernelRmemMax() {
+  long long v = -1;
+  if (std::FILE* f = std::fopen("/proc/sys/net/core/rmem_max", "r")) {
+    if (std::fscanf(f, "%lld", &v) != 1) v = -1;
+    std::fclose(f);
+  }
+  return v;
 }
 
 int64_t wallMicros() {

@@ -467,3 +467,107 @@ TEST_F(LoggerTest, BadConfigIsAClearErrorWithExitTwo) {
             std::string::npos) << dir.output();
   EXPECT_FALSE(std::filesystem::exists(path("logs-001")));
 }
+
+namespace {
+/// Makes dir unwritable for anyone, root included: moved away (the logger's open file with it)
+/// and a regular file put in its place, so a new file in it cannot be created (ENOTDIR).
+/// restore() puts it back.
+struct BrokenDir {
+  std::string dir, moved;
+  BrokenDir(std::string d) : dir(std::move(d)), moved(dir + ".moved") {
+    fs::rename(dir, moved);
+    std::ofstream(dir) << "not a directory";
+  }
+  void restore() {
+    if (moved.empty()) return;
+    fs::remove(dir);
+    fs::rename(moved, dir);
+    moved.clear();
+  }
+  ~BrokenDir() { restore(); }
+};
+}  // namespace
+
+// SIGHUP into a directory that had become unwritable stopped the recording ("cannot open log
+// file ... stopped recording"): every later message was lost. The logger now goes on recording
+// into the file it has, says so (error, LOGGER_STATUS state rotate_failed) and tries again at
+// the next SIGHUP.
+TEST_F(LoggerTest, SighupIntoAnUnwritableDirectoryKeepsRecordingIntoTheOpenFile) {
+  const std::string sub = path("sub");
+  fs::create_directories(sub);
+  auto logger = start({"--output", sub + "/h-{index}.lcmlog"});
+  for (int i = 0; i < 5; ++i) publish(i);
+  ASSERT_TRUE(waitStatus([](const auto& s) { return s.written == 5; }, 10s)) << logger->output();
+  {
+    BrokenDir broken(sub);
+    logger->signal(SIGHUP);
+    ASSERT_TRUE(waitStatus([](const auto& s) { return s.state == "rotate_failed"; }, 10s)) << logger->output();
+    EXPECT_EQ(status_->files, 1);
+    for (int i = 5; i < 12; ++i) publish(i);
+    ASSERT_TRUE(waitStatus([](const auto& s) { return s.written == 12; }, 10s)) << logger->output();
+    EXPECT_TRUE(logger->running());
+    broken.restore();
+    logger->signal(SIGHUP);  // tried again, now with success
+    ASSERT_TRUE(waitStatus([](const auto& s) { return s.files == 2 && s.state == "running"; }, 10s))
+        << logger->output();
+  }
+  for (int i = 12; i < 15; ++i) publish(i);
+  ASSERT_TRUE(waitStatus([](const auto& s) { return s.written == 15; }, 10s)) << logger->output();
+  logger->signal(SIGTERM);
+  ASSERT_EQ(logger->wait(10s), std::optional<int>(0)) << logger->output();
+  EXPECT_EQ(readBack(sub + "/h-000.lcmlog").seqs, (std::vector<int64_t>{0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11}));
+  EXPECT_EQ(readBack(sub + "/h-001.lcmlog").seqs, (std::vector<int64_t>{12, 13, 14}));
+  const std::string out = logger->output();
+  EXPECT_NE(out.find("cannot start a new log file: cannot open log file '" + sub + "/h-001.lcmlog'"), std::string::npos)
+      << out;
+  EXPECT_NE(out.find("still recording into " + sub + "/h-000.lcmlog"), std::string::npos) << out;
+  EXPECT_NE(out.find("new log file " + sub + "/h-001.lcmlog (after 1 failed attempt(s) to start one)"),
+            std::string::npos)
+      << out;
+  EXPECT_EQ(out.find("stopped recording"), std::string::npos) << out;
+}
+
+// Rotation by size had the same flaw: the file that could not be opened stopped the recording.
+// Now the full file takes what comes (larger than asked) until a new one opens, tried again
+// every kRotateRetry (1 s); nothing is lost. (Rotation by time goes the same way.)
+TEST_F(LoggerTest, SizeRotationIntoAnUnwritableDirectoryKeepsRecordingAndTriesAgain) {
+  const std::string sub = path("sub");
+  fs::create_directories(sub);
+  auto logger = start({"--output", sub + "/s-{index}.lcmlog", "--max-file-mb", "0.001"});  // 1000 bytes: 10 events
+  int n = 0;
+  for (; n < 10; ++n) publish(n);
+  ASSERT_TRUE(waitStatus([&](const auto& s) { return s.written == n; }, 10s)) << logger->output();
+  {
+    BrokenDir broken(sub);
+    for (; n < 30; ++n) publish(n);
+    ASSERT_TRUE(waitStatus([&](const auto& s) { return s.written == n && s.state == "rotate_failed"; }, 10s))
+        << logger->output();
+    EXPECT_EQ(status_->files, 1);
+    broken.restore();
+    // (the next attempt comes with a message at least 1 s after the last failed one)
+    const auto deadline = std::chrono::steady_clock::now() + 10s;
+    while (!(status_->files >= 2 && status_->state == "running") && std::chrono::steady_clock::now() < deadline) {
+      publish(n++);
+      bus_->handle(100);
+    }
+    ASSERT_GE(status_->files, 2) << logger->output();
+  }
+  for (int k = 0; k < 10; ++k) publish(n++);
+  ASSERT_TRUE(waitStatus([&](const auto& s) { return s.written == n; }, 10s)) << logger->output();
+  logger->signal(SIGTERM);
+  ASSERT_EQ(logger->wait(10s), std::optional<int>(0)) << logger->output();
+  std::vector<int64_t> all;
+  std::vector<std::string> files;
+  for (const auto& e : fs::directory_iterator(sub)) files.push_back(e.path().string());
+  std::sort(files.begin(), files.end());
+  ASSERT_GE(files.size(), 3u);
+  EXPECT_GE(readBack(files[0]).seqs.size(), 30u) << "the full file took what came while no new one opened";
+  for (const auto& f : files) {
+    const auto r = readBack(f);
+    EXPECT_FALSE(r.scan.damaged) << f;
+    all.insert(all.end(), r.seqs.begin(), r.seqs.end());
+  }
+  ASSERT_EQ(static_cast<int>(all.size()), n) << logger->output();
+  for (int i = 0; i < n; ++i) EXPECT_EQ(all[static_cast<std::size_t>(i)], i);
+  EXPECT_NE(logger->output().find("attempt(s) to start a new file failed"), std::string::npos) << logger->output();
+}

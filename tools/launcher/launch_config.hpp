@@ -3,6 +3,8 @@
 #include <string>
 #include <vector>
 
+#include "lcmloc/common/process.hpp"
+
 namespace lcmloc::launcher {
 
 struct ProcessSpec {
@@ -14,6 +16,10 @@ struct ProcessSpec {
   /// goes on), restart_delay apart; 0: the run fails and the others are stopped. A process that
   /// fails during start-up is not restarted.
   int restart = 0;
+  /// false: when it ends for good (after its restarts) or fails during start-up, this is
+  /// reported (an error, repeated every kNonCriticalReminder) and the others keep running; the
+  /// launcher still exits non-zero at the end. true: the run stops, as before.
+  bool critical = true;
 };
 
 struct LaunchConfig {
@@ -23,8 +29,19 @@ struct LaunchConfig {
   double stop_timeout = 5.0;       ///< [s] per process after SIGTERM, then SIGKILL
   double ready_timeout = 5.0;      ///< [s] to wait for a child's first heartbeat
   double restart_delay = 1.0;      ///< [s] from an unexpected end to the restart (ProcessSpec::restart)
+  /// [s] a child whose HEARTBEAT (one per second) has been missing this long is hung: stopped
+  /// (SIGTERM + SIGCONT, SIGKILL after stop_timeout) and treated as crashed. 0 = off; else at
+  /// least kMinHeartbeatTimeout. Watched from the child's first heartbeat on.
+  double heartbeat_timeout = 3.0;
+  /// [bytes] recv_buf_size added to a udpm:// URL that has none, for the children and the
+  /// launcher (0 = the URL as given).
+  int recv_buf_size = 4194304;
   std::vector<ProcessSpec> processes;
 };
+
+/// Heartbeats come once per common::Heartbeat::kPeriodSeconds (1 s): a shorter timeout than two
+/// periods would take a late or lost heartbeat for a hung process.
+inline constexpr double kMinHeartbeatTimeout = 2.0 * common::Heartbeat::kPeriodSeconds;
 
 /// Reads a system file; relative scenario paths are relative to the file. Throws ConfigError.
 LaunchConfig loadLaunchConfig(const std::string& path);

@@ -1,8 +1,10 @@
 // lcmloc-launcher: starts the processes of a system file as children (in list order, each once
-// its heartbeat shows it running), watches them, starts a child that ended unexpectedly again
-// when its `restart` allows, and stops them in reverse order when the until_exit process (the
-// simulator) has finished, when a child fails for good, or on Ctrl-C. Exits non-zero if any
-// child failed (in its last run).
+// its heartbeat shows it running), watches them (their exit, and their HEARTBEAT: one silent for
+// heartbeat_timeout is hung, and stopped), starts a child that ended unexpectedly again when its
+// `restart` allows, and stops them in reverse order when the until_exit process (the simulator)
+// has finished, when a critical child fails for good, or on Ctrl-C. A non-critical child that
+// fails for good is reported and the others keep running. Exits non-zero if any child failed (in
+// its last run).
 #include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -39,6 +41,12 @@ struct Child {
   double runtime = 0.0;
   int restarts = 0;                         ///< times started again (ProcessSpec::restart)
   std::optional<Clock::time_point> restart_at;  ///< ended unexpectedly: to be started again then
+  std::optional<Clock::time_point> last_heartbeat;  ///< of this run (any state, its pid)
+  bool hung = false;         ///< stopped by the launcher: no heartbeat for heartbeat_timeout
+  double silent_for = 0.0;   ///< [s] without a heartbeat when found hung
+  std::optional<Clock::time_point> kill_at;  ///< hung and sent SIGTERM: SIGKILL then
+  bool given_up = false;     ///< non-critical, failed for good: the others run without it
+  bool warned_silent = false;  ///< (started again) no first heartbeat within ready_timeout, said
 };
 
 std::string resolveExecutable(const std::string& exe) {
@@ -96,6 +104,13 @@ void signalChild(const Child& c, int sig) {
   if (::kill(-c.pid, sig) != 0) ::kill(c.pid, sig);
 }
 
+/// SIGTERM, then SIGCONT: a child stopped by SIGSTOP (or a debugger) handles the SIGTERM and
+/// ends in order (the logger closes its file) instead of waiting for the SIGKILL.
+void terminateChild(const Child& c) {
+  signalChild(c, SIGTERM);
+  signalChild(c, SIGCONT);
+}
+
 /// Ended by the SIGTERM of a stop (before it had set up its own handling of it): stopped.
 bool stoppedBySigterm(const Child& c) {
   return c.terminated && !c.killed && WIFSIGNALED(c.status) && WTERMSIG(c.status) == SIGTERM;
@@ -103,17 +118,22 @@ bool stoppedBySigterm(const Child& c) {
 
 std::string describeStatus(const Child& c) {
   if (c.running) return "still running";
-  if (WIFEXITED(c.status)) return "exit " + std::to_string(WEXITSTATUS(c.status));
-  if (stoppedBySigterm(c)) return "stopped by SIGTERM";
+  const std::string hung = c.hung ? fmt::format("hung, no heartbeat for {:.1f} s; ", c.silent_for) : "";
+  if (WIFEXITED(c.status)) return hung + "exit " + std::to_string(WEXITSTATUS(c.status));
+  if (stoppedBySigterm(c)) return hung + "stopped by SIGTERM";
   if (WIFSIGNALED(c.status))
-    return std::string("killed by ") + strsignal(WTERMSIG(c.status)) + (c.killed ? " (stop timeout)" : "");
-  return "unknown";
+    return hung + std::string("killed by ") + strsignal(WTERMSIG(c.status)) + (c.killed ? " (stop timeout)" : "");
+  return hung + "unknown";
 }
 
 bool failed(const Child& c) {
+  if (c.hung) return true;
   if (stoppedBySigterm(c)) return false;
   return c.killed || !WIFEXITED(c.status) || WEXITSTATUS(c.status) != 0;
 }
+
+/// While a non-critical child is down for good, the launcher says so again this often.
+constexpr double kNonCriticalReminder = 60.0;  // [s]
 
 class Launcher {
  public:
@@ -122,28 +142,52 @@ class Launcher {
 
   int run() {
     const auto sys = common::loadSystemConfig(scenario_);  // validate before starting anything
-    common::Bus bus(url_);
-    // Only our own children's heartbeats count, from their start on: a heartbeat of another
-    // process (on another host its pid may be any number) cannot make a child ready before it
-    // is, and nothing is kept per pid seen.
-    bus.subscribe<lcmloc::heartbeat_t>(sys.channels.heartbeat,
-                                       [this](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
-                                         if (m.state != "running") return;
-                                         for (auto& c : children_)
-                                           if (c.running && c.pid == m.pid) c.ready = true;
-                                       });
     for (const auto& spec : cfg_.processes) {
       children_.emplace_back();
       children_.back().spec = spec;
     }
+    std::optional<common::Bus> bus;
+    try {
+      bus.emplace(url_);
+    } catch (const common::TransportError&) {
+      // A SIGTERM right at start-up interrupts LCM's start (its self-test): that is a stop.
+      if (!common::stopRequested()) throw;
+    }
+    // Only our own children's heartbeats count, from their start on: a heartbeat of another
+    // process (on another host its pid may be any number) cannot make a child ready before it
+    // is, and nothing is kept per pid seen.
+    if (bus)
+      bus->subscribe<lcmloc::heartbeat_t>(sys.channels.heartbeat,
+                                          [this](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
+                                            for (auto& c : children_) {
+                                              if (!c.running || c.pid != m.pid) continue;
+                                              c.last_heartbeat = Clock::now();
+                                              if (m.state == "running") c.ready = true;
+                                            }
+                                          });
 
-    bool ok = startAll(bus);
+    bool ok = bus && startAll(*bus);
     std::optional<Clock::time_point> drain_until;
+    auto last_pass = Clock::now();
+    auto next_reminder = Clock::now() + secs(kNonCriticalReminder);
     while (ok && !common::stopRequested()) {
-      bus.handle(100);
+      bus->handle(100);
+      const auto now = Clock::now();
+      // The launcher itself did not run (suspended, stopped, starved): its children's silence
+      // meanwhile says nothing about them.
+      if (cfg_.heartbeat_timeout > 0 && now - last_pass > secs(cfg_.heartbeat_timeout / 2)) {
+        spdlog::warn("the launcher did not run for {:.1f} s: heartbeat clocks start again",
+                     std::chrono::duration<double>(now - last_pass).count());
+        for (auto& c : children_)
+          if (c.last_heartbeat) c.last_heartbeat = now;
+      }
+      last_pass = now;
       for (auto& c : children_) {
         if (c.restart_at && Clock::now() >= *c.restart_at && !drain_until) restart(c);
-        if (!reap(c, false)) continue;
+        if (!reap(c, false)) {
+          watch(c);
+          continue;
+        }
         if (c.spec.until_exit && !failed(c)) {
           spdlog::info("{} finished; stopping the others in {:.1f} s", c.spec.name, cfg_.drain_time);
           drain_until = Clock::now() + secs(cfg_.drain_time);
@@ -151,11 +195,18 @@ class Launcher {
           spdlog::warn("{} ended unexpectedly ({}); starting it again in {:.1f} s ({} of {})", c.spec.name,
                        describeStatus(c), cfg_.restart_delay, c.restarts + 1, c.spec.restart);
           c.restart_at = Clock::now() + secs(cfg_.restart_delay);
+        } else if (!c.spec.critical) {
+          giveUp(c, "ended unexpectedly (" + describeStatus(c) + ")" +
+                        (c.spec.restart ? fmt::format(", restarted {} time(s) already", c.restarts) : ""));
         } else {
           spdlog::error("{} ended unexpectedly ({}){}", c.spec.name, describeStatus(c),
                         c.spec.restart ? fmt::format(", restarted {} time(s) already", c.restarts) : "");
           ok = false;
         }
+      }
+      if (Clock::now() >= next_reminder) {
+        remindGivenUp();
+        next_reminder = Clock::now() + secs(kNonCriticalReminder);
       }
       if (drain_until && Clock::now() >= *drain_until) break;
     }
@@ -178,17 +229,73 @@ class Launcher {
       c.started = Clock::now();
       spdlog::info("started {} (pid {})", c.spec.name, c.pid);
       const auto deadline = Clock::now() + secs(cfg_.ready_timeout);
+      bool ended = false;
       while (!c.ready && Clock::now() < deadline && !common::stopRequested()) {
         bus.handle(50);
-        if (reap(c, false)) {
+        if ((ended = reap(c, false))) break;
+      }
+      if (ended) {
+        if (c.spec.critical) {
           spdlog::error("{} ended during start-up ({})", c.spec.name, describeStatus(c));
           return false;
         }
+        giveUp(c, "ended during start-up (" + describeStatus(c) + ")");
+        continue;
       }
-      if (!c.ready && cfg_.ready_timeout > 0)
-        spdlog::warn("{}: no heartbeat within {:.1f} s; continuing", c.spec.name, cfg_.ready_timeout);
+      if (!c.ready && cfg_.ready_timeout > 0 && !common::stopRequested())
+        spdlog::warn("{}: no heartbeat within {:.1f} s; continuing{}", c.spec.name, cfg_.ready_timeout,
+                     cfg_.heartbeat_timeout > 0 ? " (its heartbeat is watched from its first one on)" : "");
+      c.warned_silent = true;
     }
     return true;
+  }
+
+  /// A non-critical child that failed for good: said loudly, and the others go on.
+  void giveUp(Child& c, const std::string& what) {
+    c.given_up = true;
+    spdlog::error("{} {}; it is not critical (critical: false): the others keep running WITHOUT it, and the "
+                  "launcher will exit non-zero",
+                  c.spec.name, what);
+  }
+
+  void remindGivenUp() const {
+    std::string names;
+    for (const auto& c : children_)
+      if (c.given_up) names += (names.empty() ? "" : ", ") + c.spec.name;
+    if (!names.empty()) spdlog::error("still running without {} (failed; not critical)", names);
+  }
+
+  /// The liveness of a running child: silent for heartbeat_timeout after a heartbeat, it is
+  /// hung and stopped (SIGTERM and SIGCONT now, SIGKILL after stop_timeout); its end is then
+  /// taken as a crash by the loop. A child that never sent a heartbeat (not an lcmloc process)
+  /// is not watched (the start-up said so).
+  void watch(Child& c) {
+    if (!c.running) return;
+    const auto now = Clock::now();
+    if (c.kill_at && now >= *c.kill_at) {
+      spdlog::error("{} (hung) did not stop within {:.1f} s of SIGTERM: SIGKILL", c.spec.name, cfg_.stop_timeout);
+      signalChild(c, SIGKILL);
+      c.killed = true;
+      c.kill_at.reset();
+      return;
+    }
+    if (!c.last_heartbeat) {
+      if (!c.warned_silent && cfg_.ready_timeout > 0 && now - c.started > secs(cfg_.ready_timeout)) {
+        spdlog::warn("{}: no heartbeat within {:.1f} s of its start", c.spec.name, cfg_.ready_timeout);
+        c.warned_silent = true;
+      }
+      return;
+    }
+    if (cfg_.heartbeat_timeout <= 0 || c.hung) return;
+    const double silent = std::chrono::duration<double>(now - *c.last_heartbeat).count();
+    if (silent <= cfg_.heartbeat_timeout) return;
+    c.hung = true;
+    c.silent_for = silent;
+    spdlog::error("{} (pid {}) is hung: no heartbeat for {:.1f} s (heartbeat_timeout {:.1f} s); stopping it "
+                  "(SIGTERM, SIGKILL after {:.1f} s) and taking it as crashed",
+                  c.spec.name, c.pid, silent, cfg_.heartbeat_timeout, cfg_.stop_timeout);
+    terminateChild(c);
+    c.kill_at = now + secs(cfg_.stop_timeout);
   }
 
   /// Starts a child that ended unexpectedly again (its first heartbeat is not waited for: the
@@ -201,6 +308,10 @@ class Launcher {
     c.ready = false;
     c.killed = false;
     c.terminated = false;
+    c.hung = false;
+    c.kill_at.reset();
+    c.last_heartbeat.reset();
+    c.warned_silent = false;
     c.started = Clock::now();
     spdlog::info("started {} again (pid {}, {} of {})", c.spec.name, c.pid, c.restarts, c.spec.restart);
   }
@@ -213,17 +324,19 @@ class Launcher {
     if (r != c.pid) return false;
     c.running = false;
     c.status = status;
+    c.kill_at.reset();
     c.runtime = std::chrono::duration<double>(Clock::now() - c.started).count();
     return true;
   }
 
-  /// SIGTERM in reverse start order, each waited for (bounded) before the next, then SIGKILL.
+  /// SIGTERM (and SIGCONT) in reverse start order, each waited for (bounded) before the next,
+  /// then SIGKILL.
   void stopAll() {
     for (auto it = children_.rbegin(); it != children_.rend(); ++it) {
       Child& c = *it;
       if (!c.running) continue;
       c.terminated = true;
-      signalChild(c, SIGTERM);
+      terminateChild(c);
       const auto deadline = Clock::now() + secs(cfg_.stop_timeout);
       while (!reap(c, false) && Clock::now() < deadline)
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
@@ -238,17 +351,20 @@ class Launcher {
 
   int summary() const {
     bool any_failed = false;
+    const bool stopped = common::stopRequested();
     for (const auto& c : children_) {
       if (c.pid < 0) {
-        spdlog::info("  {:<16} not started", c.spec.name);
+        // (not started because of a stop request: nothing failed; because another failed: counted)
+        spdlog::info("  {:<16} not started{}", c.spec.name, stopped ? " (stop requested)" : "");
+        any_failed |= !stopped;
         continue;
       }
       const bool bad = failed(c);
       any_failed |= bad;
-      spdlog::info("  {:<16} pid {:<7} {:>7.2f} s  {}  {}{}", c.spec.name, c.pid, c.runtime, describeStatus(c),
-                   bad ? "FAILED" : "ok", c.restarts ? fmt::format("  (started again {} time(s))", c.restarts) : "");
+      spdlog::info("  {:<16} pid {:<7} {:>7.2f} s  {}  {}{}{}", c.spec.name, c.pid, c.runtime, describeStatus(c),
+                   bad ? "FAILED" : "ok", bad && !c.spec.critical ? " (not critical)" : "",
+                   c.restarts ? fmt::format("  (started again {} time(s))", c.restarts) : "");
     }
-    for (const auto& c : children_) any_failed |= (c.pid < 0);
     return any_failed ? common::kExitRuntimeError : common::kExitOk;
   }
 
@@ -260,12 +376,21 @@ class Launcher {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"lcmloc-launcher: starts, watches (starting again those with `restart: N` that crash) and stops the "
-               "processes of a system file"};
+  // Before anything else: a SIGTERM right after start-up is an orderly stop (exit 0), not the
+  // default action's death, nor a failed start.
+  common::installSignalHandlers();
+  CLI::App app{"lcmloc-launcher: starts, watches (heartbeats; starting again those with `restart: N` that crash or "
+               "hang) and stops the processes of a system file.\n"
+               "A udpm:// URL without recv_buf_size gets the system file's recv_buf_size (default 4194304) for "
+               "every child; a child silent for heartbeat_timeout (default 3 s) is stopped as hung; a child with "
+               "`critical: false` that fails is reported and the others keep running (exit status 1 at the end)."};
   common::CommonOptions opts;
   opts.config = "-";  // placeholder: the system file names the scenario unless --config is given
   common::addCommonOptions(app, opts);
   app.get_option("--config")->description("scenario YAML for every child (default: the system file's `scenario`)");
+  app.get_option("--lcm-url")
+      ->description("LCM provider URL for the launcher and every child (default: $LCM_DEFAULT_URL or udpm); a "
+                    "udpm:// URL without recv_buf_size gets the system file's recv_buf_size");
   std::string system = std::string(LCMLOC_CONFIG_DIR) + "/system.yaml";
   app.add_option("--system", system, "system file: processes to run")->capture_default_str();
 
@@ -274,8 +399,19 @@ int main(int argc, char** argv) {
     std::string scenario = opts.config != "-" ? opts.config : cfg.scenario;
     if (scenario.empty()) scenario = common::defaultConfigPath();
     scenario = std::filesystem::absolute(scenario).string();
-    spdlog::info("system {}: {} processes, scenario {}, LCM {}", system, cfg.processes.size(), scenario,
-                 opts.lcm_url);
-    return Launcher(std::move(cfg), scenario, opts.lcm_url).run();
+    const std::string url = common::withReceiveBuffer(opts.lcm_url, cfg.recv_buf_size);
+    spdlog::info("system {}: {} processes, scenario {}, LCM {}", system, cfg.processes.size(), scenario, url);
+    if (url != opts.lcm_url)
+      spdlog::info("recv_buf_size={} added to the LCM URL for every child (the kernel's default UDP receive buffer "
+                   "drops bursts; a recv_buf_size in --lcm-url is kept; recv_buf_size: 0 in {} leaves the URL as "
+                   "given)",
+                   cfg.recv_buf_size, system);
+    const long long asked = common::receiveBufferOf(url), rmem_max = common::kernelRmemMax();
+    if (asked > 0 && rmem_max >= 0 && rmem_max < asked)
+      spdlog::warn("the kernel caps UDP receive buffers at net.core.rmem_max = {} bytes, less than the "
+                   "recv_buf_size={} asked for: bursts may be lost (LCM says so too); as root: sysctl -w "
+                   "net.core.rmem_max={} (and in /etc/sysctl.d/ to keep it)",
+                   rmem_max, asked, asked);
+    return Launcher(std::move(cfg), scenario, url).run();
   });
 }

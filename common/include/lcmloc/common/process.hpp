@@ -82,6 +82,8 @@ int runProcess(CLI::App& app, int argc, char** argv, const CommonOptions& opts,
 class Heartbeat {
  public:
   using Counters = std::vector<std::pair<std::string, int64_t>>;
+  /// [s] between two heartbeats (lcmloc-launcher's heartbeat_timeout is at least twice this).
+  static constexpr double kPeriodSeconds = 1.0;
   Heartbeat(Bus& bus, std::string channel, std::string process,
             std::function<Counters()> counters = nullptr);
   /// Publishes if a second of wall time has passed since the last heartbeat (or none was sent).

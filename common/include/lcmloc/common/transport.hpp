@@ -25,6 +25,16 @@ class TransportError : public std::runtime_error {
 /// Default URL: $LCM_DEFAULT_URL, else loopback-friendly udpm with a 4 MB receive buffer.
 std::string defaultLcmUrl();
 
+/// url with "recv_buf_size=<bytes>" added when it is a udpm:// URL without one; any other URL,
+/// one that sets recv_buf_size, or bytes <= 0: url unchanged. LCM 1.3.1 sets the socket's
+/// SO_RCVBUF to it, which the kernel caps at net.core.rmem_max (LCM then warns on stderr).
+std::string withReceiveBuffer(const std::string& url, int bytes);
+/// The recv_buf_size a udpm:// URL sets (0 when none or not udpm).
+long long receiveBufferOf(const std::string& url);
+/// The kernel's net.core.rmem_max [bytes]: the largest SO_RCVBUF a process without
+/// CAP_NET_ADMIN gets (-1 when it cannot be read).
+long long kernelRmemMax();
+
 /// Typed publish/subscribe over any raw message transport: LCM (Bus) live, a log file for the
 /// offline replay (lcmloc::replay::LogBus). Code written against MessageBus (the fusion daemon)
 /// therefore publishes byte-identical messages whichever transport carries them.

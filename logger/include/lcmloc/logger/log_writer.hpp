@@ -5,6 +5,10 @@
 // batch to the kernel at once and fsync()ing every flush period. A failed write (disk full,
 // file size limit) stops the writer: the file keeps every whole event written before, later
 // messages are counted as lost/dropped and failed() tells the main loop to exit non-zero.
+// A new file that cannot be opened (its directory gone or unwritable) is no such failure: the
+// writer goes on recording into the file it has, reports it (error log, WriterStats::
+// rotate_failures / rotate_error) and tries again at the next request, or, for size and time,
+// kRotateRetry later.
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
@@ -27,6 +31,10 @@ namespace lcmloc::logger {
 /// its LOGGER_STATUS without bound. Every message is recorded all the same.
 inline constexpr std::size_t kMaxChannels = 1000;
 inline const std::string kOtherChannels = "(other channels)";
+
+/// A size or time rotation that could not open its new file is tried again this much later (a
+/// requested one, SIGHUP, at the next request).
+inline constexpr double kRotateRetry = 1.0;  // [s]
 
 struct Event {
   std::string channel;
@@ -55,6 +63,8 @@ struct WriterStats {
   std::string file;            ///< current file
   bool failed = false;
   std::string error;           ///< what failed (when failed)
+  int64_t rotate_failures = 0; ///< attempts to start a new file that could not open it
+  std::string rotate_error;    ///< why the last attempt failed; "" once a new file was opened
 };
 
 /// Name of file number index (0-based) from pattern at time t (local time): strftime codes are
@@ -90,13 +100,18 @@ class LogWriter {
 
  private:
   void run();
-  void openNext();               // writer thread (and constructor)
+  /// Opens the next file (writer thread, and constructor); on failure returns null and sets *error.
+  std::unique_ptr<EventFile> openNext(std::string* error);
+  /// Starts a new file; when it cannot be opened, keeps the current one and reports it.
+  void rotate(bool requested);
   void fail(int err, const std::string& what);
   void finishFile();
 
   WriterOptions opts_;
   std::unique_ptr<EventFile> file_;
   std::chrono::steady_clock::time_point file_opened_;
+  std::chrono::steady_clock::time_point rotate_retry_at_{};  // a size/time rotation failed: not before
+  int64_t failed_in_a_row_ = 0;                               // rotations that failed since the last new file
   int64_t closed_bytes_ = 0, closed_events_ = 0;  // of files already closed (writer thread)
   int64_t appended_ = 0;                           // events given to EventFile (writer thread)
 
