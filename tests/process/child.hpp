@@ -77,9 +77,11 @@ class Child {
 
 /// A udpm:// URL on loopback with a port of its own, shared by every process test so that tests
 /// of different files running at the same time do not hear each other: one allocator, 8 ports
-/// per test process, 5000 process slots (20000..59999).
+/// per test process, 1500 process slots (20000..31999): below the kernel's ephemeral ports
+/// (net.ipv4.ip_local_port_range, 32768 up), where another program's socket made LCM's bind fail
+/// now and then ("Address already in use").
 inline std::string uniqueLcmUrl() {
   static int next = 0;
-  const int port = 20000 + (::getpid() % 5000) * 8 + (next++ % 8);
+  const int port = 20000 + (::getpid() % 1500) * 8 + (next++ % 8);
   return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0&recv_buf_size=4194304";
 }
