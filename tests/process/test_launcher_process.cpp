@@ -143,6 +143,13 @@ TEST_F(LauncherTest, ANonCriticalChildFailsAndTheRestRunsOn) {
   int64_t odometry = 0;
   bool logger_killed = false;
   int64_t odometry_after_kill = 0;
+  // The launcher's own heartbeat shows the child given up, on the bus for a monitor.
+  int64_t given_up = -1;
+  bus_->subscribe<lcmloc::heartbeat_t>("HEARTBEAT", [&](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
+    if (m.process != "lcmloc-launcher") return;
+    for (int i = 0; i < m.num_counters; ++i)
+      if (m.counter_names[static_cast<std::size_t>(i)] == "given_up") given_up = m.counters[static_cast<std::size_t>(i)];
+  });
   bus_->subscribe<lcmloc::odometry_t>("ODOMETRY", [&](const std::string&, const lcmloc::odometry_t&, int64_t) {
     ++odometry;
     if (logger_killed) ++odometry_after_kill;
@@ -151,8 +158,10 @@ TEST_F(LauncherTest, ANonCriticalChildFailsAndTheRestRunsOn) {
   const int logger = firstPid("lcmloc-logger", 15s);
   ASSERT_GT(logger, 0) << launcher.output();
   ASSERT_TRUE(waitFor([&] { return odometry > 10; }, 20s)) << launcher.output();
+  EXPECT_EQ(given_up, 0) << launcher.output();
   ASSERT_EQ(::kill(logger, SIGKILL), 0);
   logger_killed = true;
+  EXPECT_TRUE(waitFor([&] { return given_up == 1; }, 5s)) << launcher.output();
   const auto rc = waitExit(launcher, 60s);
   ASSERT_TRUE(rc.has_value()) << launcher.output();
   EXPECT_EQ(*rc, 1) << launcher.output();

@@ -166,11 +166,16 @@ class Launcher {
                                             }
                                           });
 
+    // Its own HEARTBEAT: a monitor (lcm-spy) sees the system's state, e.g. a non-critical child
+    // given up, on the bus and not only in the launcher's log.
+    if (bus)
+      hb_.emplace(*bus, sys.channels.heartbeat, "lcmloc-launcher", [this] { return counters(); });
     bool ok = bus && startAll(*bus);
     std::optional<Clock::time_point> drain_until;
     auto last_pass = Clock::now();
     auto next_reminder = Clock::now() + secs(kNonCriticalReminder);
     while (ok && !common::stopRequested()) {
+      hb_->tick();
       bus->handle(100);
       const auto now = Clock::now();
       // The launcher itself did not run (suspended, stopped, starved): its children's silence
@@ -211,6 +216,7 @@ class Launcher {
       if (drain_until && Clock::now() >= *drain_until) break;
     }
     if (common::stopRequested()) spdlog::info("stop requested (signal {}): stopping all", common::stopSignal());
+    if (hb_) hb_->publish("stopping");
     stopAll();
     return summary();
   }
@@ -231,6 +237,7 @@ class Launcher {
       const auto deadline = Clock::now() + secs(cfg_.ready_timeout);
       bool ended = false;
       while (!c.ready && Clock::now() < deadline && !common::stopRequested()) {
+        hb_->tick();
         bus.handle(50);
         if ((ended = reap(c, false))) break;
       }
@@ -371,6 +378,19 @@ class Launcher {
   launcher::LaunchConfig cfg_;
   std::string scenario_, url_;
   std::vector<Child> children_;
+  std::optional<common::Heartbeat> hb_;
+  /// The launcher's heartbeat counters: children in the system file, running now, failed for good
+  /// (non-critical ones given up), started again so far.
+  common::Heartbeat::Counters counters() const {
+    int64_t running = 0, given_up = 0, restarts = 0;
+    for (const auto& c : children_) {
+      running += c.running;
+      given_up += c.given_up;
+      restarts += c.restarts;
+    }
+    return {{"children", static_cast<int64_t>(children_.size())}, {"running", running}, {"given_up", given_up},
+            {"restarts", restarts}};
+  }
 };
 
 }  // namespace
