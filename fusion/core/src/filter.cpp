@@ -257,6 +257,9 @@ class DeadReckoningFilter final : public Filter {
     return d;
   }
 
+ protected:
+  void addPoseNoise(const Mat3& Q) override { P_ += Q; }  // (always DeadReckoning)
+
  private:
   FilterConfig cfg_;
   std::vector<std::string> names_{"x", "y", "theta"};
@@ -389,6 +392,9 @@ class RulerUkf final : public Filter {
     utime_ = std::max(utime_, det.utime);
     return book_.finish(d, best_id, best, gate_, gated_, ukf_, cfg_);
   }
+
+ protected:
+  void addPoseNoise(const Mat3& Q) override { book_.addPoseNoise(ukf_, Q); }
 
  private:
   /// Association candidates: markers the ruler can physically reach from the predicted pose.
