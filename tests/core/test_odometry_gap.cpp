@@ -310,3 +310,49 @@ TEST(OdometryGap, TheGnssFiltersKeepTheirSpeedOverTheGap) {
     EXPECT_LT(unbridged.x[0], ref.x[0] - 5.0) << type;
   }
 }
+
+// The odometry driver is down for 4.5 s (restarted by the launcher), the ruler goes on: its
+// detections in between have no odometry to place them. One within max_time_jump of the last
+// odometry is refused with reason "no_odometry" (before: matched against the pose of the last
+// odometry, 0.5 s behind); those beyond are dropped by the time-jump guard, whose report names
+// the missing odometry, not the healthy ruler, as the cause.
+TEST(OdometryGap, RulerDetectionsWhileTheOdometryIsMissingAreRefusedNamingTheMissingOdometry) {
+  std::vector<std::pair<std::string, std::string>> events;
+  std::vector<std::string> reasons;
+  EngineOutputs o;
+  o.on_event = [&](const std::string& e, const std::string& d, int64_t) { events.emplace_back(e, d); };
+  o.on_decision = [&](const std::string& f, bool, const GateDecision& d) { reasons.push_back(f + ":" + d.reason); };
+  FusionEngine e(config(true), line(30), o);
+  const int64_t t0 = 1000000;
+  auto odo = [&](int k, int64_t seq) {
+    OdometryInput in;
+    in.utime = t0 + k * 10000;
+    in.delta_s = 0.015;
+    in.has_steering = true;
+    e.push(EngineInput{"ODOMETRY", seq, in.utime, in});
+  };
+  auto ruler = [&](int k, int64_t seq) {
+    RulerDetection d;
+    d.utime = t0 + k * 10000;
+    d.seq = seq;
+    e.push(EngineInput{"MAGRULER", seq, d.utime, d});
+  };
+  for (int k = 1; k <= 500; ++k) odo(k, k);
+  ruler(550, 1);  // 0.5 s after the last odometry
+  ruler(700, 2);  // 2.0 s after: held by the time-jump guard
+  ruler(780, 3);
+  for (int k = 950; k <= 1050; ++k) odo(k, k - 950);  // the restarted driver counts from 0
+  e.flush();
+  EXPECT_EQ(reasons, (std::vector<std::string>{"ukf_gated:no_odometry", "ukf:no_odometry", "ukf_calib:no_odometry",
+                                               "dead_reckoning:no_odometry"}));
+  int too_new = 0, gaps = 0;
+  for (const auto& [name, detail] : events) {
+    if (name == "odometry_gap") ++gaps;
+    if (name != "too_new") continue;
+    ++too_new;
+    EXPECT_NE(detail.find("MAGRULER seq"), std::string::npos) << detail;
+    EXPECT_NE(detail.find("the odometry is missing"), std::string::npos) << detail;
+  }
+  EXPECT_EQ(too_new, 2);
+  EXPECT_EQ(gaps, 1);
+}

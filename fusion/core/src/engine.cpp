@@ -147,6 +147,7 @@ struct FusionEngine::Impl {
     refused_fixes.clear();
     odometry_tracks.clear();
     last_odometry_utime = INT64_MIN;
+    last_odometry_period = 0;
     after_gap = false;
     event("time_jump",
           at + "time went back " + std::to_string(secondsApart(newest, first.utime)) + " s (utime " +
@@ -232,6 +233,14 @@ struct FusionEngine::Impl {
   };
   std::map<std::string, OdometryTrack> odometry_tracks;
   int64_t last_odometry_utime = INT64_MIN;  ///< newest odometry input on any channel
+  int64_t last_odometry_period = 0;         ///< [us] its channel's recent period (0: not known)
+  /// A measurement at utime has no odometry to place it: the newest odometry input is older by
+  /// more than max_odometry_gap and twice its channel's period (a slow sender is not missing).
+  bool odometryMissing(int64_t utime) const {
+    const int64_t limit = cfg.odometry_gap.max_gap_us;
+    return limit > 0 && last_odometry_utime != INT64_MIN &&
+           apartBy(utime, last_odometry_utime, std::max(limit, 2 * last_odometry_period));
+  }
   bool after_gap = false;  ///< an odometry gap was bridged; no measurement accepted since
   void odometryGap(const EngineInput& in, const OdometryInput& odo) {
     last_odometry_utime = std::max(last_odometry_utime, odo.utime);
@@ -242,6 +251,11 @@ struct FusionEngine::Impl {
     t.utime = odo.utime;
     t.seq = in.seq;
     t.has_steering = odo.has_steering;
+    if (odo.utime >= last_odometry_utime) {
+      double sum_dt = 0;
+      for (int k = 0; k < t.n; ++k) sum_dt += t.dt[k];
+      last_odometry_period = t.n > 0 ? static_cast<int64_t>(sum_dt / t.n * 1e6) : 0;
+    }
     if (first || odo.utime <= prev_utime) return;
     const bool follows = in.seq == prev_seq + 1;
     if (gc.max_gap_us <= 0 || follows || !apartBy(odo.utime, prev_utime, gc.max_gap_us)) {
@@ -319,9 +333,16 @@ struct FusionEngine::Impl {
   }
 
   void handle(const EngineInput&, const RulerDetection& det) {
+    const bool unplaced = odometryMissing(det.utime);
     forEachFilter([&](Filter& f, bool is_active) {
       if (!f.uses(Measurement::Ruler)) return;
-      const GateDecision d = f.update(det);
+      GateDecision d;
+      if (unplaced) {  // the filter's pose is of the last odometry, not of this detection
+        d = detail::decision(det.utime, det.sensor, det.seq, std::numeric_limits<double>::infinity());
+        d.reason = "no_odometry";
+      } else {
+        d = f.update(det);
+      }
       if (is_active) ++(d.accepted ? counters.accepted : counters.rejected);
       if (out.on_decision) out.on_decision(f.name(), is_active, d);
       emitState(f, is_active);
