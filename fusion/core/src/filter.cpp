@@ -379,11 +379,12 @@ class RulerUkf final : public Filter {
     int best_id = -1;
     const double margin = reachMargin();
     // While the ruler's position is known to well within L1 (tracking), the range-bearing model
-    // of eq. 3-6. When its 3-sigma spread exceeds L1 (after an odometry gap, a lock-out
-    // inflation), the sigma points lie on both sides of the marker and the range folds: the
-    // marker's position in the body frame (forward, left), linear in the position, with the
-    // range-bearing noise carried into it, instead.
-    const bool wide = margin > cfg_.ruler_offset;
+    // of eq. 3-6. When its 3-sigma spread exceeds L1 after an odometry gap (status DeadReckoning
+    // until a detection is accepted), the sigma points lie on both sides of the marker and the
+    // range folds: the marker's position in the body frame (forward, left), linear in the
+    // position, with the range-bearing noise carried into it, instead. (Not after a lock-out
+    // inflation: the lock-out's re-acquisition is as it was.)
+    const bool wide = book_.status == FilterStatus::DeadReckoning && margin > cfg_.ruler_offset;
     Mat2 R = R_;
     if (wide) {
       const double r = z[0], c = std::cos(z[1]), sn = std::sin(z[1]);
