@@ -286,6 +286,9 @@ void parseFusion(KeyReader& root, FusionConfig& f) {
     if (slash != std::string::npos) f.map_file = root.file().substr(0, slash + 1) + f.map_file;
   }
   r.get("output_every", f.output_every, 1, 1000000);
+  r.get("max_odometry_gap", f.max_odometry_gap, 0.0, 3600.0, "0 = off");
+  r.get("odometry_gap_accel", f.odometry_gap_accel, 0.0, 100.0);
+  r.get("odometry_gap_yaw_rate", f.odometry_gap_yaw_rate, 0.0, 10.0);
   ins_config::parseLandmarks(r, f.landmarks);
   {
     KeyReader x(r.child("landmark_fix"), root.file(), "fusion.landmark_fix");

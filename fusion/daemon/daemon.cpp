@@ -51,6 +51,8 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
   ec.fix = cfg.fusion.fix;
   ec.fix_gate = cfg.fusion.fix_gate;
   ec.max_time_jump_us = max_jump_us_ = static_cast<int64_t>(std::llround(cfg.fusion.max_time_jump * 1e6));
+  ec.odometry_gap = {static_cast<int64_t>(std::llround(cfg.fusion.max_odometry_gap * 1e6)),
+                     cfg.fusion.odometry_gap_accel, cfg.fusion.odometry_gap_yaw_rate};
   core::EngineOutputs out;
   out.on_state = [this](const std::string& f, bool active, const core::FilterState& s) { publishState(f, active, s); };
   out.on_decision = [this](const std::string& f, bool, const core::GateDecision& d) {
@@ -75,7 +77,10 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
       publishStatus("rejected_input", "too new: " + detail, last_utime_);
       return;
     }
-    spdlog::info("{}: {}", event, core::printable(detail));
+    if (event == "odometry_gap")  // the estimate went on without its odometry: a warning
+      spdlog::warn("{}: {}", event, core::printable(detail));
+    else
+      spdlog::info("{}: {}", event, core::printable(detail));
     publishStatus(event, detail, utime);
   };
   core::MarkerMap map;

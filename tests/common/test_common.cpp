@@ -75,6 +75,9 @@ TEST(Config, PaperYamlSpellsOutTheDefaults) {
   EXPECT_EQ(f.steer_bias_rw, fd.steer_bias_rw);
   EXPECT_EQ(cfg.fusion.reorder_window, def.fusion.reorder_window);
   EXPECT_EQ(cfg.fusion.output_every, def.fusion.output_every);
+  EXPECT_EQ(cfg.fusion.max_odometry_gap, def.fusion.max_odometry_gap);
+  EXPECT_EQ(cfg.fusion.odometry_gap_accel, def.fusion.odometry_gap_accel);
+  EXPECT_EQ(cfg.fusion.odometry_gap_yaw_rate, def.fusion.odometry_gap_yaw_rate);
   EXPECT_EQ(cfg.logger.queue_capacity, def.logger.queue_capacity);
 }
 
@@ -179,6 +182,20 @@ TEST(Config, OutputEveryIsAPositiveInteger) {
   EXPECT_NE(errorOf("fusion: {output_every: 0}").find("test.yaml: fusion.output_every: value 0 out of range"),
             std::string::npos) << errorOf("fusion: {output_every: 0}");
   EXPECT_NE(errorOf("fusion: {output_every: 2.5}").find("fusion.output_every: expected an integer"),
+            std::string::npos);
+}
+
+TEST(Config, OdometryGapKeysAreCheckedAndNamed) {
+  const auto c = common::parseSystemConfig("fusion: {max_odometry_gap: 0.5, odometry_gap_accel: 1.0, odometry_gap_yaw_rate: 0.1}", "g.yaml");
+  EXPECT_EQ(c.fusion.max_odometry_gap, 0.5);
+  EXPECT_EQ(c.fusion.odometry_gap_accel, 1.0);
+  EXPECT_EQ(c.fusion.odometry_gap_yaw_rate, 0.1);
+  EXPECT_EQ(common::parseSystemConfig("fusion: {max_odometry_gap: 0}", "g.yaml").fusion.max_odometry_gap, 0.0);
+  EXPECT_NE(errorOf("fusion: {max_odometry_gap: -1}").find("test.yaml: fusion.max_odometry_gap: value -1 out of range"),
+            std::string::npos) << errorOf("fusion: {max_odometry_gap: -1}");
+  EXPECT_NE(errorOf("fusion: {odometry_gap_accel: .nan}").find("test.yaml: fusion.odometry_gap_accel: expected a finite number"),
+            std::string::npos) << errorOf("fusion: {odometry_gap_accel: .nan}");
+  EXPECT_NE(errorOf("fusion: {odometry_gap_yaw_rate: x}").find("test.yaml: fusion.odometry_gap_yaw_rate"),
             std::string::npos);
 }
 

@@ -626,3 +626,56 @@ TEST(OdoInsFilter, ALongImuDropoutHoldsTheLastSampleForMaxCoastOnly) {
   const std::vector<double> held = run(1000.0);  // the sample held throughout
   EXPECT_GT(std::abs(wrapAngle(held[15] - held[5])), 1.0);
 }
+
+// An odometry gap (messages lost, the IMU going on): the INS bridges it with the IMU; the first
+// odometer increment after it covers its own 10 ms only and must not read as a speed over the
+// whole gap (0.1 m in 2 s: 0.05 m/s, with the odometer's 0.01 m/s sigma).
+TEST(OdoInsFilter, AnOdometryGapIsBridgedByTheInsAndTheIncrementAfterItIsNoSpeed) {
+  const double theta = 0.4, v = 10.0;
+  for (const bool bridge : {true, false}) {
+    EngineConfig ec;
+    ec.filter = insConfig(theta);
+    if (!bridge) ec.odometry_gap.max_gap_us = 0;
+    std::vector<FilterState> states;
+    std::vector<std::string> events;
+    EngineOutputs o;
+    o.on_state = [&](const std::string&, bool active, const FilterState& s) {
+      if (active) states.push_back(s);
+    };
+    o.on_event = [&](const std::string& e, const std::string& d, int64_t) { events.push_back(e + ": " + d); };
+    FusionEngine e(ec, {}, o);
+    const int64_t t0 = 1000000;
+    int64_t seq = 0;
+    for (int k = 1; k <= 1200; ++k) {  // 12 s at 10 m/s; no odometry in (5 s, 7 s]
+      const int64_t t = t0 + k * 10000;
+      ++seq;
+      if (k <= 500 || k > 700) {
+        OdometryInput odo;
+        odo.utime = t;
+        odo.delta_s = v * 0.01;
+        e.push(EngineInput{"ODOMETRY", seq, t, odo});
+      }
+      e.push(EngineInput{"IMU", k, t, drivingImu(t, theta, v, 0.0)});
+    }
+    e.flush();
+    int gaps = 0;
+    for (const auto& ev : events) gaps += ev.rfind("odometry_gap", 0) == 0;
+    EXPECT_EQ(gaps, bridge ? 1 : 0);
+    // the state 0.1 s after the gap: the INS speed
+    const int64_t after = t0 + 710 * 10000;
+    const FilterState* s = nullptr;
+    for (const auto& st : states)
+      if (st.utime >= after) { s = &st; break; }
+    ASSERT_NE(s, nullptr);
+    const double speed = std::hypot(s->x[4], s->x[5]);
+    const FilterState& last = states.back();
+    const double travelled = std::hypot(last.x[0], last.x[1]);  // from (0, 0), truth 11.99 s at 10 m/s
+    if (bridge) {  // (measured: 10.000 m/s; -0.10 m, the 10 ms before the INS started)
+      EXPECT_NEAR(speed, v, 0.02);
+      EXPECT_NEAR(travelled, v * 11.99, 0.2);
+    } else {  // without the gap handling (measured: 9.70 m/s, +0.71 m)
+      EXPECT_LT(speed, v - 0.1);
+      EXPECT_GT(std::abs(travelled - v * 11.99), 0.5);
+    }
+  }
+}

@@ -1,6 +1,7 @@
 #include "lcmloc/core/engine.hpp"
 
 #include <algorithm>
+#include <array>
 #include <climits>
 #include <cmath>
 #include <cstdio>
@@ -73,6 +74,10 @@ struct FusionEngine::Impl {
     if (!(g.probability >= 0.0 && g.probability < 1.0) || g.lockout_rejections < 0)
       throw std::invalid_argument("fix gate: probability must be in [0, 1) and lockout_rejections >= 0");
     if (g.probability > 0.0) fix_gate = chi2Quantile(g.probability, 3);
+    const OdometryGapConfig& og = cfg.odometry_gap;
+    if (!(og.max_gap_us >= 0) || !(std::isfinite(og.accel_std) && og.accel_std >= 0) ||
+        !(std::isfinite(og.yaw_rate_std) && og.yaw_rate_std >= 0))
+      throw std::invalid_argument("odometry gap: max_gap, accel_std and yaw_rate_std must be >= 0");
     active = makeFilter(active_cfg, map);
     last_status = active->state().status;
     for (const auto& type : cfg.shadow) {
@@ -88,6 +93,19 @@ struct FusionEngine::Impl {
 
   TimeBaseGuard<EngineInput> guard{cfg.max_time_jump_us};  ///< EngineConfig::max_time_jump_us
 
+  /// Why an input ahead was not placed when the odometry stopped before it: a measurement needs
+  /// the odometry up to its time, and none came (the odometry source is missing, not this one).
+  std::string missingOdometry(const EngineInput& s, bool ahead) const {
+    if (!ahead || std::holds_alternative<OdometryInput>(s.payload) || last_odometry_utime == INT64_MIN ||
+        !apartBy(s.utime, last_odometry_utime, cfg.max_time_jump_us))
+      return "";
+    char text[200];
+    std::snprintf(text, sizeof text, "; no odometry for %.3f s before it (the last at utime %lld): the odometry is "
+                  "missing, nothing places this input", static_cast<double>(s.utime - last_odometry_utime) * 1e-6,
+                  static_cast<long long>(last_odometry_utime));
+    return text;
+  }
+
   /// A held input the old time base went on after: an outlier.
   void dropHeld(const EngineInput& s, int side, int64_t newest) {
     const bool ahead = side > 0;
@@ -96,7 +114,7 @@ struct FusionEngine::Impl {
           s.channel + " seq " + std::to_string(s.seq) + " utime " + std::to_string(s.utime) + ": " +
               std::to_string(ahead ? secondsApart(s.utime, newest) : secondsApart(newest, s.utime)) +
               (ahead ? " s ahead of" : " s behind") + " the newest input (utime " + std::to_string(newest) +
-              "), not followed by its time base",
+              "), not followed by its time base" + missingOdometry(s, ahead),
           s.utime);
   }
 
@@ -127,6 +145,10 @@ struct FusionEngine::Impl {
     accumulated = unpublished = imu_saturating = false;
     imu_saturated = 0;
     refused_fixes.clear();
+    odometry_tracks.clear();
+    last_odometry_utime = INT64_MIN;
+    last_odometry_period = 0;
+    after_gap = false;
     event("time_jump",
           at + "time went back " + std::to_string(secondsApart(newest, first.utime)) + " s (utime " +
               std::to_string(first.utime) + " after " + std::to_string(newest) + ", " + n +
@@ -178,7 +200,10 @@ struct FusionEngine::Impl {
               in.utime);
       else if (last_status == FilterStatus::Lockout)
         event("recovered", active->name() + ": measurement accepted again", in.utime);
+      else if (after_gap && now == FilterStatus::Ok)
+        event("recovered", active->name() + ": measurement accepted again after the odometry gap", in.utime);
     }
+    if (now == FilterStatus::Ok) after_gap = false;
     last_status = now;
   }
 
@@ -188,11 +213,96 @@ struct FusionEngine::Impl {
             in.utime);
       return;
     }
+    odometryGap(in, odo);
     if (cfg.output_every > 1) return handleBatched(odo);
     forEachFilter([&](Filter& f, bool is_active) {
       f.predict(odo);
       emitState(f, is_active);
     });
+  }
+
+  /// Odometry gaps (EngineConfig::odometry_gap): per odometry channel, the last input and the
+  /// recent increments (speed, yaw rate, steering, period before a gap).
+  struct OdometryTrack {
+    int64_t utime = 0, seq = 0;
+    static constexpr int kRecent = 10;
+    std::array<double, kRecent> dt{}, ds{}, dth{}, steer{};
+    int n = 0, next = 0;
+    bool has_steering = false;
+    void clearRecent() { n = next = 0; }
+  };
+  std::map<std::string, OdometryTrack> odometry_tracks;
+  int64_t last_odometry_utime = INT64_MIN;  ///< newest odometry input on any channel
+  int64_t last_odometry_period = 0;         ///< [us] its channel's recent period (0: not known)
+  /// A measurement at utime has no odometry to place it: the newest odometry input is older by
+  /// more than max_odometry_gap and twice its channel's period (a slow sender is not missing).
+  bool odometryMissing(int64_t utime) const {
+    const int64_t limit = cfg.odometry_gap.max_gap_us;
+    return limit > 0 && last_odometry_utime != INT64_MIN &&
+           apartBy(utime, last_odometry_utime, std::max(limit, 2 * last_odometry_period));
+  }
+  bool after_gap = false;  ///< an odometry gap was bridged; no measurement accepted since
+  void odometryGap(const EngineInput& in, const OdometryInput& odo) {
+    last_odometry_utime = std::max(last_odometry_utime, odo.utime);
+    const OdometryGapConfig& gc = cfg.odometry_gap;
+    auto [it, first] = odometry_tracks.try_emplace(in.channel);
+    OdometryTrack& t = it->second;
+    const int64_t prev_utime = t.utime, prev_seq = t.seq;
+    t.utime = odo.utime;
+    t.seq = in.seq;
+    t.has_steering = odo.has_steering;
+    if (odo.utime >= last_odometry_utime) {
+      double sum_dt = 0;
+      for (int k = 0; k < t.n; ++k) sum_dt += t.dt[k];
+      last_odometry_period = t.n > 0 ? static_cast<int64_t>(sum_dt / t.n * 1e6) : 0;
+    }
+    if (first || odo.utime <= prev_utime) return;
+    const bool follows = in.seq == prev_seq + 1;
+    if (gc.max_gap_us <= 0 || follows || !apartBy(odo.utime, prev_utime, gc.max_gap_us)) {
+      const int i = t.next;
+      t.dt[i] = static_cast<double>(odo.utime - prev_utime) * 1e-6;
+      t.ds[i] = odo.delta_s;
+      t.dth[i] = odo.delta_theta;
+      t.steer[i] = odo.steering;
+      t.next = (i + 1) % OdometryTrack::kRecent;
+      t.n = std::min(t.n + 1, OdometryTrack::kRecent);
+      return;
+    }
+    OdometryGap gap;
+    double sum_dt = 0, sum_ds = 0, sum_dth = 0, sum_steer = 0;
+    for (int k = 0; k < t.n; ++k) {
+      sum_dt += t.dt[k];
+      sum_ds += t.ds[k];
+      sum_dth += t.dth[k];
+      sum_steer += t.steer[k];
+    }
+    // The increment after the gap covers its own period only: the channel's recent period.
+    const int64_t period = t.n > 0 ? static_cast<int64_t>(std::llround(sum_dt / t.n * 1e6)) : 0;
+    gap.from_utime = prev_utime;
+    gap.next_utime = odo.utime;
+    gap.to_utime = std::max(prev_utime, odo.utime - period);
+    gap.seconds = static_cast<double>(gap.to_utime - gap.from_utime) * 1e-6;
+    gap.speed = sum_dt > 0 ? sum_ds / sum_dt : 0.0;
+    gap.yaw_rate = sum_dt > 0 ? sum_dth / sum_dt : 0.0;
+    gap.has_steering = odo.has_steering;
+    gap.steering = t.n > 0 ? sum_steer / t.n : odo.steering;
+    gap.accel_std = gc.accel_std;
+    gap.yaw_rate_std = gc.yaw_rate_std;
+    gap.max_position_std = active_cfg.lockout_max_std;
+    t.clearRecent();  // (the increment after the gap says nothing about the speed over its interval)
+    if (cfg.output_every > 1) applyAccumulated();  // the bridge starts where the odometry before it ended
+    char head[300];
+    std::snprintf(head, sizeof head,
+                  "%s seq %lld after seq %lld: %.3f s of message time without odometry (utime %lld to %lld, "
+                  "max_odometry_gap %.3f s), %s; bridged at %.2f m/s",
+                  in.channel.c_str(), static_cast<long long>(in.seq), static_cast<long long>(prev_seq),
+                  gap.seconds, static_cast<long long>(gap.from_utime), static_cast<long long>(gap.to_utime),
+                  static_cast<double>(gc.max_gap_us) * 1e-6,
+                  in.seq > prev_seq ? "messages lost" : "the sender started over", gap.speed);
+    std::string detail = head;
+    forEachFilter([&](Filter& f, bool) { detail += "; " + f.bridgeOdometryGap(gap); });
+    after_gap = true;
+    event("odometry_gap", detail, odo.utime);
   }
 
   // Output decimation with batched time update (EngineConfig::output_every > 1).
@@ -223,9 +333,16 @@ struct FusionEngine::Impl {
   }
 
   void handle(const EngineInput&, const RulerDetection& det) {
+    const bool unplaced = odometryMissing(det.utime);
     forEachFilter([&](Filter& f, bool is_active) {
       if (!f.uses(Measurement::Ruler)) return;
-      const GateDecision d = f.update(det);
+      GateDecision d;
+      if (unplaced) {  // the filter's pose is of the last odometry, not of this detection
+        d = detail::decision(det.utime, det.sensor, det.seq, std::numeric_limits<double>::infinity());
+        d.reason = "no_odometry";
+      } else {
+        d = f.update(det);
+      }
       if (is_active) ++(d.accepted ? counters.accepted : counters.rejected);
       if (out.on_decision) out.on_decision(f.name(), is_active, d);
       emitState(f, is_active);

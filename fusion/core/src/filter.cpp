@@ -257,6 +257,9 @@ class DeadReckoningFilter final : public Filter {
     return d;
   }
 
+ protected:
+  void addPoseNoise(const Mat3& Q) override { P_ += Q; }  // (always DeadReckoning)
+
  private:
   FilterConfig cfg_;
   std::vector<std::string> names_{"x", "y", "theta"};
@@ -370,17 +373,33 @@ class RulerUkf final : public Filter {
       d.reason = "bad_input";
       return d;
     }
-    const Vec2 z = rulerObservation(det.lateral_offset, cfg_.ruler_offset);
+    Vec2 z = rulerObservation(det.lateral_offset, cfg_.ruler_offset);
     const Pose pose = ukf_.x().template head<3>();
     Innovation<N, 2> best, cand;
     int best_id = -1;
     const double margin = reachMargin();
+    // While the ruler's position is known to well within L1 (tracking), the range-bearing model
+    // of eq. 3-6. When its 3-sigma spread exceeds L1 after an odometry gap (status DeadReckoning
+    // until a detection is accepted), the sigma points lie on both sides of the marker and the
+    // range folds: the marker's position in the body frame (forward, left), linear in the
+    // position, with the range-bearing noise carried into it, instead. (Not after a lock-out
+    // inflation: the lock-out's re-acquisition is as it was.)
+    const bool wide = book_.status == FilterStatus::DeadReckoning && margin > cfg_.ruler_offset;
+    Mat2 R = R_;
+    if (wide) {
+      const double r = z[0], c = std::cos(z[1]), sn = std::sin(z[1]);
+      Mat2 J;
+      J << c, -r * sn, sn, r * c;
+      R = J * R_ * J.transpose();
+      z = Vec2(r * c, r * sn);
+    }
     for (const Marker& m : map_) {
       if (!reachable(pose, m, margin)) continue;
-      auto h = [&m](const typename U::Vector& s) {
-        return predictRangeBearing(s.template head<3>(), m.x, m.y);
+      auto h = [&m, wide](const typename U::Vector& s) {
+        return wide ? markerInBody(s.template head<3>(), m.x, m.y)
+                    : predictRangeBearing(s.template head<3>(), m.x, m.y);
       };
-      if (!ukf_.template innovate<2>(X, h, R_, z, kBearingMask, cand)) continue;
+      if (!ukf_.template innovate<2>(X, h, R, z, wide ? AngleMask{0} : kBearingMask, cand)) continue;
       if (best_id < 0 || cand.mahalanobis < best.mahalanobis) {
         best = cand;
         best_id = m.id;
@@ -389,6 +408,9 @@ class RulerUkf final : public Filter {
     utime_ = std::max(utime_, det.utime);
     return book_.finish(d, best_id, best, gate_, gated_, ukf_, cfg_);
   }
+
+ protected:
+  void addPoseNoise(const Mat3& Q) override { book_.addPoseNoise(ukf_, Q); }
 
  private:
   /// Association candidates: markers the ruler can physically reach from the predicted pose.

@@ -110,6 +110,15 @@ struct GateBook {
     reset();
     return d;
   }
+  /// An odometry gap (Filter::addPoseNoise): Q on the pose block; DeadReckoning until the next
+  /// accepted measurement (a Lockout stays one).
+  template <class Ukf>
+  void addPoseNoise(Ukf& ukf, const Mat3& Q) {
+    auto P = ukf.P();
+    P.template topLeftCorner<3, 3>() += Q;
+    ukf.reset(ukf.x(), P);
+    if (status != FilterStatus::Lockout) status = FilterStatus::DeadReckoning;
+  }
   template <class Ukf>
   void reject(Ukf& ukf, const FilterConfig& cfg) {
     ++consecutive_rejections;

@@ -122,6 +122,7 @@ class GnssFilterBase : public Filter {
     setState(x, P);
     utime_ = from.utime;
     enc_sum_ = x[kDistance];
+    encoder_gap_s_ = 0;
     // A state of a time (hand-over, fix, set_pose, checkpoint): the next increment is the motion
     // since then, if it comes within kMaxHandOverGapUs (a daemon started from a checkpoint after
     // a crash does not know how the vehicle moved meanwhile: resume_gap). A state of no time (a
@@ -147,7 +148,17 @@ class GnssFilterBase : public Filter {
     if (!have_odo_time_ || (from_state && odo.utime - last_odo_utime_ > kMaxHandOverGapUs)) {
       have_odo_time_ = true;  // the first increment only starts the clock and the encoder sum
       last_odo_utime_ = odo.utime;
+      encoder_gap_s_ = 0;
       return;
+    }
+    if (encoder_gap_s_ > 0) {
+      // After an odometry gap the encoder did not see the distance of the gap: its sum goes on
+      // from the distance the filter predicts over the gap (speed from the IMU's acceleration).
+      Eigen::VectorXd x;
+      Eigen::MatrixXd P;
+      fillState(x, P);
+      enc_sum_ = x[kDistance] + x[kSpeed] * encoder_gap_s_;
+      encoder_gap_s_ = 0;
     }
     enc_sum_ += odo.delta_s;
     Step st;
@@ -225,6 +236,14 @@ class GnssFilterBase : public Filter {
       if (use_course_ && g_.course_distance > 0) courseAid(Vec2(gps.x, gps.y), sd);
     }
     return d;
+  }
+
+  /// An odometry gap: the time update of the next increment spans it already (position from
+  /// speed and heading, speed from the IMU's acceleration); the encoder distance, which lacks the
+  /// gap's travel, is re-based there instead of pulling the distance and speed back.
+  std::string bridgeOdometryGap(const OdometryGap& gap) override {
+    encoder_gap_s_ = gap.seconds;
+    return name() + ": speed and heading carry the position over the gap; encoder distance re-based";
   }
 
   /// IMU samples whose forward acceleration was saturated or not finite (not used).
@@ -317,6 +336,7 @@ class GnssFilterBase : public Filter {
   bool use_course_ = false;  ///< the GPS-course heading aid applies (tvekf)
   double gate1_, gate2_;  ///< chi-square gates of 1-D (heading) and 2-D (position) innovations
   double enc_sum_ = 0;    ///< encoder distance accumulated since the start [m] (eq. 5's s(k))
+  double encoder_gap_s_ = 0;  ///< an odometry gap the next increment follows [s] (bridgeOdometryGap)
 
  private:
   int64_t utime_ = 0;

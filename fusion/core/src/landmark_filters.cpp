@@ -141,6 +141,9 @@ class LandmarkUkf final : public Filter {
     return finish(d, id, in, gate1_);
   }
 
+ protected:
+  void addPoseNoise(const Mat3& Q) override { book_.addPoseNoise(ukf_, Q); }
+
  private:
   void reset() {
     ukf_.reset(cfg_.initial_pose, Mat3(cfg_.p0_diag.asDiagonal()));

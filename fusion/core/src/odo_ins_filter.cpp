@@ -158,6 +158,16 @@ class OdoInsAdapter : public Filter {
 
   bool uses(Measurement m) const override { return m == Measurement::Imu; }
 
+  /// An odometry gap: the INS carries position, velocity and attitude over it with the IMU, and
+  /// its covariance grows as the IMU's errors say; what it must not do is take the first
+  /// increment after the gap, over the interval since the last one before it, as a speed (it
+  /// covers its own period only: the vehicle would read as standing still).
+  std::string bridgeOdometryGap(const OdometryGap& gap) override {
+    skip_odo_utime_ = gap.next_utime;
+    return name_ + ": the INS bridges the gap with the IMU; the first odometer increment after it is not "
+                   "taken as a speed";
+  }
+
   std::optional<GateDecision> update(const ImuInput& m) override {
     GateDecision d = detail::decision(m.utime, m.sensor, m.seq, std::numeric_limits<double>::infinity());
     if (!m.gyro.allFinite() || !m.accel.allFinite()) {
@@ -378,7 +388,7 @@ class OdoInsAdapter : public Filter {
       const double dt = (o.utime - last_odo_utime_) * 1e-6;
       if (dt <= 0) continue;
       last_odo_utime_ = o.utime;
-      if (!odo_interval_known_) {
+      if (!odo_interval_known_ || o.utime == skip_odo_utime_) {
         // Its interval began at an odometer message before the INS started (or before a skipped
         // gap), at a time not known here: the distance over (last_odo_utime_, o.utime] would read
         // as a wrong speed (twice the truth, 0.05 s into a 0.1 s interval). From here on it is known.
@@ -419,6 +429,7 @@ class OdoInsAdapter : public Filter {
   std::deque<OdometryInput> pending_;
   FilterStatus status_ = FilterStatus::Uninitialized;
   int64_t gaps_ = 0;
+  int64_t skip_odo_utime_ = INT64_MIN;  ///< the increment after an odometry gap (not a speed)
 };
 
 }  // namespace

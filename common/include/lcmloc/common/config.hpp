@@ -85,6 +85,12 @@ struct FusionConfig {
   /// (max_condition; the other FixOptions keep their defaults).
   core::LandmarkFixGate fix_gate;
   core::landmark::FixOptions fix;
+  /// Odometry gaps (core::EngineConfig::odometry_gap, docs/odometry_gap.md): consecutive
+  /// odometry inputs of one channel more than this apart in message time, seq not following,
+  /// are bridged by every filter [s]; 0 = off.
+  double max_odometry_gap = 0.1;
+  double odometry_gap_accel = 0.5;     ///< speed change rate the bridge allows, 1 sigma [m/s^2]
+  double odometry_gap_yaw_rate = 0.05; ///< yaw-rate change the bridge allows, 1 sigma [rad/s]
 };
 
 struct LoggerConfig {

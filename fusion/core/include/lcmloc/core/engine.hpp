@@ -63,7 +63,7 @@ struct EngineOutputs {
   std::function<void(const std::string& filter, bool is_active, const FilterState&)> on_state;
   std::function<void(const std::string& filter, bool is_active, const GateDecision&)> on_decision;
   /// Events worth a human's attention: ("ack"|"refused"|"lockout"|"recovered"|"too_old"|
-  /// "too_new"|"time_jump"|"fix"|"fix_refused"|"fix_lockout"|"imu_saturated"|"bad_input", detail). "bad_input": an odometry increment, IMU sample or GPS fix (with a fix) with a NaN/Inf field
+  /// "too_new"|"time_jump"|"fix"|"fix_refused"|"fix_lockout"|"imu_saturated"|"bad_input"|"odometry_gap", detail). "bad_input": an odometry increment, IMU sample or GPS fix (with a fix) with a NaN/Inf field
   /// (skipped).
   std::function<void(const std::string& event, const std::string& detail, int64_t utime)> on_event;
 };
@@ -78,6 +78,17 @@ struct EngineOutputs {
 struct LandmarkFixGate {
   double probability = 0.9999;  ///< in (0, 1) (0.9999 -> 21.1); 0 = no gate, every fix taken (seeds/004)
   int lockout_rejections = 2;   ///< 0 = never
+};
+
+/// Odometry gaps (fusion.max_odometry_gap, fusion.odometry_gap_accel, fusion.odometry_gap_yaw_rate;
+/// docs/odometry_gap.md): two consecutive inputs of one odometry channel more than max_gap_us
+/// apart in message time whose seq does not follow (an increment whose seq follows covers the
+/// whole interval: a slow or paused sender lost nothing). Every filter is told
+/// (Filter::bridgeOdometryGap) before the increment after the gap; event "odometry_gap".
+struct OdometryGapConfig {
+  int64_t max_gap_us = 100000;  ///< 0 = off
+  double accel_std = 0.5;       ///< OdometryGap::accel_std [m/s^2]
+  double yaw_rate_std = 0.05;   ///< OdometryGap::yaw_rate_std [rad/s]
 };
 
 struct EngineConfig {
@@ -115,6 +126,7 @@ struct EngineConfig {
   /// kept), as in a newly started daemon, and the suspects are taken. An input of the old time base
   /// drops the held suspects as outliers (event "too_new" or "too_old" each).
   int64_t max_time_jump_us = 1000000;
+  OdometryGapConfig odometry_gap;
 };
 
 

@@ -147,6 +147,36 @@ struct FilterConfig {
 /// Measurement kinds a filter may use (Filter::uses).
 enum class Measurement { Ruler, Imu, Gps, Landmark, Beacon };
 
+/// Odometry no increment covers (EngineConfig::odometry_gap): two consecutive inputs of one
+/// odometry channel further apart than the limit whose seq does not follow (messages lost in
+/// transit, a restarted sender). An increment carries the motion since its sender's previous
+/// message, so the motion of the lost ones is lost with them. See docs/odometry_gap.md.
+struct OdometryGap {
+  int64_t from_utime = 0;      ///< the last odometry input before the gap
+  int64_t to_utime = 0;        ///< where the next increment's own period begins (next_utime - period)
+  int64_t next_utime = 0;      ///< the first odometry input after the gap
+  double seconds = 0.0;        ///< to_utime - from_utime: the time no increment covers [s]
+  double speed = 0.0;          ///< speed before the gap (recent increments) [m/s]
+  bool has_steering = false;   ///< car-like source: the heading follows eq. 2 from steering
+  double steering = 0.0;       ///< last steering angle [rad] (has_steering)
+  double yaw_rate = 0.0;       ///< heading rate before the gap (recent increments) [rad/s]
+  double accel_std = 0.5;      ///< 1 sigma of the speed change rate over the gap [m/s^2]
+  double yaw_rate_std = 0.05;  ///< 1 sigma of the change of the yaw rate over the gap [rad/s]
+  double max_position_std = 100.0;  ///< the bridge's position sigma stops here (FilterConfig::lockout_max_std) [m]
+};
+/// [s] The bridge moves the pose at the speed before the gap for at most this long: a vehicle
+/// unseen for longer may have stopped or turned anywhere (its covariance still grows, up to
+/// OdometryGap::max_position_std and kLockoutMaxHeadingStd).
+inline constexpr double kMaxBridgeSeconds = 10.0;
+
+/// The constant-velocity bridge of a gap: one increment over gap.seconds (at most
+/// kMaxBridgeSeconds) at the speed and yaw rate (or steering) before it, stamped gap.to_utime.
+OdometryInput bridgeIncrement(const OdometryGap& gap);
+/// Pose covariance (x, y, theta) of what the bridge does not know, at heading theta: along the
+/// track accel_std g^2 / 2 (a speed change), across it speed yaw_rate_std g^2 / 2 and on the
+/// heading yaw_rate_std g (a yaw-rate change), these two fully correlated.
+Mat3 bridgeNoise(const OdometryGap& gap, double theta);
+
 class Filter {
  public:
   virtual ~Filter() = default;
@@ -198,6 +228,16 @@ class Filter {
   /// and their covariance like SetPose (cross-covariances to other states zeroed). Returns
   /// false when the fix was not applied.
   virtual bool applyFix(const PoseFix& fix);
+  /// An odometry gap (the engine calls it before the first increment after the gap, which then
+  /// covers its own period only). Default: the constant-velocity bridge (bridgeIncrement) through
+  /// predict(), then bridgeNoise added to the pose covariance by addPoseNoise(), and the status
+  /// DeadReckoning until a measurement is accepted again. Returns what was done, for the event.
+  virtual std::string bridgeOdometryGap(const OdometryGap& gap);
+
+ protected:
+  /// Adds Q to the covariance of (x, y, theta) and marks the state DeadReckoning until the next
+  /// accepted measurement (Lockout stays Lockout). Default: through state() and initialize().
+  virtual void addPoseNoise(const Mat3& Q);
 };
 
 /// Builds a filter of cfg.type over the marker map. Throws std::invalid_argument for an unknown
