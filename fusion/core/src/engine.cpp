@@ -147,7 +147,7 @@ struct FusionEngine::Impl {
     refused_fixes.clear();
     odometry_tracks.clear();
     last_odometry_utime = INT64_MIN;
-    last_odometry_period = 0;
+    newest_track = cached_track = nullptr;
     after_gap = false;
     event("time_jump",
           at + "time went back " + std::to_string(secondsApart(newest, first.utime)) + " s (utime " +
@@ -230,32 +230,46 @@ struct FusionEngine::Impl {
     int n = 0, next = 0;
     bool has_steering = false;
     void clearRecent() { n = next = 0; }
+    /// [us] The recent period (0: not known).
+    int64_t period() const {
+      double sum_dt = 0;
+      for (int k = 0; k < n; ++k) sum_dt += dt[k];
+      return n > 0 ? static_cast<int64_t>(sum_dt / n * 1e6) : 0;
+    }
   };
-  std::map<std::string, OdometryTrack> odometry_tracks;
+  std::map<std::string, OdometryTrack> odometry_tracks;  ///< (nodes stay put: pointers below)
   int64_t last_odometry_utime = INT64_MIN;  ///< newest odometry input on any channel
-  int64_t last_odometry_period = 0;         ///< [us] its channel's recent period (0: not known)
+  const OdometryTrack* newest_track = nullptr;  ///< the channel of that input
+  /// The track of the previous odometry input's channel (one lookup per channel change, not per
+  /// message: this runs for every odometry message).
+  OdometryTrack* cached_track = nullptr;
+  std::string cached_track_channel;
   /// A measurement at utime has no odometry to place it: the newest odometry input is older by
   /// more than max_odometry_gap and twice its channel's period (a slow sender is not missing).
   bool odometryMissing(int64_t utime) const {
     const int64_t limit = cfg.odometry_gap.max_gap_us;
     return limit > 0 && last_odometry_utime != INT64_MIN &&
-           apartBy(utime, last_odometry_utime, std::max(limit, 2 * last_odometry_period));
+           apartBy(utime, last_odometry_utime, std::max(limit, 2 * newest_track->period()));
   }
   bool after_gap = false;  ///< an odometry gap was bridged; no measurement accepted since
   void odometryGap(const EngineInput& in, const OdometryInput& odo) {
-    last_odometry_utime = std::max(last_odometry_utime, odo.utime);
     const OdometryGapConfig& gc = cfg.odometry_gap;
-    auto [it, first] = odometry_tracks.try_emplace(in.channel);
-    OdometryTrack& t = it->second;
+    bool first = false;
+    if (!cached_track || !sameText(in.channel, cached_track_channel)) {
+      auto [it, inserted] = odometry_tracks.try_emplace(in.channel);
+      cached_track = &it->second;
+      cached_track_channel = in.channel;
+      first = inserted;
+    }
+    OdometryTrack& t = *cached_track;
+    if (odo.utime >= last_odometry_utime) {
+      last_odometry_utime = odo.utime;
+      newest_track = &t;
+    }
     const int64_t prev_utime = t.utime, prev_seq = t.seq;
     t.utime = odo.utime;
     t.seq = in.seq;
     t.has_steering = odo.has_steering;
-    if (odo.utime >= last_odometry_utime) {
-      double sum_dt = 0;
-      for (int k = 0; k < t.n; ++k) sum_dt += t.dt[k];
-      last_odometry_period = t.n > 0 ? static_cast<int64_t>(sum_dt / t.n * 1e6) : 0;
-    }
     if (first || odo.utime <= prev_utime) return;
     const bool follows = in.seq == prev_seq + 1;
     if (gc.max_gap_us <= 0 || follows || !apartBy(odo.utime, prev_utime, gc.max_gap_us)) {
