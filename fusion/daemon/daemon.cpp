@@ -52,7 +52,8 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
   ec.fix_gate = cfg.fusion.fix_gate;
   ec.max_time_jump_us = max_jump_us_ = static_cast<int64_t>(std::llround(cfg.fusion.max_time_jump * 1e6));
   ec.odometry_gap = {static_cast<int64_t>(std::llround(cfg.fusion.max_odometry_gap * 1e6)),
-                     cfg.fusion.odometry_gap_accel, cfg.fusion.odometry_gap_yaw_rate};
+                     cfg.fusion.odometry_gap_accel, cfg.fusion.odometry_gap_yaw_rate,
+                     cfg.scenario.odometry.rate_hz > 0 ? std::llround(1e6 / cfg.scenario.odometry.rate_hz) : 0};
   core::EngineOutputs out;
   out.on_state = [this](const std::string& f, bool active, const core::FilterState& s) { publishState(f, active, s); };
   out.on_decision = [this](const std::string& f, bool, const core::GateDecision& d) {
@@ -222,7 +223,7 @@ void FusionDaemon::checkResumeGap(const core::EngineInput& in) {
   if (!core::apartBy(in.utime, *init_utime_, kResumeGapUs)) return;
   const std::string detail = fmt::format(
       "{} seq {}: the first input comes {:.3f} s of message time after the state this daemon started from (utime {}): "
-      "the motion in between is not in the estimate",
+      "the motion in between was not seen (the filters bridge it: odometry_gap)",
       in.channel, in.seq, (static_cast<double>(in.utime) - static_cast<double>(*init_utime_)) * 1e-6, *init_utime_);
   spdlog::warn("{}", core::printable(detail));
   publishStatus("resume_gap", detail, in.utime);

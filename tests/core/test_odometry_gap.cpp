@@ -383,3 +383,60 @@ TEST(OdometryGap, AfterAFiveSecondGapTheRulerFiltersReacquireTheRightMarkersWith
     EXPECT_LT(d.error(d.states.at(f).back()), 0.05) << f;
   }
 }
+
+// A daemon started again from its checkpoint after a crash: the first odometry comes seconds of
+// message time after the state it started from, and its sender's messages in between were never
+// seen. The filters went on from the checkpoint's pose (20 m behind at 10 m/s after 2 s, with the
+// checkpoint's centimetre sigma); now the first input after initialize() is a gap too.
+TEST(OdometryGap, TheFirstOdometryLongAfterTheStartStateIsBridged) {
+  auto run = [](int64_t first_after_us, int64_t resume_period_us, std::vector<std::string>* events) {
+    EngineConfig cfg;
+    cfg.filter.type = "ukf_gated";
+    cfg.shadow = {"dead_reckoning"};
+    cfg.reorder_window_us = 0;
+    cfg.odometry_gap.resume_period_us = resume_period_us;
+    EngineOutputs o;
+    o.on_event = [&](const std::string& e, const std::string& d, int64_t) { events->push_back(e + ": " + d); };
+    FusionEngine engine(cfg, line(30), o);
+    FilterState start;
+    start.utime = 5000000;
+    start.x = Eigen::Vector3d(0.0, 0.0, M_PI / 2);  // heading north, along the markers
+    start.P = Eigen::Matrix3d::Identity() * 1e-4;
+    start.names = {"x", "y", "theta"};
+    engine.initialize(start);
+    for (int k = 0; k < 10; ++k) {  // 10 m/s at 100 Hz, the sender's seq far on
+      OdometryInput odo;
+      odo.utime = start.utime + first_after_us + k * 10000;
+      odo.delta_s = 0.1;
+      odo.has_steering = true;
+      EXPECT_TRUE(engine.push(EngineInput{"ODOMETRY", 7000 + k, odo.utime, odo}));
+    }
+    engine.flush();
+    return engine.activeState();
+  };
+  std::vector<std::string> events;
+  const FilterState bridged = run(2000000, 10000, &events);
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0].rfind("odometry_gap: ODOMETRY seq 7000: 1.990 s of message time without odometry since the "
+                            "state the filters started from", 0), 0u) << events[0];
+  EXPECT_NE(events[0].find("bridged at 10.00 m/s"), std::string::npos) << events[0];
+  EXPECT_NE(events[0].find("dead_reckoning: bridged 19.90 m"), std::string::npos) << events[0];
+  EXPECT_NEAR(bridged.x[1], 19.9 + 1.0, 0.05);  // the bridge, then the ten increments
+  EXPECT_GT(std::sqrt(bridged.P(1, 1)), 0.5);     // accel_std g^2 / 2 = 0.99 m along the track
+  EXPECT_EQ(bridged.status, FilterStatus::DeadReckoning);
+
+  // The sender's period not known: no motion bridged, the covariance grown all the same.
+  events.clear();
+  const FilterState unknown = run(2000000, 0, &events);
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_NE(events[0].find("bridged at 0.00 m/s"), std::string::npos) << events[0];
+  EXPECT_NEAR(unknown.x[1], 1.0, 0.05);
+  EXPECT_GT(std::sqrt(unknown.P(1, 1)), 0.5);
+
+  // A hand-over goes on with the next message: nothing to bridge.
+  events.clear();
+  const FilterState handed = run(10000, 10000, &events);
+  EXPECT_TRUE(events.empty()) << events[0];
+  EXPECT_NEAR(handed.x[1], 1.0, 0.01);
+  EXPECT_LT(handed.P(1, 1), 1e-3);
+}

@@ -609,7 +609,7 @@ TEST_F(ProcessTest, LauncherStartsACrashedProcessAgainAndTheDaemonGoesOnFromItsC
   EXPECT_TRUE(from_checkpoint);
   bool gap_reported = false;  // the motion the daemon missed while down is reported as lost
   for (const auto& st : status)
-    gap_reported |= st.event == "resume_gap" && st.detail.find("the motion in between is not in the estimate") !=
+    gap_reported |= st.event == "resume_gap" && st.detail.find("the motion in between was not seen") !=
                                                    std::string::npos;
   EXPECT_TRUE(gap_reported);
   // The second daemon went on from where the first was (the motion of its down time is lost:

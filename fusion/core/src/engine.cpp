@@ -148,6 +148,7 @@ struct FusionEngine::Impl {
     odometry_tracks.clear();
     last_odometry_utime = INT64_MIN;
     newest_track = cached_track = nullptr;
+    resume_from = INT64_MIN;
     after_gap = false;
     event("time_jump",
           at + "time went back " + std::to_string(secondsApart(newest, first.utime)) + " s (utime " +
@@ -270,7 +271,11 @@ struct FusionEngine::Impl {
     t.utime = odo.utime;
     t.seq = in.seq;
     t.has_steering = odo.has_steering;
-    if (first || odo.utime <= prev_utime) return;
+    if (first) {
+      if (resume_from != INT64_MIN) resumeGap(in, odo);
+      return;
+    }
+    if (odo.utime <= prev_utime) return;
     const bool follows = in.seq == prev_seq + 1;
     if (gc.max_gap_us <= 0 || follows || !apartBy(odo.utime, prev_utime, gc.max_gap_us)) {
       const int i = t.next;
@@ -300,11 +305,7 @@ struct FusionEngine::Impl {
     gap.yaw_rate = sum_dt > 0 ? sum_dth / sum_dt : 0.0;
     gap.has_steering = odo.has_steering;
     gap.steering = t.n > 0 ? sum_steer / t.n : odo.steering;
-    gap.accel_std = gc.accel_std;
-    gap.yaw_rate_std = gc.yaw_rate_std;
-    gap.max_position_std = active_cfg.lockout_max_std;
     t.clearRecent();  // (the increment after the gap says nothing about the speed over its interval)
-    if (cfg.output_every > 1) applyAccumulated();  // the bridge starts where the odometry before it ended
     char head[300];
     std::snprintf(head, sizeof head,
                   "%s seq %lld after seq %lld: %.3f s of message time without odometry (utime %lld to %lld, "
@@ -313,10 +314,49 @@ struct FusionEngine::Impl {
                   gap.seconds, static_cast<long long>(gap.from_utime), static_cast<long long>(gap.to_utime),
                   static_cast<double>(gc.max_gap_us) * 1e-6,
                   in.seq > prev_seq ? "messages lost" : "the sender started over", gap.speed);
+    bridge(gap, head, odo.utime);
+  }
+
+  /// Every filter bridges the gap (before the increment after it), and the event says so.
+  void bridge(OdometryGap& gap, const std::string& head, int64_t utime) {
+    gap.accel_std = cfg.odometry_gap.accel_std;
+    gap.yaw_rate_std = cfg.odometry_gap.yaw_rate_std;
+    gap.max_position_std = active_cfg.lockout_max_std;
+    if (cfg.output_every > 1) applyAccumulated();  // the bridge starts where the odometry before it ended
     std::string detail = head;
     forEachFilter([&](Filter& f, bool) { detail += "; " + f.bridgeOdometryGap(gap); });
     after_gap = true;
-    event("odometry_gap", detail, odo.utime);
+    event("odometry_gap", detail, utime);
+  }
+
+  /// The time of the state initialize() started the filters from, until the first odometry input.
+  int64_t resume_from = INT64_MIN;
+  /// The first odometry input after initialize(): more than max_odometry_gap after the state
+  /// (a daemon started again from its checkpoint after a crash, the motion of its down time
+  /// unseen) it is a gap, bridged at the speed of this first increment over the sender's period.
+  void resumeGap(const EngineInput& in, const OdometryInput& odo) {
+    const int64_t from = resume_from, limit = cfg.odometry_gap.max_gap_us;
+    resume_from = INT64_MIN;
+    if (limit <= 0 || !apartBy(odo.utime, from, limit)) return;
+    const int64_t period = cfg.odometry_gap.resume_period_us;
+    OdometryGap gap;
+    gap.from_utime = from;
+    gap.next_utime = odo.utime;
+    gap.to_utime = std::max(from, odo.utime - period);
+    gap.seconds = static_cast<double>(gap.to_utime - gap.from_utime) * 1e-6;
+    gap.speed = period > 0 ? odo.delta_s / (static_cast<double>(period) * 1e-6) : 0.0;
+    gap.yaw_rate = period > 0 ? odo.delta_theta / (static_cast<double>(period) * 1e-6) : 0.0;
+    gap.has_steering = odo.has_steering;
+    gap.steering = odo.steering;
+    char head[300];
+    std::snprintf(head, sizeof head,
+                  "%s seq %lld: %.3f s of message time without odometry since the state the filters started from "
+                  "(utime %lld to %lld; a daemon started again after a crash?); bridged at %.2f m/s (its first "
+                  "increment over %.3f s)",
+                  in.channel.c_str(), static_cast<long long>(in.seq), gap.seconds,
+                  static_cast<long long>(gap.from_utime), static_cast<long long>(gap.to_utime), gap.speed,
+                  static_cast<double>(period) * 1e-6);
+    bridge(gap, head, odo.utime);
   }
 
   // Output decimation with batched time update (EngineConfig::output_every > 1).
@@ -668,6 +708,10 @@ void FusionEngine::flush() {
 
 void FusionEngine::initialize(const FilterState& state) {
   impl_->forEachFilter([&](Filter& f, bool) { f.initialize(state); });
+  impl_->odometry_tracks.clear();  // (their next input is the first after the state)
+  impl_->newest_track = impl_->cached_track = nullptr;
+  impl_->last_odometry_utime = INT64_MIN;
+  impl_->resume_from = state.utime;
   impl_->last_status = impl_->active->state().status;
 }
 

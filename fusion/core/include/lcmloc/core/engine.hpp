@@ -89,6 +89,12 @@ struct OdometryGapConfig {
   int64_t max_gap_us = 100000;  ///< 0 = off
   double accel_std = 0.5;       ///< OdometryGap::accel_std [m/s^2]
   double yaw_rate_std = 0.05;   ///< OdometryGap::yaw_rate_std [rad/s]
+  /// [us] The odometry sender's period (the daemon: 1 / odometry.rate_hz), for a resume gap: the
+  /// first odometry input after initialize() more than max_gap_us after the state's time (a
+  /// daemon started again from its checkpoint after a crash) is a gap too, bridged at the speed
+  /// of that first increment over this period (its sender's previous message was not seen);
+  /// 0 = not known: bridged at speed 0, the covariance grown all the same.
+  int64_t resume_period_us = 0;
 };
 
 struct EngineConfig {
@@ -148,7 +154,9 @@ class FusionEngine {
   /// Processes everything still queued (end of log / shutdown).
   void flush();
   /// Starts every filter (active and shadows) from state, mapped where the states differ
-  /// (process-level hand-over: the last POSE of a previous daemon, or a checkpoint).
+  /// (process-level hand-over: the last POSE of a previous daemon, or a checkpoint). The first
+  /// odometry input more than the odometry gap limit after state.utime is a resume gap
+  /// (OdometryGapConfig::resume_period_us).
   void initialize(const FilterState& state);
   std::string activeFilter() const;
   FilterState activeState() const;
