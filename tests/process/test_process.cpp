@@ -612,8 +612,17 @@ TEST_F(ProcessTest, LauncherStartsACrashedProcessAgainAndTheDaemonGoesOnFromItsC
     gap_reported |= st.event == "resume_gap" && st.detail.find("the motion in between was not seen") !=
                                                    std::string::npos;
   EXPECT_TRUE(gap_reported);
-  // The second daemon went on from where the first was (the motion of its down time is lost:
-  // at five times real time and 3 m/s, well under 10 m), not from the start of the path.
+  // ... and bridged at the speed of its first odometry (1.5 m/s; one increment, 1 mm ticks: within
+  // 0.1 m/s of it), not left behind.
+  std::string bridge;
+  for (const auto& st : status)
+    if (st.event == "odometry_gap" && st.detail.find("since the state the filters started from") != std::string::npos)
+      bridge = st.detail;
+  const auto at = bridge.find("bridged at ");
+  ASSERT_NE(at, std::string::npos) << bridge;
+  EXPECT_NEAR(std::stod(bridge.substr(at + 11)), 1.5, 0.12) << bridge;
+  // The second daemon went on from where the first was (its down time bridged, above:
+  // at five times real time and 1.5 m/s, well under 10 m), not from the start of the path.
   const lcmloc::pose_t& resumed = poses[before];
   EXPECT_GT(resumed.utime, last.utime);
   EXPECT_LT(std::hypot(resumed.state[0] - last.state[0], resumed.state[1] - last.state[1]), 10.0);
