@@ -78,7 +78,7 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
       publishStatus("rejected_input", "too new: " + detail, last_utime_);
       return;
     }
-    if (event == "odometry_gap")  // the estimate went on without its odometry: a warning
+    if (event == "odometry_gap" || event == "ambiguous")  // the estimate may be off: a warning
       spdlog::warn("{}: {}", event, core::printable(detail));
     else
       spdlog::info("{}: {}", event, core::printable(detail));

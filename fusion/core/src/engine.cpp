@@ -1,5 +1,7 @@
 #include "lcmloc/core/engine.hpp"
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <array>
 #include <climits>
@@ -201,8 +203,18 @@ struct FusionEngine::Impl {
               in.utime);
       else if (last_status == FilterStatus::Lockout)
         event("recovered", active->name() + ": measurement accepted again", in.utime);
-      else if (after_gap && now == FilterStatus::Ok)
+      else if (after_gap && now == FilterStatus::Ok) {
         event("recovered", active->name() + ": measurement accepted again after the odometry gap", in.utime);
+        if (active->uses(Measurement::Ruler) && gap_spread > 0.5 * marker_spacing) {
+          char text[400];
+          std::snprintf(text, sizeof text,
+                        "%s: the marker taken after the odometry gap may be a neighbour of the one passed: the "
+                        "position was known to %.2f m (3 sigma) before it, more than half the marker spacing "
+                        "(%.2f m), and the markers are alike; confirm the pose (lcmloc-ctl set-pose, a fix)",
+                        active->name().c_str(), gap_spread, marker_spacing);
+          event("ambiguous", text, in.utime);
+        }
+      }
     }
     if (now == FilterStatus::Ok) after_gap = false;
     last_status = now;
@@ -326,7 +338,24 @@ struct FusionEngine::Impl {
     std::string detail = head;
     forEachFilter([&](Filter& f, bool) { detail += "; " + f.bridgeOdometryGap(gap); });
     after_gap = true;
+    const FilterState s = active->state();
+    const Eigen::Matrix2d Pxy = s.P.topLeftCorner<2, 2>();
+    gap_spread = 3.0 * std::sqrt(std::max(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(Pxy).eigenvalues()(1), 0.0));
     event("odometry_gap", detail, utime);
+  }
+  /// [m] 3 sigma of the active filter's position after the last bridged gap (the larger axis).
+  double gap_spread = 0.0;
+  /// [m] The smallest distance between two markers of the map (+inf: fewer than two): after a
+  /// gap whose spread exceeds half of it, the marker taken may be a neighbour ("ambiguous").
+  double marker_spacing = closestMarkers(map);
+  static double closestMarkers(const MarkerMap& m) {
+    std::vector<Marker> v(m);
+    std::sort(v.begin(), v.end(), [](const Marker& a, const Marker& b) { return a.x < b.x; });
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < v.size(); ++i)
+      for (std::size_t j = i + 1; j < v.size() && v[j].x - v[i].x < best; ++j)
+        best = std::min(best, std::hypot(v[j].x - v[i].x, v[j].y - v[i].y));
+    return best;
   }
 
   /// The time of the state initialize() started the filters from, until the first odometry input.
