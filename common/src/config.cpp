@@ -496,4 +496,20 @@ void refuseOutputOverInputs(const std::string& flag, const std::string& output,
 
 SystemConfig loadSystemConfig(const std::string& path) { return parseSystemConfig(readConfigFile(path), path); }
 
+core::EngineConfig engineConfig(const SystemConfig& cfg) {
+  const auto us = [](double s) { return static_cast<int64_t>(std::llround(s * 1e6)); };
+  core::EngineConfig ec;
+  ec.filter = cfg.fusion.filter;
+  ec.shadow = cfg.fusion.shadow;
+  ec.reorder_window_us = us(cfg.fusion.reorder_window);
+  ec.output_every = cfg.fusion.output_every;
+  ec.landmarks = cfg.fusion.landmarks;
+  ec.fix = cfg.fusion.fix;
+  ec.fix_gate = cfg.fusion.fix_gate;
+  ec.max_time_jump_us = us(cfg.fusion.max_time_jump);
+  ec.odometry_gap = {us(cfg.fusion.max_odometry_gap), cfg.fusion.odometry_gap_accel, cfg.fusion.odometry_gap_yaw_rate,
+                     cfg.scenario.odometry.rate_hz > 0 ? us(1.0 / cfg.scenario.odometry.rate_hz) : 0};
+  return ec;
+}
+
 }  // namespace lcmloc::common

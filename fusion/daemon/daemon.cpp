@@ -42,18 +42,8 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
     : cfg_(cfg), bus_(bus), hold_(opts.hold), frame_(cfg.datum) {
   echo_ = opts.echo;
   if (echo_) echoes_.resize(kEchoSeqs);
-  core::EngineConfig ec;
-  ec.filter = cfg.fusion.filter;
-  ec.shadow = cfg.fusion.shadow;
-  ec.reorder_window_us = static_cast<int64_t>(std::llround(cfg.fusion.reorder_window * 1e6));
-  ec.output_every = cfg.fusion.output_every;
-  ec.landmarks = cfg.fusion.landmarks;
-  ec.fix = cfg.fusion.fix;
-  ec.fix_gate = cfg.fusion.fix_gate;
-  ec.max_time_jump_us = max_jump_us_ = static_cast<int64_t>(std::llround(cfg.fusion.max_time_jump * 1e6));
-  ec.odometry_gap = {static_cast<int64_t>(std::llround(cfg.fusion.max_odometry_gap * 1e6)),
-                     cfg.fusion.odometry_gap_accel, cfg.fusion.odometry_gap_yaw_rate,
-                     cfg.scenario.odometry.rate_hz > 0 ? std::llround(1e6 / cfg.scenario.odometry.rate_hz) : 0};
+  core::EngineConfig ec = common::engineConfig(cfg);
+  max_jump_us_ = ec.max_time_jump_us;
   core::EngineOutputs out;
   out.on_state = [this](const std::string& f, bool active, const core::FilterState& s) { publishState(f, active, s); };
   out.on_decision = [this](const std::string& f, bool, const core::GateDecision& d) {

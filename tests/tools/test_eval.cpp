@@ -219,6 +219,30 @@ TEST_F(EvalTest, CountsAndMetricsOfEachFilter) {
   }
 }
 
+// lcmloc-eval replays with the daemon's engine configuration (common::engineConfig), not the
+// engine's defaults: a config that turns the odometry-gap bridge off is obeyed, as live.
+TEST_F(EvalTest, TheEngineConfigurationIsTheDaemons) {
+  writeRun(file("run.lcmlog"), false);
+  auto data = eval::readLog(file("run.lcmlog"), cfg_.channels);
+  // 0.5 s of odometry lost in transit (the seq numbers were used up).
+  std::vector<core::EngineInput> kept;
+  for (const auto& in : data.inputs)
+    if (!(std::holds_alternative<core::OdometryInput>(in.payload) && in.utime > kT0 + 100 * kDt &&
+          in.utime <= kT0 + 150 * kDt))
+      kept.push_back(in);
+  data.inputs = kept;
+  auto lastY = [&](bool bridge) {
+    auto c = cfg_;
+    c.fusion.max_odometry_gap = bridge ? 0.1 : 0.0;
+    setup_.engine = common::engineConfig(c);
+    setup_.filters = {"dead_reckoning"};
+    const auto ev = eval::evaluate(data, setup_);
+    return run(ev, "dead_reckoning").track.back().y;
+  };
+  const double bridged = lastY(true), off = lastY(false);
+  EXPECT_NEAR(bridged - off, 0.5, 0.02) << "the 0.5 m of the gap at 1 m/s, bridged only when the config says so";
+}
+
 TEST_F(EvalTest, ReportWithInvalidUtf8FromTheLogIsWrittenWithReplacements) {
   // A channel or filter name from a damaged log may hold any bytes.
   nlohmann::json j;

@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
     }
 
     lcmloc::eval::EvalSetup setup;
+    setup.engine = lcmloc::common::engineConfig(cfg);  // the daemon's time-jump guard and odometry gaps
     setup.filter = cfg.fusion.filter;
     setup.reorder_window_us = static_cast<int64_t>(std::llround(cfg.fusion.reorder_window * 1e6));
     setup.filters = filters;

@@ -68,9 +68,11 @@ FilterRun replay(const LogData& data, const EvalSetup& setup, const std::string&
                  const std::set<FaultKey>& fault_keys) {
   FilterRun run;
   run.name = type;
-  core::EngineConfig cfg;
+  core::EngineConfig cfg = setup.engine;
   cfg.filter = setup.filter;
   cfg.filter.type = type;
+  cfg.shadow.clear();
+  cfg.output_every = 1;
   cfg.reorder_window_us = setup.reorder_window_us;
   core::EngineOutputs out;
   out.on_state = [&](const std::string&, bool active, const core::FilterState& s) {

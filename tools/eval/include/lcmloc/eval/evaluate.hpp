@@ -15,6 +15,10 @@ struct EvalSetup {
   core::FilterConfig filter;          ///< parameters shared by every filter (type overridden)
   core::MarkerMap map;
   int64_t reorder_window_us = 50000;
+  /// The rest of the engine's configuration, as the daemon has it (common::engineConfig: the
+  /// time-jump guard, odometry gaps); filter, shadows, reorder window and output_every (1: every
+  /// pose is scored) are set per run.
+  core::EngineConfig engine;
   std::vector<std::string> filters{"dead_reckoning", "ukf", "ukf_gated"};
 };
 
