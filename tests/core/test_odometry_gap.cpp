@@ -174,9 +174,11 @@ TEST(OdometryGap, EveryFilterBridgesTheGapWithAnHonestSigmaAndReacquiresTheRight
   // The gap's spread (metres) was wider than half the 2 m spacing of alike markers: the right one
   // was taken here, but the filter cannot know that, and says so.
   ASSERT_EQ(d.count("ambiguous"), 1);
-  for (const auto& [name, detail] : d.events)
-    if (name == "ambiguous")
+  for (const auto& [name, detail] : d.events) {
+    if (name == "ambiguous") {
       EXPECT_NE(detail.find("more than half the marker spacing (2.00 m)"), std::string::npos) << detail;
+    }
+  }
 }
 
 TEST(OdometryGap, AShortGapReacquiresWithoutAmbiguity) {

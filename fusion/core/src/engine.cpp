@@ -1,7 +1,5 @@
 #include "lcmloc/core/engine.hpp"
 
-#include <Eigen/Eigenvalues>
-
 #include <algorithm>
 #include <array>
 #include <climits>
@@ -338,9 +336,7 @@ struct FusionEngine::Impl {
     std::string detail = head;
     forEachFilter([&](Filter& f, bool) { detail += "; " + f.bridgeOdometryGap(gap); });
     after_gap = true;
-    const FilterState s = active->state();
-    const Eigen::Matrix2d Pxy = s.P.topLeftCorner<2, 2>();
-    gap_spread = 3.0 * std::sqrt(std::max(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(Pxy).eigenvalues()(1), 0.0));
+    gap_spread = 3.0 * positionSigma(active->state());
     event("odometry_gap", detail, utime);
   }
   /// [m] 3 sigma of the active filter's position after the last bridged gap (the larger axis).

@@ -44,14 +44,11 @@ Mat3 bridgeNoise(const OdometryGap& gap, double theta) {
   return T * B * T.transpose();
 }
 
-namespace {
-/// 1 sigma of the position: sqrt of the larger eigenvalue of the (x, y) covariance.
 double positionSigma(const FilterState& s) {
   const double a = s.P(0, 0), b = s.P(0, 1), d = s.P(1, 1);
   const double m = 0.5 * (a + d), r = std::sqrt(0.25 * (a - d) * (a - d) + b * b);
   return std::sqrt(std::max(m + r, 0.0));
 }
-}  // namespace
 
 std::string Filter::bridgeOdometryGap(const OdometryGap& gap) {
   if (!(gap.seconds > 0)) return name() + ": nothing to bridge";

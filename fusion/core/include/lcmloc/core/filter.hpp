@@ -176,6 +176,9 @@ OdometryInput bridgeIncrement(const OdometryGap& gap);
 /// track accel_std g^2 / 2 (a speed change), across it speed yaw_rate_std g^2 / 2 and on the
 /// heading yaw_rate_std g (a yaw-rate change), these two fully correlated.
 Mat3 bridgeNoise(const OdometryGap& gap, double theta);
+/// [m] 1 sigma of a state's position along its larger axis (sqrt of the larger eigenvalue of
+/// the (x, y) covariance).
+double positionSigma(const FilterState& s);
 
 class Filter {
  public:
