@@ -17,27 +17,37 @@ constexpr double kMaxAccel = 1000.0;  // [m/s^2], about 100 g
 constexpr double kMaxGyro = 100.0;    // [rad/s]
 constexpr double kMaxMag = 100.0;     // [gauss]
 
-bool fail(std::string* why, const std::string& reason) {
+// The checks run for every message; only a failure builds its reason (out of line: the fast
+// path of a valid message is a few compares).
+[[gnu::cold, gnu::noinline]] bool fail(std::string* why, const std::string& reason) {
   if (why) *why = reason;
   return false;
 }
 
-bool finiteField(double v, const char* name, std::string* why) {
-  if (std::isfinite(v)) return true;
+[[gnu::cold, gnu::noinline]] bool notFinite(double v, const char* name, std::string* why) {
   return fail(why, std::string(name) + " is " + (std::isnan(v) ? "NaN" : "Inf"));
 }
 
-bool withinField(double v, double limit, const char* name, const char* unit, std::string* why) {
-  if (std::abs(v) <= limit) return true;
+inline bool finiteField(double v, const char* name, std::string* why) {
+  return std::isfinite(v) || notFinite(v, name, why);
+}
+
+[[gnu::cold, gnu::noinline]] bool outOfRange(double v, double limit, const char* name, const char* unit,
+                                             std::string* why) {
   char text[120];
   std::snprintf(text, sizeof text, "%s %g %s out of range (|%s| <= %g)", name, v, unit, name, limit);
   return fail(why, text);
 }
 
-bool validUtime(int64_t utime, std::string* why) {
-  if (utime >= 0) return true;
+inline bool withinField(double v, double limit, const char* name, const char* unit, std::string* why) {
+  return std::abs(v) <= limit || outOfRange(v, limit, name, unit, why);
+}
+
+[[gnu::cold, gnu::noinline]] bool negativeUtime(int64_t utime, std::string* why) {
   return fail(why, "utime is negative (" + std::to_string(utime) + ")");
 }
+
+inline bool validUtime(int64_t utime, std::string* why) { return utime >= 0 || negativeUtime(utime, why); }
 
 }  // namespace
 

@@ -281,6 +281,11 @@ SeqGap SeqTracker::observe(const std::string& key, int64_t seq) {
   SeqGap gap;
   gap.before_seq = seq;
   gap.last_seq = e.last;
+  if (!e.pending && e.last != INT64_MAX && seq == e.last + 1) {  // in order: the usual case
+    e.jump_missing = 0;
+    e.last = seq;
+    return gap;
+  }
   // The seq `outlier` (after `after`) broke the sequence and this message did not go on from it.
   auto ignore = [&](int64_t outlier, int64_t after) {
     gap.ignored = true;
