@@ -4,12 +4,14 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
+#include <memory>
 
 #include <lcm/lcm-cpp.hpp>
 #include <spdlog/spdlog.h>
 
 #include "daemon/daemon.hpp"
 #include "lcmloc/core/text.hpp"
+#include "lcmloc/eval/read_ahead.hpp"
 #include "lcmloc/replay/log_bus.hpp"
 
 namespace lcmloc::replay {
@@ -22,16 +24,16 @@ bool isDaemonOutput(const common::ChannelConfig& ch, const std::string& c) {
   return false;
 }
 
-ReplayResult replayLog(const common::SystemConfig& cfg, const ReplayOptions& opts) {
+namespace {
+
+/// Feeds every event of the scanner (LogScanner, or ReadAheadScanner: the same events) to the
+/// daemon over bus; fills in what the scanner and the daemon counted.
+template <typename Scanner>
+void replayEvents(Scanner& scanner, LogBus& bus, fusion::FusionDaemon& daemon, const common::SystemConfig& cfg,
+                  const ReplayOptions& opts, ReplayResult& r) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
-  ReplayResult r;
-  if (!opts.output.empty()) common::refuseOutputOverInputs("--output", opts.output, {opts.input}, "input log");
-  eval::LogScanner scanner(opts.input, &r.issues);
   r.file_size = scanner.fileSize();
-  LogBus bus(opts.output);
-  fusion::FusionDaemon daemon(cfg, bus);
-
   auto next_progress = t0 + std::chrono::duration<double>(opts.progress_period_s);
   std::size_t issues_reported = 0;
   // Whether the channel is one of the daemon's outputs, kept for the channel of the event before
@@ -39,7 +41,7 @@ ReplayResult replayLog(const common::SystemConfig& cfg, const ReplayOptions& opt
   std::string last_channel;
   bool last_is_output = false;
   while (true) {
-    if (opts.stop && opts.stop()) {
+    if ((scanner.eventsRead() & 255) == 0 && opts.stop && opts.stop()) {  // (every 256 events)
       r.interrupted = true;
       break;
     }
@@ -72,11 +74,32 @@ ReplayResult replayLog(const common::SystemConfig& cfg, const ReplayOptions& opt
                    daemon.processed(), bus.written(), scanner.eventsRead() / std::max(secs, 1e-9));
     }
   }
-  daemon.shutdown();
-  bus.close();
   r.events_read = scanner.eventsRead();
   r.bytes_unreadable = scanner.bytesUnreadable();
   r.damaged = scanner.damaged();
+}
+
+}  // namespace
+
+ReplayResult replayLog(const common::SystemConfig& cfg, const ReplayOptions& opts) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  ReplayResult r;
+  if (!opts.output.empty()) common::refuseOutputOverInputs("--output", opts.output, {opts.input}, "input log");
+  std::unique_ptr<eval::ReadAheadScanner> ahead;
+  std::unique_ptr<eval::LogScanner> inline_scanner;
+  if (opts.read_ahead)
+    ahead = std::make_unique<eval::ReadAheadScanner>(opts.input, &r.issues);
+  else
+    inline_scanner = std::make_unique<eval::LogScanner>(opts.input, &r.issues);
+  LogBus bus(opts.output);
+  fusion::FusionDaemon daemon(cfg, bus);
+  if (ahead)
+    replayEvents(*ahead, bus, daemon, cfg, opts, r);
+  else
+    replayEvents(*inline_scanner, bus, daemon, cfg, opts, r);
+  daemon.shutdown();
+  bus.close();
   r.messages_in = daemon.messagesIn();
   r.used = daemon.processed();
   r.rejected = daemon.rejected();

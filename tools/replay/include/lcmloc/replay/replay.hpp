@@ -23,7 +23,10 @@ struct ReplayOptions {
   /// heartbeats and LCM_SELF_TEST), so the output log is complete for lcmloc-eval.
   bool with_inputs = false;
   double progress_period_s = 2.0;  ///< [s, wall] between progress lines (<= 0: none)
-  std::function<bool()> stop;      ///< polled between events: true ends the replay early
+  /// Read the log on a thread of its own (eval::ReadAheadScanner), overlapping with the fusion
+  /// on a second core; false: in line (eval::LogScanner). The outputs are the same either way.
+  bool read_ahead = true;
+  std::function<bool()> stop;      ///< polled every 256 events (and before the first): true ends the replay early
 };
 
 struct ReplayResult {
