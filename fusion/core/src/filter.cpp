@@ -202,7 +202,10 @@ class DeadReckoningFilter final : public Filter {
     x_ = x;
     P_ = P;
   }
-  std::string name() const override { return "dead_reckoning"; }
+  const std::string& name() const override {
+    static const std::string n = "dead_reckoning";
+    return n;
+  }
   void stateInto(FilterState& s) const override {
     s.utime = utime_;
     s.x = x_;
@@ -294,7 +297,7 @@ class RulerUkf final : public Filter {
     reach_radius_ = std::sqrt(f * f + l * l) * (1.0 + 1e-9);
   }
 
-  std::string name() const override { return name_; }
+  const std::string& name() const override { return name_; }
 
   void stateInto(FilterState& s) const override {
     s.utime = utime_;

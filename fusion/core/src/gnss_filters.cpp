@@ -374,7 +374,10 @@ class TvEkf final : public GnssFilterBase {
     initialState(x, P);
     setState(x, P);
   }
-  std::string name() const override { return "tvekf"; }
+  const std::string& name() const override {
+    static const std::string n = "tvekf";
+    return n;
+  }
   double heading() const override { return th_; }
 
  protected:
@@ -493,7 +496,10 @@ class GpsUkf final : public GnssFilterBase {
     initialState(x, P);
     setState(x, P);
   }
-  std::string name() const override { return "ukf_gps"; }
+  const std::string& name() const override {
+    static const std::string n = "ukf_gps";
+    return n;
+  }
   double heading() const override { return ukf_.x()[kTheta]; }
 
  protected:

@@ -34,7 +34,10 @@ class LandmarkUkf final : public Filter {
     reset();
   }
 
-  std::string name() const override { return "ukf_landmarks"; }
+  const std::string& name() const override {
+    static const std::string n = "ukf_landmarks";
+    return n;
+  }
   void stateInto(FilterState& s) const override {
     s.utime = utime_;
     s.x = ukf_.x();

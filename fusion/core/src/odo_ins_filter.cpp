@@ -66,7 +66,7 @@ class OdoInsAdapter : public Filter {
     for (const auto& e : kExtraStates) names_.push_back(e.name);
   }
 
-  std::string name() const override { return name_; }
+  const std::string& name() const override { return name_; }
 
   void stateInto(FilterState& out) const override {
     const ins::InsState& s = kf_.state();

@@ -183,7 +183,8 @@ double positionSigma(const FilterState& s);
 class Filter {
  public:
   virtual ~Filter() = default;
-  virtual std::string name() const = 0;
+  /// The filter type (as makeFilter takes it); the same object for the filter's lifetime.
+  virtual const std::string& name() const = 0;
   /// Current state (first three entries x, y, theta), covariance and status.
   FilterState state() const {
     FilterState s;
