@@ -41,12 +41,14 @@ EventFile::~EventFile() { close(); }
 
 int EventFile::append(int64_t utime, const std::string& channel, const void* data, std::size_t size) {
   if (fd_ < 0) return EBADF;
-  const std::size_t start = buf_.size();
-  buf_.resize(start + 28 + channel.size() + size);
-  encodeEventHeader(buf_.data() + start, events_, utime, static_cast<uint32_t>(channel.size()),
-                    static_cast<uint32_t>(size));
-  std::memcpy(buf_.data() + start + 28, channel.data(), channel.size());
-  if (size) std::memcpy(buf_.data() + start + 28 + channel.size(), data, size);
+  uint8_t header[28];
+  encodeEventHeader(header, events_, utime, static_cast<uint32_t>(channel.size()), static_cast<uint32_t>(size));
+  // (insert, not resize and copy: no zero fill of bytes about to be overwritten)
+  buf_.insert(buf_.end(), header, header + sizeof header);
+  const auto* ch = reinterpret_cast<const uint8_t*>(channel.data());
+  buf_.insert(buf_.end(), ch, ch + channel.size());
+  const auto* d = static_cast<const uint8_t*>(data);
+  if (size) buf_.insert(buf_.end(), d, d + size);
   ends_.push_back(buf_.size());
   ++events_;
   if (buf_.size() >= buffer_bytes_) return writeOut();

@@ -157,6 +157,17 @@ struct FusionEngine::Impl {
           first.utime);
   }
 
+  /// The reorder window refused in (key): older than what was processed, or a duplicate.
+  [[gnu::cold, gnu::noinline]] void tooOld(const EngineInput& in, const OrderKey& key) {
+    ++counters.too_old;
+    std::string detail = in.channel + " seq " + std::to_string(in.seq) + " utime " + std::to_string(in.utime);
+    if (buffer.contains(key))
+      detail += ": duplicate";
+    else
+      detail += ": older than already processed utime " + std::to_string(buffer.lastReleased().utime);
+    event("too_old", detail, in.utime);
+  }
+
   /// orderKey() with the channel hash of the previous input reused when the channel is the same.
   std::string hashed_channel;
   uint32_t channel_hash = 0;
@@ -195,35 +206,39 @@ struct FusionEngine::Impl {
     if (cfg.output_every > 1 && !odometry) applyAccumulated();  // measurements see all odometry
     std::visit([&](const auto& p) { handle(in, p); }, in.payload);
     const FilterStatus now = active->status();
-    if (now != last_status) {
-      if (now == FilterStatus::Lockout)
-        event("lockout", active->name() + ": consecutive gate rejections, covariance inflated",
-              in.utime);
-      else if (last_status == FilterStatus::Lockout)
-        event("recovered", active->name() + ": measurement accepted again", in.utime);
-      else if (after_gap && now == FilterStatus::Ok) {
-        event("recovered", active->name() + ": measurement accepted again after the odometry gap", in.utime);
-        if (active->uses(Measurement::Ruler) && gap_spread > 0.5 * marker_spacing) {
-          char text[400];
-          std::snprintf(text, sizeof text,
-                        "%s: the marker taken after the odometry gap may be a neighbour of the one passed: the "
-                        "position was known to %.2f m (3 sigma) before it, more than half the marker spacing "
-                        "(%.2f m), and the markers are alike; confirm the pose (lcmloc-ctl set-pose, a fix)",
-                        active->name().c_str(), gap_spread, marker_spacing);
-          event("ambiguous", text, in.utime);
-        }
-      }
-    }
+    if (now != last_status) statusChanged(in, now);
     if (now == FilterStatus::Ok) after_gap = false;
     last_status = now;
   }
+  /// The active filter's status went from last_status to now with input in: an event when it
+  /// entered or left a lock-out, or recovered after an odometry gap.
+  [[gnu::noinline]] void statusChanged(const EngineInput& in, FilterStatus now) {
+    if (now == FilterStatus::Lockout)
+      event("lockout", active->name() + ": consecutive gate rejections, covariance inflated",
+            in.utime);
+    else if (last_status == FilterStatus::Lockout)
+      event("recovered", active->name() + ": measurement accepted again", in.utime);
+    else if (after_gap && now == FilterStatus::Ok) {
+      event("recovered", active->name() + ": measurement accepted again after the odometry gap", in.utime);
+      if (active->uses(Measurement::Ruler) && gap_spread > 0.5 * marker_spacing) {
+        char text[400];
+        std::snprintf(text, sizeof text,
+                      "%s: the marker taken after the odometry gap may be a neighbour of the one passed: the "
+                      "position was known to %.2f m (3 sigma) before it, more than half the marker spacing "
+                      "(%.2f m), and the markers are alike; confirm the pose (lcmloc-ctl set-pose, a fix)",
+                      active->name().c_str(), gap_spread, marker_spacing);
+        event("ambiguous", text, in.utime);
+      }
+    }
+  }
+
+  /// An input with a NaN or Inf field (skipped): event bad_input.
+  [[gnu::cold, gnu::noinline]] void badInput(const EngineInput& in, const char* what) {
+    event("bad_input", in.channel + " seq " + std::to_string(in.seq) + ": non-finite " + what, in.utime);
+  }
 
   void handle(const EngineInput& in, const OdometryInput& odo) {
-    if (!isFinite(odo)) {
-      event("bad_input", in.channel + " seq " + std::to_string(in.seq) + ": non-finite odometry",
-            in.utime);
-      return;
-    }
+    if (!isFinite(odo)) return badInput(in, "odometry");
     odometryGap(in, odo);
     if (cfg.output_every > 1) return handleBatched(odo);
     forEachFilter([&](Filter& f, bool is_active) {
@@ -266,12 +281,7 @@ struct FusionEngine::Impl {
   void odometryGap(const EngineInput& in, const OdometryInput& odo) {
     const OdometryGapConfig& gc = cfg.odometry_gap;
     bool first = false;
-    if (!cached_track || !sameText(in.channel, cached_track_channel)) {
-      auto [it, inserted] = odometry_tracks.try_emplace(in.channel);
-      cached_track = &it->second;
-      cached_track_channel = in.channel;
-      first = inserted;
-    }
+    if (!cached_track || !sameText(in.channel, cached_track_channel)) first = findTrack(in.channel);
     OdometryTrack& t = *cached_track;
     if (odo.utime >= last_odometry_utime) {
       last_odometry_utime = odo.utime;
@@ -293,10 +303,23 @@ struct FusionEngine::Impl {
       t.ds[i] = odo.delta_s;
       t.dth[i] = odo.delta_theta;
       t.steer[i] = odo.steering;
-      t.next = (i + 1) % OdometryTrack::kRecent;
-      t.n = std::min(t.n + 1, OdometryTrack::kRecent);
+      t.next = i + 1 == OdometryTrack::kRecent ? 0 : i + 1;
+      if (t.n < OdometryTrack::kRecent) ++t.n;
       return;
     }
+    gapFound(in, odo, t, prev_utime, prev_seq);
+  }
+  /// The track of channel into cached_track (a new one when the channel is new: returns true).
+  [[gnu::noinline]] bool findTrack(const std::string& channel) {
+    auto [it, inserted] = odometry_tracks.try_emplace(channel);
+    cached_track = &it->second;
+    cached_track_channel = channel;
+    return inserted;
+  }
+  /// odo comes after a gap in its channel t (the previous input at prev_utime, prev_seq).
+  [[gnu::cold, gnu::noinline]] void gapFound(const EngineInput& in, const OdometryInput& odo, OdometryTrack& t,
+                                             int64_t prev_utime, int64_t prev_seq) {
+    const OdometryGapConfig& gc = cfg.odometry_gap;
     OdometryGap gap;
     double sum_dt = 0, sum_ds = 0, sum_dth = 0, sum_steer = 0;
     for (int k = 0; k < t.n; ++k) {
@@ -432,11 +455,7 @@ struct FusionEngine::Impl {
   /// state after it) is published only when the filter used the measurement.
   template <typename M>
   void handleAbsolute(const EngineInput& in, const M& m, Measurement kind, const char* what) {
-    if (!isFinite(m)) {
-      event("bad_input", in.channel + " seq " + std::to_string(in.seq) + ": non-finite " + what,
-            in.utime);
-      return;
-    }
+    if (!isFinite(m)) return badInput(in, what);
     forEachFilter([&](Filter& f, bool is_active) {
       if (!f.uses(kind)) return;
       const std::optional<GateDecision> d = f.update(m);
@@ -676,45 +695,38 @@ FusionEngine& FusionEngine::operator=(FusionEngine&&) noexcept = default;
 bool FusionEngine::push(EngineInput&& in) {
   Impl& m = *impl_;
   const int64_t utime = in.utime;
-  if (std::holds_alternative<Boxed<ControlCommand>>(in.payload)) {
-    // A command waits for the sensors' time, it never makes it: it neither releases the inputs
-    // before it nor takes part in the time-jump guard (commands sent at once by several tools
-    // each one reorder window after the newest answer would otherwise carry the time ahead of the
-    // sensors, whose inputs then came too late). One beyond the guard would wait for a time that
-    // may never come: refused.
-    const int64_t newest = m.guard.newest(), jump = m.cfg.max_time_jump_us;
-    if (jump > 0 && newest != INT64_MIN && apartBy(utime, newest, jump)) {
-      ++m.counters.too_new;
-      m.event("too_new",
-              in.channel + " seq " + std::to_string(in.seq) + " utime " + std::to_string(utime) + ": a command " +
-                  std::to_string(secondsApart(utime, newest)) + " s ahead of the newest input (utime " +
-                  std::to_string(newest) + "), more than fusion.max_time_jump",
-              utime);
-      return false;
-    }
-    return take(std::move(in), false);
-  }
+  if (std::holds_alternative<Boxed<ControlCommand>>(in.payload)) return pushCommand(std::move(in));
   return m.guard.offer(
       std::move(in), utime, [this](EngineInput&& e) { return take(std::move(e)); },
       [&m](const EngineInput& s, int side, int64_t newest) { m.dropHeld(s, side, newest); },
       [&m](int side, const EngineInput& first, int64_t newest) { m.newTimeBase(side, first, newest); });
 }
 
+bool FusionEngine::pushCommand(EngineInput&& in) {
+  // A command waits for the sensors' time, it never makes it: it neither releases the inputs
+  // before it nor takes part in the time-jump guard (commands sent at once by several tools
+  // each one reorder window after the newest answer would otherwise carry the time ahead of the
+  // sensors, whose inputs then came too late). One beyond the guard would wait for a time that
+  // may never come: refused.
+  Impl& m = *impl_;
+  const int64_t utime = in.utime;
+  const int64_t newest = m.guard.newest(), jump = m.cfg.max_time_jump_us;
+  if (jump > 0 && newest != INT64_MIN && apartBy(utime, newest, jump)) {
+    ++m.counters.too_new;
+    m.event("too_new",
+            in.channel + " seq " + std::to_string(in.seq) + " utime " + std::to_string(utime) + ": a command " +
+                std::to_string(secondsApart(utime, newest)) + " s ahead of the newest input (utime " +
+                std::to_string(newest) + "), more than fusion.max_time_jump",
+            utime);
+    return false;
+  }
+  return take(std::move(in), false);
+}
+
 bool FusionEngine::take(EngineInput&& in, bool advance) {
   const OrderKey key = impl_->orderKey(in);
   if (!impl_->buffer.push(key, std::move(in), advance)) {  // refused: `in` is untouched
-    ++impl_->counters.too_old;
-    const bool duplicate = impl_->buffer.contains(key);
-    const std::string& channel = in.channel;
-    const int64_t seq = in.seq, utime = in.utime;
-    std::string detail = channel + " seq " + std::to_string(seq) + " utime " +
-                         std::to_string(utime);
-    if (duplicate)
-      detail += ": duplicate";
-    else
-      detail += ": older than already processed utime " +
-                std::to_string(impl_->buffer.lastReleased().utime);
-    impl_->event("too_old", detail, utime);
+    impl_->tooOld(in, key);
     return false;
   }
   if (!advance) return true;

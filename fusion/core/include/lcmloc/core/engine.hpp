@@ -167,6 +167,7 @@ class FusionEngine {
   /// Past the time-jump guard: into the reorder window; an input that does not `advance` (a
   /// command) does not move the window's time.
   bool take(EngineInput&& in, bool advance = true);
+  bool pushCommand(EngineInput&& in);  ///< push() of a control command
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -58,9 +58,30 @@ class TimeBaseGuard {
     if (max_jump_ > 0 && newest_ != INT64_MIN)
       side = apartBy(utime, newest_, max_jump_) ? kAhead : apartBy(newest_, utime, max_jump_) ? kBack : 0;
     if (side == 0) {
-      dropHeld(drop);  // the old time base goes on: they were outliers
+      if (!held_.empty()) dropHeld(drop);  // the old time base goes on: they were outliers
       return take(std::move(in));
     }
+    return hold(std::move(in), utime, side, take, drop, confirm);
+  }
+
+  /// The caller took an input with message time utime.
+  void took(int64_t utime) {
+    if (utime > newest_) newest_ = utime;
+  }
+  /// Drops what is held (end of input): drop(held, side, newest) each.
+  template <typename Drop>
+  void flush(Drop&& drop) {
+    dropHeld(drop);
+  }
+  /// [us] Message time the inputs confirming a new time base span at least.
+  int64_t confirmSpan() const { return confirm_span_; }
+  /// Newest message time taken (INT64_MIN: none yet, or time started over).
+  int64_t newest() const { return newest_; }
+
+ private:
+  /// offer() of an input beyond the guard (side): held, or confirming a new time base.
+  template <typename Take, typename Drop, typename Confirm>
+  [[gnu::noinline]] bool hold(T&& in, int64_t utime, int side, Take& take, Drop& drop, Confirm& confirm) {
     if (!held_.empty() && (side != side_ || apartBy(utime, held_utime_, max_jump_) ||
                            apartBy(held_utime_, utime, max_jump_)))
       dropHeld(drop);
@@ -79,21 +100,6 @@ class TimeBaseGuard {
     return all;
   }
 
-  /// The caller took an input with message time utime.
-  void took(int64_t utime) {
-    if (utime > newest_) newest_ = utime;
-  }
-  /// Drops what is held (end of input): drop(held, side, newest) each.
-  template <typename Drop>
-  void flush(Drop&& drop) {
-    dropHeld(drop);
-  }
-  /// [us] Message time the inputs confirming a new time base span at least.
-  int64_t confirmSpan() const { return confirm_span_; }
-  /// Newest message time taken (INT64_MIN: none yet, or time started over).
-  int64_t newest() const { return newest_; }
-
- private:
   template <typename Drop>
   void dropHeld(Drop& drop) {
     for (const auto& h : held_) drop(h, side_, newest_);
