@@ -498,11 +498,25 @@ TEST(OdometryBatch, ComposedIncrementMovesAPoseAsTheStepsOneByOne) {
   EXPECT_NEAR(wrapAngle(composed.z() - seq.z()), 0.0, 1e-12);
   EXPECT_EQ(b.steps, 50);
   EXPECT_EQ(b.utime, 49000);
-  for (double a = -0.06; a <= 0.06; a += 0.0007) {  // the polynomial range and both sides of it
+  for (double a = -0.26; a <= 0.26; a += 0.0007) {  // the polynomial range and both sides of it
     double s, c;
     OdometryBatch::sinCosSmall(a, s, c);
-    EXPECT_NEAR(s, std::sin(a), 4e-17) << a;
+    EXPECT_NEAR(s, std::sin(a), 1.2e-16) << a;
     EXPECT_NEAR(c, std::cos(a), 2.3e-16) << a;
+  }
+  // Near a heading by angle addition: within rounding of libm, exactly libm's at the heading.
+  for (double theta : {-3.1, -1.0, 0.0, 0.5, 3.1}) {
+    const OdometryBatch::Heading h(theta);
+    for (double d = -0.3; d <= 0.3; d += 0.0011) {
+      double s, c;
+      h.sinCos(theta + d, s, c);
+      EXPECT_NEAR(s, std::sin(theta + d), 5e-16) << theta << " " << d;
+      EXPECT_NEAR(c, std::cos(theta + d), 5e-16) << theta << " " << d;
+    }
+    double s, c;
+    h.sinCos(theta, s, c);
+    EXPECT_EQ(s, std::sin(theta));
+    EXPECT_EQ(c, std::cos(theta));
   }
 }
 

@@ -232,12 +232,13 @@ class DeadReckoningFilter final : public Filter {
   /// their product over the batch is the same form with the batch's world displacement, exact.
   void applyAccumulated() override {
     if (batch_.empty()) return;
-    const double c = std::cos(x_.z()), s = std::sin(x_.z());
+    const OdometryBatch::Heading h(x_.z());
+    const double c = h.c, s = h.s;
     Mat3 F = Mat3::Identity();
     F(0, 2) = -s * batch_.dx - c * batch_.dy;
     F(1, 2) = c * batch_.dx - s * batch_.dy;
-    const Mat3 Q = batch_.noise(x_.z());
-    x_ = batch_.apply(x_);
+    const Mat3 Q = batch_.noise(h);
+    x_ = batch_.apply(x_, h);
     P_ = F * P_ * F.transpose() + Q;
     utime_ = batch_.utime;
     batch_.clear();
@@ -333,13 +334,14 @@ class RulerUkf final : public Filter {
   void applyAccumulated() override {
     if (batch_.empty()) return;
     const OdometryBatch& b = batch_;
-    auto f = [&b](const typename U::Vector& s) {
+    const OdometryBatch::Heading mean(ukf_.x()(2));  // the sigma points' headings lie around it
+    auto f = [&b, &mean](const typename U::Vector& s) {
       typename U::Vector out = s;
-      out.template head<3>() = b.apply(s.template head<3>());
+      out.template head<3>() = b.apply(s.template head<3>(), mean);
       return out;
     };
     typename U::Matrix Q = U::Matrix::Zero();
-    Q.template topLeftCorner<3, 3>() = b.noise(ukf_.x()(2));
+    Q.template topLeftCorner<3, 3>() = b.noise(mean);
     if (ukf_.predict(f, Q)) utime_ = b.utime;
     batch_.clear();
   }
