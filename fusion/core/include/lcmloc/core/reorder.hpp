@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <climits>
 #include <cstdint>
+#include <cstdlib>
 #include <functional>
 #include <tuple>
 #include <utility>
@@ -21,6 +22,10 @@ struct OrderKey {
   }
 };
 
+/// Items are kept in slots that are reused: an item is moved in once (move-assigned into a free
+/// slot), released where it is, and its slot taken by a later item; only the keys (small,
+/// trivially copyable) are kept sorted and shifted. The slots number at most the items the
+/// window held at once.
 template <typename T>
 class ReorderBuffer {
  public:
@@ -34,15 +39,23 @@ class ReorderBuffer {
   bool push(const OrderKey& key, T&& item, bool advance = true) {
     if (released_any_ && !(last_released_ < key)) return false;
     // Before either insert: one out of order (at equal utimes from two sources) that found the
-    // storage full would otherwise grow it with the released items still in it, for good.
+    // storage full would otherwise grow it with the released keys still in it, for good.
     compact();
-    if (empty() || items_.back().first < key) {  // the usual case: in order
-      items_.emplace_back(key, std::move(item));
-    } else {
-      const auto it = lowerBound(key);
-      if (!(key < it->first)) return false;  // duplicate
-      items_.emplace(it, key, std::move(item));
+    auto at = keys_.end();
+    if (!(empty() || keys_.back().key < key)) {  // (the usual case: in order, at the end)
+      at = lowerBound(key);
+      if (!(key < at->key)) return false;  // duplicate
     }
+    uint32_t slot;
+    if (free_.empty()) {
+      slot = static_cast<uint32_t>(slots_.size());
+      slots_.push_back(std::move(item));
+    } else {
+      slot = free_.back();
+      free_.pop_back();
+      slots_[slot] = std::move(item);
+    }
+    keys_.insert(at, Key{key, slot});
     if (advance) newest_utime_ = std::max(newest_utime_, key.utime);
     return true;
   }
@@ -50,7 +63,7 @@ class ReorderBuffer {
   /// Releases, in canonical order, every item older than newest - window.
   template <typename F>
   void releaseReady(F&& sink) {
-    while (!empty() && items_[head_].first.utime < newest_utime_ - window_us_) pop(sink);
+    while (!empty() && keys_[head_].key.utime < newest_utime_ - window_us_) pop(sink);
   }
 
   /// Releases everything (end of input / shutdown).
@@ -59,11 +72,11 @@ class ReorderBuffer {
     while (!empty()) pop(sink);
   }
 
-  std::size_t size() const { return items_.size() - head_; }
-  bool empty() const { return head_ == items_.size(); }
+  std::size_t size() const { return keys_.size() - head_; }
+  bool empty() const { return head_ == keys_.size(); }
   bool contains(const OrderKey& key) const {
     const auto it = lowerBound(key);
-    return it != items_.cend() && !(key < it->first);
+    return it != keys_.cend() && !(key < it->key);
   }
   /// Key of the last released item (meaningful once anything was released).
   bool releasedAny() const { return released_any_; }
@@ -71,31 +84,35 @@ class ReorderBuffer {
   int64_t window() const { return window_us_; }
 
  private:
-  using Item = std::pair<OrderKey, T>;
-  typename std::vector<Item>::const_iterator lowerBound(const OrderKey& key) const {
-    return std::lower_bound(items_.cbegin() + static_cast<std::ptrdiff_t>(head_), items_.cend(), key,
-                            [](const Item& a, const OrderKey& k) { return a.first < k; });
+  struct Key {
+    OrderKey key;
+    uint32_t slot;
+  };
+  typename std::vector<Key>::const_iterator lowerBound(const OrderKey& key) const {
+    return std::lower_bound(keys_.cbegin() + static_cast<std::ptrdiff_t>(head_), keys_.cend(), key,
+                            [](const Key& a, const OrderKey& k) { return a.key < k; });
   }
-  typename std::vector<Item>::iterator lowerBound(const OrderKey& key) {
-    return std::lower_bound(items_.begin() + static_cast<std::ptrdiff_t>(head_), items_.end(), key,
-                            [](const Item& a, const OrderKey& k) { return a.first < k; });
+  typename std::vector<Key>::iterator lowerBound(const OrderKey& key) {
+    return std::lower_bound(keys_.begin() + static_cast<std::ptrdiff_t>(head_), keys_.end(), key,
+                            [](const Key& a, const OrderKey& k) { return a.key < k; });
   }
-  /// The sink sees the item where it is stored (no move out): it must not push meanwhile. The
-  /// released item is destroyed when compact() reuses its place.
+  /// The sink sees the item in its slot: it must not push meanwhile. The slot is free again
+  /// after it.
   template <typename F>
   void pop(F& sink) {
-    const Item& item = items_[head_++];
-    last_released_ = item.first;
+    const Key k = keys_[head_++];
+    last_released_ = k.key;
     released_any_ = true;
-    sink(item.first, item.second);
+    sink(k.key, static_cast<const T&>(slots_[k.slot]));
+    free_.push_back(k.slot);
   }
-  /// Drops the released items at the front before the storage would grow: the vector's
-  /// storage is reused, no allocation per item. Only when at least half of the items are
-  /// released: the storage then grows to about twice the window's items and each compaction
-  /// moves at most as many items as were pushed since the one before.
+  /// Drops the released keys at the front before the key storage would grow: it is reused, no
+  /// allocation per item. Only when at least half of the keys are released: the storage then
+  /// grows to about twice the window's items and each compaction moves at most as many keys as
+  /// were pushed since the one before.
   void compact() {
-    if (items_.size() < items_.capacity() || head_ * 2 < items_.size()) return;
-    items_.erase(items_.begin(), items_.begin() + static_cast<std::ptrdiff_t>(head_));
+    if (keys_.size() < keys_.capacity() || head_ * 2 < keys_.size()) return;
+    keys_.erase(keys_.begin(), keys_.begin() + static_cast<std::ptrdiff_t>(head_));
     head_ = 0;
   }
   int64_t window_us_;
@@ -103,8 +120,10 @@ class ReorderBuffer {
   bool released_any_ = false;
   OrderKey last_released_;
   /// Sorted by key from head_ on (inputs arrive nearly in order: appends); [0, head_) released.
-  std::vector<Item> items_;
+  std::vector<Key> keys_;
   std::size_t head_ = 0;
+  std::vector<T> slots_;        ///< the items, waiting or released
+  std::vector<uint32_t> free_;  ///< slots whose item was released
 };
 
 }  // namespace lcmloc::core
