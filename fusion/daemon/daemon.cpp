@@ -39,7 +39,7 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
     : FusionDaemon(cfg, bus, Options{}) {}
 
 FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& bus, Options opts)
-    : cfg_(cfg), bus_(bus), hold_(opts.hold), frame_(cfg.datum) {
+    : cfg_(cfg), bus_(bus), intake_(cfg), hold_(opts.hold) {
   echo_ = opts.echo;
   if (echo_) echoes_.resize(kEchoSeqs);
   core::EngineConfig ec = common::engineConfig(cfg);
@@ -87,26 +87,14 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
   engine_ = std::make_unique<core::FusionEngine>(ec, map, out);
 
   const auto& ch = cfg.channels;
-  auto err = [this](const std::string& c, const std::string& why) { onDecodeError(c, why); };
-  bus_.subscribe<lcmloc::odometry_t>(
-      ch.odometry, [this](const std::string& c, const lcmloc::odometry_t& m, int64_t) { onOdometry(c, m); }, err);
-  for (const auto& r : ch.magruler)
-    bus_.subscribe<lcmloc::magruler_t>(
-        r, [this](const std::string& c, const lcmloc::magruler_t& m, int64_t) { onRuler(c, m); }, err);
-  bus_.subscribe<lcmloc::imu_t>(
-      ch.imu, [this](const std::string& c, const lcmloc::imu_t& m, int64_t) { onImu(c, m); }, err);
-  bus_.subscribe<lcmloc::gps_fix_t>(
-      ch.gps, [this](const std::string& c, const lcmloc::gps_fix_t& m, int64_t) { onGps(c, m); }, err);
-  bus_.subscribe<lcmloc::landmark_obs_t>(
-      ch.landmarks, [this](const std::string& c, const lcmloc::landmark_obs_t& m, int64_t) { onLandmark(c, m); }, err);
-  bus_.subscribe<lcmloc::beacon_range_t>(
-      ch.beacons, [this](const std::string& c, const lcmloc::beacon_range_t& m, int64_t) { onBeacon(c, m); }, err);
-  bus_.subscribe<lcmloc::landmark_bearings_t>(
-      ch.vision, [this](const std::string& c, const lcmloc::landmark_bearings_t& m, int64_t) { onBearings(c, m); },
-      err);
-  bus_.subscribe<lcmloc::fusion_control_t>(
-      ch.control, [this](const std::string& c, const lcmloc::fusion_control_t& m, int64_t) { onControl(c, m); },
-      err);
+  subscribe(ch.odometry, &DaemonIntake::odometry);
+  for (const auto& r : ch.magruler) subscribe(r, &DaemonIntake::ruler);
+  subscribe(ch.imu, &DaemonIntake::imu);
+  subscribe(ch.gps, &DaemonIntake::gps);
+  subscribe(ch.landmarks, &DaemonIntake::landmark);
+  subscribe(ch.beacons, &DaemonIntake::beacon);
+  subscribe(ch.vision, &DaemonIntake::bearings);
+  subscribe(ch.control, &DaemonIntake::control);
 
   spdlog::info("filter {} (shadow: {}), {} markers, reorder window {:.3f} s; in: {}, {}, {}, {}, {}, {}, {}, {}; out: {}, {}, {}",
                cfg.fusion.filter.type, cfg.fusion.shadow.empty() ? "none" : fmt::format("{}", fmt::join(cfg.fusion.shadow, ", ")),
@@ -172,9 +160,10 @@ void FusionDaemon::warn(const std::string& event, const std::string& detail) {
   publishStatus(event, detail, last_utime_);
 }
 
-bool FusionDaemon::received(const std::string& ch, int64_t seq) {
-  ++messages_in_;
-  const auto gap = gaps_.observe(ch, seq);
+void FusionDaemon::reportSeq(const IntakeItem& item) {
+  const common::SeqGap& gap = item.detail->gap;
+  const std::string& ch = item.input.channel;
+  gaps_ += gap.missing - gap.uncounted;  // (the tracker's count: a small jump is taken back when it was an outlier)
   if (gap.ignored) {  // a lone corrupt seq: neither a loss nor a restart (and maybe a gap too)
     const std::string what = gap.describeIgnored(ch);
     if (log_throttle_.allow("ignored:" + ch)) spdlog::warn("{}", core::printable(what));
@@ -189,7 +178,6 @@ bool FusionDaemon::received(const std::string& ch, int64_t seq) {
     if (log_throttle_.allow("restart:" + ch)) spdlog::warn("{}", core::printable(what));
     publishStatus("source_restart", what, last_utime_);
   }
-  return true;
 }
 
 void FusionDaemon::reject(const std::string& ch, int64_t seq, int64_t utime, const std::string& why) {
@@ -199,11 +187,29 @@ void FusionDaemon::reject(const std::string& ch, int64_t seq, int64_t utime, con
   publishStatus("rejected_input", detail, utime > 0 ? utime : last_utime_);
 }
 
-void FusionDaemon::onDecodeError(const std::string& ch, const std::string& why) {
-  ++messages_in_;
+void FusionDaemon::decodeError(const std::string& ch, const std::string& why) {
   ++rejected_;
   if (log_throttle_.allow("decode:" + ch)) spdlog::warn("rejected input: {}: {}", core::printable(ch), why);
   publishStatus("rejected_input", ch + ": " + why, last_utime_);
+}
+
+void FusionDaemon::apply(IntakeItem& item) {
+  ++messages_in_;
+  if (item.seq_event) reportSeq(item);
+  core::EngineInput& in = item.input;
+  switch (item.kind) {
+    case IntakeItem::Kind::Input:
+      return push(std::move(in));
+    case IntakeItem::Kind::Rejected:
+      return reject(in.channel, in.seq, in.utime, item.detail->why);
+    case IntakeItem::Kind::Refused:
+      spdlog::warn("{}", item.detail->note);
+      return publishStatus("refused", item.detail->why, in.utime);
+    case IntakeItem::Kind::DecodeError:
+      return decodeError(in.channel, item.detail->why);
+    case IntakeItem::Kind::Nothing:
+      return;
+  }
 }
 
 void FusionDaemon::checkResumeGap(const core::EngineInput& in) {
@@ -214,7 +220,7 @@ void FusionDaemon::checkResumeGap(const core::EngineInput& in) {
   const std::string detail = fmt::format(
       "{} seq {}: the first input comes {:.3f} s of message time after the state this daemon started from (utime {}): "
       "the motion in between was not seen (the filters bridge it: odometry_gap)",
-      in.channel, in.seq, (static_cast<double>(in.utime) - static_cast<double>(*init_utime_)) * 1e-6, *init_utime_);
+      in.channel.str(), in.seq, (static_cast<double>(in.utime) - static_cast<double>(*init_utime_)) * 1e-6, *init_utime_);
   spdlog::warn("{}", core::printable(detail));
   publishStatus("resume_gap", detail, in.utime);
 }
@@ -241,69 +247,93 @@ void FusionDaemon::push(core::EngineInput&& in) {
     reject(in.channel, in.seq, in.utime, "older than the reorder window");  // normally reported by the engine
 }
 
-void FusionDaemon::onOdometry(const std::string& ch, const lcmloc::odometry_t& m) {
-  received(ch, m.seq);
-  std::string why;
-  auto odo = common::toCore(m, &why);
-  if (!odo) return reject(ch, m.seq, m.utime, why);
-  push({ch, m.seq, m.utime, *odo});
+DaemonIntake::DaemonIntake(const common::SystemConfig& cfg) : cfg_(cfg), frame_(cfg.datum) {}
+
+void DaemonIntake::start(IntakeItem& out, IntakeItem::Kind kind, const std::string& ch, int64_t seq, int64_t utime) {
+  out.kind = kind;
+  out.seq_event = false;
+  if (!core::sameText(channel_, ch)) channel_ = ch;  // (one name lookup per change of channel)
+  out.input.channel = channel_;
+  out.input.seq = seq;
+  out.input.utime = utime;
 }
 
-void FusionDaemon::onRuler(const std::string& ch, const lcmloc::magruler_t& m) {
-  received(ch, m.seq);
+void DaemonIntake::tracked(IntakeItem& out, const std::string& ch, int64_t seq, int64_t utime) {
+  start(out, IntakeItem::Kind::Nothing, ch, seq, utime);
+  const common::SeqGap gap = gaps_.observe(ch, seq);
+  if (gap.missing > 0 || gap.uncounted > 0 || gap.ignored || gap.restarted) {
+    out.seq_event = true;
+    out.more().gap = gap;
+  }
+}
+
+template <typename T>
+void DaemonIntake::convert(IntakeItem& out, std::optional<T>&& payload, std::string&& why) {
+  if (payload) {
+    out.kind = IntakeItem::Kind::Input;
+    out.input.payload = std::move(*payload);
+  } else {
+    out.kind = IntakeItem::Kind::Rejected;
+    out.more().why = std::move(why);
+  }
+}
+
+void DaemonIntake::odometry(const std::string& ch, const lcmloc::odometry_t& m, IntakeItem& out) {
+  tracked(out, ch, m.seq, m.utime);
+  std::string why;
+  convert(out, common::toCore(m, &why), std::move(why));
+}
+
+void DaemonIntake::ruler(const std::string& ch, const lcmloc::magruler_t& m, IntakeItem& out) {
+  tracked(out, ch, m.seq, m.utime);
   std::string why;
   auto det = common::toCore(m, ch, &why);
-  if (!det) {
-    if (!why.empty()) reject(ch, m.seq, m.utime, why);
-    return;  // a raw reading without detection: nothing for the filter
-  }
-  push({ch, m.seq, m.utime, *det});
+  if (!det && why.empty()) return;  // a raw reading without detection: nothing for the filter
+  convert(out, std::move(det), std::move(why));
 }
 
-void FusionDaemon::onImu(const std::string& ch, const lcmloc::imu_t& m) {
-  received(ch, m.seq);
+void DaemonIntake::imu(const std::string& ch, const lcmloc::imu_t& m, IntakeItem& out) {
+  tracked(out, ch, m.seq, m.utime);
   std::string why;
-  auto in = common::toCore(m, ch, &why);
-  if (!in) return reject(ch, m.seq, m.utime, why);
-  push({ch, m.seq, m.utime, *in});
+  convert(out, common::toCore(m, ch, &why), std::move(why));
 }
 
-void FusionDaemon::onGps(const std::string& ch, const lcmloc::gps_fix_t& m) {
-  received(ch, m.seq);
+void DaemonIntake::gps(const std::string& ch, const lcmloc::gps_fix_t& m, IntakeItem& out) {
+  tracked(out, ch, m.seq, m.utime);
   std::string why;
-  auto in = common::toCore(m, ch, frame_, &why);
-  if (!in) return reject(ch, m.seq, m.utime, why);
-  push({ch, m.seq, m.utime, *in});
+  convert(out, common::toCore(m, ch, frame_, &why), std::move(why));
 }
 
-void FusionDaemon::onLandmark(const std::string& ch, const lcmloc::landmark_obs_t& m) {
-  received(ch, m.seq);
+void DaemonIntake::landmark(const std::string& ch, const lcmloc::landmark_obs_t& m, IntakeItem& out) {
+  tracked(out, ch, m.seq, m.utime);
   std::string why;
-  auto in = common::toCore(m, ch, &why);
-  if (!in) return reject(ch, m.seq, m.utime, why);
-  push({ch, m.seq, m.utime, *in});
+  convert(out, common::toCore(m, ch, &why), std::move(why));
 }
 
-void FusionDaemon::onBeacon(const std::string& ch, const lcmloc::beacon_range_t& m) {
-  received(ch, m.seq);
+void DaemonIntake::beacon(const std::string& ch, const lcmloc::beacon_range_t& m, IntakeItem& out) {
+  tracked(out, ch, m.seq, m.utime);
   std::string why;
-  auto in = common::toCore(m, ch, &why);
-  if (!in) return reject(ch, m.seq, m.utime, why);
-  push({ch, m.seq, m.utime, *in});
+  convert(out, common::toCore(m, ch, &why), std::move(why));
 }
 
-void FusionDaemon::onBearings(const std::string& ch, const lcmloc::landmark_bearings_t& m) {
-  received(ch, m.seq);
+void DaemonIntake::bearings(const std::string& ch, const lcmloc::landmark_bearings_t& m, IntakeItem& out) {
+  tracked(out, ch, m.seq, m.utime);
   std::string why;
-  auto in = common::toCore(m, ch, &why);
-  if (!in) return reject(ch, m.seq, m.utime, why);
-  push({ch, m.seq, m.utime, *in});
+  convert(out, common::toCore(m, ch, &why), std::move(why));
 }
 
-void FusionDaemon::onControl(const std::string& ch, const lcmloc::fusion_control_t& m) {
+void DaemonIntake::decodeError(const std::string& ch, const std::string& why, IntakeItem& out) {
+  start(out, IntakeItem::Kind::DecodeError, ch, 0, 0);
+  out.more().why = why;
+}
+
+void DaemonIntake::control(const std::string& ch, const lcmloc::fusion_control_t& m, IntakeItem& out) {
   // Not seq-tracked: every lcmloc-ctl (and any other tool) sends on it, each with its own seq.
-  ++messages_in_;
-  if (m.utime < 0) return reject(ch, m.seq, m.utime, "utime is negative");
+  start(out, IntakeItem::Kind::Rejected, ch, m.seq, m.utime);
+  if (m.utime < 0) {
+    out.more().why = "utime is negative";
+    return;
+  }
   core::ControlCommand cmd;
   switch (m.command) {
     case lcmloc::fusion_control_t::CMD_SWITCH_FILTER: {
@@ -313,9 +343,9 @@ void FusionDaemon::onControl(const std::string& ch, const lcmloc::fusion_control
         if (!m.filter.empty()) params["type"] = m.filter;
         fc = common::parseFilterConfig(params, fc, ch, "parameters");
       } catch (const std::exception& e) {
-        spdlog::warn("refused switch to '{}': {}", core::printable(m.filter), core::printable(e.what()));
-        publishStatus("refused", ch + " seq " + std::to_string(m.seq) + ": switch to '" + m.filter + "': " + e.what(),
-                      m.utime);
+        out.kind = IntakeItem::Kind::Refused;
+        out.more().note = "refused switch to '" + core::printable(m.filter) + "': " + core::printable(e.what());
+        out.more().why = ch + " seq " + std::to_string(m.seq) + ": switch to '" + m.filter + "': " + e.what();
         return;
       }
       cmd = core::SwitchFilter{fc};
@@ -329,9 +359,11 @@ void FusionDaemon::onControl(const std::string& ch, const lcmloc::fusion_control
                           core::Vec3(m.pose_std[0], m.pose_std[1], m.pose_std[2])};
       break;
     default:
-      return reject(ch, m.seq, m.utime, "unknown command " + std::to_string(m.command));
+      out.more().why = "unknown command " + std::to_string(m.command);
+      return;
   }
-  push({ch, m.seq, m.utime, cmd});
+  out.kind = IntakeItem::Kind::Input;
+  out.input.payload = std::move(cmd);
 }
 
 std::string FusionDaemon::poseChannel(const std::string& filter, bool active) const {
@@ -384,7 +416,7 @@ void FusionDaemon::publishStatus(const std::string& event, const std::string& de
   m.messages_in = messages_in_;
   m.messages_used = engine_->counters().processed;
   m.messages_rejected = rejected_;
-  m.sequence_gaps = gaps_.gaps();
+  m.sequence_gaps = gaps_;
   bus_.publish(cfg_.channels.status, m);
 }
 
@@ -393,7 +425,7 @@ void FusionDaemon::shutdown() {
   const auto c = engine_->counters();
   std::string detail = fmt::format(
       "in {}, processed {}, rejected {} (too old {}{}), gaps {}, gate accepted {}, rejected {}", messages_in_,
-      c.processed, rejected_, c.too_old, c.too_new ? fmt::format(", too new {}", c.too_new) : "", gaps_.gaps(),
+      c.processed, rejected_, c.too_old, c.too_new ? fmt::format(", too new {}", c.too_new) : "", gaps_,
       c.accepted, c.rejected);
   if (covered_ > 0) detail += fmt::format(", covered by the initial state {}", covered_);
   publishStatus("stopped", detail, last_utime_);
@@ -403,7 +435,7 @@ void FusionDaemon::shutdown() {
 common::Heartbeat::Counters FusionDaemon::counters() const {
   const auto c = engine_->counters();
   return {{"in", messages_in_}, {"processed", c.processed}, {"rejected", rejected_},
-          {"gaps", gaps_.gaps()}, {"accepted", c.accepted}, {"gate_rejected", c.rejected}};
+          {"gaps", gaps_}, {"accepted", c.accepted}, {"gate_rejected", c.rejected}};
 }
 
 }  // namespace lcmloc::fusion

@@ -5,6 +5,7 @@
 // event, and is counted.
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -28,6 +29,66 @@
 
 namespace lcmloc::fusion {
 
+/// One message as the daemon's intake (DaemonIntake) made it: decoded, validated, converted,
+/// its seq checked. What the daemon then does with it (FusionDaemon::apply: counting, reporting,
+/// the engine, the outputs) depends on the items alone, in their order: the offline replay runs
+/// the intake on its reading thread, ahead of the rest, and gets what the daemon publishes live.
+struct IntakeItem {
+  enum class Kind : uint8_t {
+    Input,        ///< for the engine (input)
+    Rejected,     ///< refused (input.channel, seq, utime, why): status rejected_input
+    Refused,      ///< a command refused: status refused (why: its detail; note: the log line)
+    DecodeError,  ///< undecodable (input.channel, why): status rejected_input
+    Nothing,      ///< counted, nothing else (a ruler reading without a detection)
+  };
+  Kind kind = Kind::Nothing;
+  bool seq_event = false;   ///< the sequence tracker found a gap, a restart or an ignored seq (detail->gap)
+  core::EngineInput input;  ///< channel, seq and utime always; the payload with Kind::Input
+  /// What only few items carry, out of the way of the others (the replay hands millions of them
+  /// from one thread to another): what the sequence tracker found (seq_event), the reasons of a
+  /// refusal (why, note).
+  struct Detail {
+    common::SeqGap gap;
+    std::string why, note;
+  };
+  std::unique_ptr<Detail> detail;
+  Detail& more() {
+    if (!detail) detail = std::make_unique<Detail>();
+    return *detail;
+  }
+};
+
+/// The daemon's first stage: decodes (the bus does), validates and converts each message, and
+/// checks its channel's seq. Its only state is the sequence tracker, so it may run on another
+/// thread than the rest of the daemon (the replay's reading thread).
+class DaemonIntake {
+ public:
+  explicit DaemonIntake(const common::SystemConfig& cfg);
+  /// Each fills `out` (whatever it held before) with what the message is.
+  void odometry(const std::string& ch, const lcmloc::odometry_t& m, IntakeItem& out);
+  void ruler(const std::string& ch, const lcmloc::magruler_t& m, IntakeItem& out);
+  void imu(const std::string& ch, const lcmloc::imu_t& m, IntakeItem& out);
+  void gps(const std::string& ch, const lcmloc::gps_fix_t& m, IntakeItem& out);
+  void landmark(const std::string& ch, const lcmloc::landmark_obs_t& m, IntakeItem& out);
+  void beacon(const std::string& ch, const lcmloc::beacon_range_t& m, IntakeItem& out);
+  void bearings(const std::string& ch, const lcmloc::landmark_bearings_t& m, IntakeItem& out);
+  void control(const std::string& ch, const lcmloc::fusion_control_t& m, IntakeItem& out);
+  void decodeError(const std::string& ch, const std::string& why, IntakeItem& out);
+
+ private:
+  /// out for message (ch, seq, utime) of `kind`, its seq checked when tracked.
+  void start(IntakeItem& out, IntakeItem::Kind kind, const std::string& ch, int64_t seq, int64_t utime);
+  void tracked(IntakeItem& out, const std::string& ch, int64_t seq, int64_t utime);
+  /// out an Input with the converted payload, or Rejected with why when the conversion refused it.
+  template <typename T>
+  static void convert(IntakeItem& out, std::optional<T>&& payload, std::string&& why);
+
+  const common::SystemConfig& cfg_;
+  common::SeqTracker gaps_;
+  common::LocalFrame frame_;  ///< lat/lon of GPS fixes -> local metric frame (cfg.datum)
+  core::ChannelName channel_;  ///< the channel of the message before
+};
+
 /// The daemon is written against common::MessageBus: lcmloc-fusion runs it over LCM, the
 /// offline replay (lcmloc-replay) over a log file, so both publish the same bytes.
 class FusionDaemon {
@@ -41,6 +102,14 @@ class FusionDaemon {
   };
   FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& bus);
   FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& bus, Options opts);
+  /// What the intake makes of each message the bus hands over goes into the item `slot` returns
+  /// for it, instead of to apply() (the offline replay: the bus dispatches, and the intake runs,
+  /// on its reading thread; it apply()s the items in their order on its own). Empty: apply() at
+  /// once, as live.
+  void divert(std::function<IntakeItem&()> slot) { slot_ = std::move(slot); }
+  /// The rest of the daemon for one message after the intake: counts it, reports what the intake
+  /// found (sequence gaps, refusals), hands an input to the engine (moved out of item).
+  void apply(IntakeItem& item);
   /// Ends the hold: starts every filter from init (if given; source says where it came from),
   /// drops the queued inputs that init already covers and processes the rest. Inputs arriving
   /// later that init covers are dropped too (counted, not rejected). Covered: utime <= init.utime,
@@ -73,21 +142,31 @@ class FusionDaemon {
   int64_t processed() const { return engine_->counters().processed; }
   int64_t messagesIn() const { return messages_in_; }
   int64_t rejected() const { return rejected_; }
-  int64_t gaps() const { return gaps_.gaps(); }
+  int64_t gaps() const { return gaps_; }
   int64_t covered() const { return covered_; }
 
  private:
-  void onOdometry(const std::string& ch, const lcmloc::odometry_t& m);
-  void onRuler(const std::string& ch, const lcmloc::magruler_t& m);
-  void onControl(const std::string& ch, const lcmloc::fusion_control_t& m);
-  void onImu(const std::string& ch, const lcmloc::imu_t& m);
-  void onGps(const std::string& ch, const lcmloc::gps_fix_t& m);
-  void onLandmark(const std::string& ch, const lcmloc::landmark_obs_t& m);
-  void onBeacon(const std::string& ch, const lcmloc::beacon_range_t& m);
-  void onBearings(const std::string& ch, const lcmloc::landmark_bearings_t& m);
-  void onDecodeError(const std::string& ch, const std::string& why);
-
-  bool received(const std::string& ch, int64_t seq);     ///< counts and checks the seq gap
+  /// Messages of type T on channel through the intake's `take` (and undecodable ones through
+  /// its decodeError), then deliver().
+  template <typename T>
+  void subscribe(const std::string& channel, void (DaemonIntake::*take)(const std::string&, const T&, IntakeItem&)) {
+    bus_.subscribe<T>(
+        channel,
+        [this, take](const std::string& c, const T& m, int64_t) {
+          IntakeItem& item = slot_ ? slot_() : item_;
+          (intake_.*take)(c, m, item);
+          if (!slot_) apply(item);
+        },
+        [this](const std::string& c, const std::string& why) {
+          IntakeItem& item = slot_ ? slot_() : item_;
+          intake_.decodeError(c, why, item);
+          if (!slot_) apply(item);
+        });
+  }
+  /// What the sequence tracker found about a message (a gap, a restart, an ignored seq):
+  /// counted, a warning and a status event.
+  void reportSeq(const IntakeItem& item);
+  void decodeError(const std::string& ch, const std::string& why);
   void push(core::EngineInput&& in);
   /// First input after an init state (hand-over, checkpoint): more than kResumeGapUs after it
   /// is reported (status event resume_gap): the motion in between is lost.
@@ -101,7 +180,10 @@ class FusionDaemon {
   const common::SystemConfig& cfg_;
   common::MessageBus& bus_;
   std::unique_ptr<core::FusionEngine> engine_;
-  common::SeqTracker gaps_;
+  DaemonIntake intake_;
+  std::function<IntakeItem&()> slot_;  ///< divert()
+  IntakeItem item_;  ///< the intake's item of the message being taken in (its storage reused)
+  int64_t gaps_ = 0;  ///< messages missing according to the intake's sequence checks
   std::map<std::string, int64_t> out_seq_;  ///< per output channel
   /// Per (filter, active): its POSE channel, that channel's seq counter (a node of out_seq_) and
   /// the message, reused for every state it publishes (no per-message allocations).
@@ -129,7 +211,6 @@ class FusionDaemon {
   core::FilterStatus last_status_ = core::FilterStatus::Uninitialized;
   bool event_seen_ = false;
   bool hold_ = false;
-  common::LocalFrame frame_;  ///< lat/lon of GPS fixes -> local metric frame (cfg.datum)
   /// Inputs queued while holding, at most kMaxHeld (a flood while waiting for the hand-over must
   /// not take the memory): beyond, the oldest go first (they are the likeliest to be covered by
   /// the state handed over), counted in held_dropped_ and said in the "started" event.

@@ -169,10 +169,10 @@ struct FusionEngine::Impl {
   }
 
   /// orderKey() with the channel hash of the previous input reused when the channel is the same.
-  std::string hashed_channel;
-  uint32_t channel_hash = 0;
+  ChannelName hashed_channel;
+  uint32_t channel_hash = stableHash("");
   OrderKey orderKey(const EngineInput& in) {
-    if (hashed_channel.empty() || !sameText(in.channel, hashed_channel)) {
+    if (in.channel != hashed_channel) {
       hashed_channel = in.channel;
       channel_hash = stableHash(in.channel);
     }
@@ -269,7 +269,7 @@ struct FusionEngine::Impl {
   /// The track of the previous odometry input's channel (one lookup per channel change, not per
   /// message: this runs for every odometry message).
   OdometryTrack* cached_track = nullptr;
-  std::string cached_track_channel;
+  ChannelName cached_track_channel;
   /// A measurement at utime has no odometry to place it: the newest odometry input is older by
   /// more than max_odometry_gap and twice its channel's period (a slow sender is not missing).
   bool odometryMissing(int64_t utime) const {
@@ -281,7 +281,7 @@ struct FusionEngine::Impl {
   void odometryGap(const EngineInput& in, const OdometryInput& odo) {
     const OdometryGapConfig& gc = cfg.odometry_gap;
     bool first = false;
-    if (!cached_track || !sameText(in.channel, cached_track_channel)) first = findTrack(in.channel);
+    if (!cached_track || in.channel != cached_track_channel) first = findTrack(in.channel);
     OdometryTrack& t = *cached_track;
     if (odo.utime >= last_odometry_utime) {
       last_odometry_utime = odo.utime;
@@ -310,7 +310,7 @@ struct FusionEngine::Impl {
     gapFound(in, odo, t, prev_utime, prev_seq);
   }
   /// The track of channel into cached_track (a new one when the channel is new: returns true).
-  [[gnu::noinline]] bool findTrack(const std::string& channel) {
+  [[gnu::noinline]] bool findTrack(const ChannelName& channel) {
     auto [it, inserted] = odometry_tracks.try_emplace(channel);
     cached_track = &it->second;
     cached_track_channel = channel;
@@ -595,7 +595,7 @@ struct FusionEngine::Impl {
 };
 
 void FusionEngine::Impl::landmarkFix(const EngineInput& in, const BearingsInput& b) {
-  GateDecision d = detail::decision(in.utime, b.sensor.empty() ? in.channel : b.sensor, in.seq,
+  GateDecision d = detail::decision(in.utime, b.sensor.empty() ? in.channel.str() : b.sensor, in.seq,
                                     std::numeric_limits<double>::infinity());
   auto refuse = [&](const std::string& reason, const std::string& ev, const std::string& why) {
     d.reason = reason;

@@ -10,6 +10,7 @@
 #include <variant>
 #include <vector>
 
+#include "lcmloc/core/channel_name.hpp"
 #include "lcmloc/core/filter.hpp"
 #include "lcmloc/core/landmark_fix.hpp"
 #include "lcmloc/core/reorder.hpp"
@@ -47,7 +48,7 @@ class Boxed {
 
 /// One input message, already converted and validated.
 struct EngineInput {
-  std::string channel;
+  ChannelName channel;
   int64_t seq = 0;
   int64_t utime = 0;
   /// Alternatives are only ever appended (the index is part of the canonical tie-break).
