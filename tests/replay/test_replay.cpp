@@ -324,6 +324,106 @@ TEST_F(ReplayTest, AnOutputThatCannotBeWrittenIsAnErrorNotASuccess) {
   EXPECT_LE(fs::file_size(out), 2000u);
 }
 
+/// What a replay reports, in one string to compare.
+std::string describe(const replay::ReplayResult& r) {
+  std::string s = "read " + std::to_string(r.events_read) + " old " + std::to_string(r.old_outputs) + " dispatched " +
+                  std::to_string(r.dispatched) + " in " + std::to_string(r.messages_in) + " used " +
+                  std::to_string(r.used) + " rejected " + std::to_string(r.rejected) + " gaps " +
+                  std::to_string(r.gaps) + " written " + std::to_string(r.written) + " copied " +
+                  std::to_string(r.copied) + " unreadable " + std::to_string(r.bytes_unreadable) +
+                  (r.damaged ? " damaged" : "") + (r.interrupted ? " interrupted" : "") + " filter " +
+                  r.final_filter + " error '" + r.write_error + "'";
+  for (const auto& [ch, n] : r.written_per_channel) s += " " + ch + "=" + std::to_string(n);
+  for (const auto& is : r.issues) s += "; " + is.describe();
+  return s;
+}
+
+// The replay reads on a thread of its own (ReplayOptions::read_ahead, the default) or in line: the
+// same bytes and the same report either way, over damage, recorded outputs, commands, undecodable
+// and invalid messages, copied inputs, an early stop and an output that fails.
+TEST_F(ReplayTest, ReadingAheadOnAThreadGivesWhatReadingInLineGives) {
+  auto events = readLog(log_);
+  ASSERT_GT(events.size(), 6000u);
+  std::vector<Event> mixed;
+  for (std::size_t i = 0; i < events.size(); ++i) {
+    mixed.push_back(events[i]);
+    if (i == 100) {  // a recorded output of the live run: ignored
+      lcmloc::pose_t p{};
+      p.utime = events[i].timestamp;
+      p.filter = "ukf_gated";
+      mixed.push_back(encode("POSE", p));
+    }
+    if (i == 2000) {  // a switch, and one refused
+      lcmloc::fusion_control_t c{};
+      c.utime = events[i].timestamp + 1;
+      c.command = lcmloc::fusion_control_t::CMD_SWITCH_FILTER;
+      c.filter = "ukf_calib";
+      mixed.push_back(encode("FUSION_CONTROL", c));
+      c.seq = 1;
+      c.filter = "no_such_filter";
+      mixed.push_back(encode("FUSION_CONTROL", c));
+    }
+    if (i == 3000) mixed.push_back({events[i].timestamp, "ODOMETRY", std::vector<uint8_t>(12, 0xab)});  // undecodable
+    if (i == 4000) {  // invalid: NaN
+      lcmloc::odometry_t o{};
+      o.utime = events[i].timestamp;
+      o.seq = 999999;
+      o.delta_s = std::nan("");
+      mixed.push_back(encode("ODOMETRY", o));
+    }
+    if (i % 1500 == 700) mixed.push_back({events[i].timestamp, "SOMETHING_ELSE", std::vector<uint8_t>(40, 1)});
+  }
+  writeEvents(path("mixed.lcmlog"), mixed);
+  std::string bytes = slurp(path("mixed.lcmlog"));
+  // Damage: a corrupt sync word in the middle and a truncated last event.
+  std::size_t at = 0;
+  for (std::size_t i = 0; i < 5000; ++i) at += 28 + mixed[i].channel.size() + mixed[i].data.size();
+  bytes[at] = 'X';
+  bytes.resize(bytes.size() - 7);
+  std::ofstream(path("damaged.lcmlog"), std::ios::binary) << bytes;
+
+  auto both = [&](const std::string& input, const std::string& output, bool with_inputs, int stop_after) {
+    std::string report[2], file[2];
+    for (int ahead = 0; ahead < 2; ++ahead) {
+      replay::ReplayOptions o;
+      o.input = input;
+      o.output = output.empty() || output == "/dev/full" ? output : output + std::to_string(ahead);
+      o.with_inputs = with_inputs;
+      o.progress_period_s = 0;
+      o.read_ahead = ahead == 1;
+      int polled = 0;
+      if (stop_after > 0) o.stop = [&polled, stop_after] { return ++polled > stop_after; };
+      report[ahead] = describe(replay::replayLog(cfg_, o));
+      if (!output.empty() && output != "/dev/full") file[ahead] = slurp(o.output);
+    }
+    EXPECT_EQ(report[1], report[0]) << input << " -> " << output;
+    EXPECT_TRUE(file[1] == file[0]) << input << " -> " << output << ": the outputs differ";
+    return report[0];
+  };
+  const std::string full = both(path("damaged.lcmlog"), path("out"), true, 0);
+  EXPECT_NE(full.find("damaged"), std::string::npos) << full;
+  EXPECT_NE(full.find("old 1 "), std::string::npos) << full;
+  EXPECT_NE(full.find("rejected 2 "), std::string::npos) << full;  // the undecodable and the NaN ones
+  EXPECT_NE(full.find("FUSION_STATUS"), std::string::npos) << full;
+  both(path("damaged.lcmlog"), path("plain"), false, 0);
+  both(path("damaged.lcmlog"), "", false, 0);  // no output file
+  const std::string stopped = both(path("damaged.lcmlog"), path("stop"), false, 10);
+  EXPECT_NE(stopped.find("read 2560 "), std::string::npos) << stopped;  // polled every 256 events
+  EXPECT_NE(stopped.find("interrupted"), std::string::npos) << stopped;
+  // An output that fails (a full disk) when its first megabyte is written out: the replay stops
+  // there, at the same event either way.
+  for (int k = 0; k < 3; ++k) mixed.insert(mixed.end(), mixed.begin(), mixed.begin() + 6000);  // (over 1 MB)
+  writeEvents(path("long.lcmlog"), mixed);
+  const std::string failed = both(path("long.lcmlog"), "/dev/full", true, 0);
+  EXPECT_NE(failed.find("No space left on device"), std::string::npos) << failed;
+  EXPECT_EQ(failed.find("read " + std::to_string(mixed.size()) + " "), std::string::npos) << failed;
+  // A log shorter than a block, and an empty one.
+  writeEvents(path("short.lcmlog"), std::vector<Event>(events.begin(), events.begin() + 50));
+  EXPECT_NE(both(path("short.lcmlog"), path("short"), true, 0).find("read 50 "), std::string::npos);
+  writeEvents(path("empty.lcmlog"), {});
+  EXPECT_NE(both(path("empty.lcmlog"), path("empty"), false, 0).find("read 0 "), std::string::npos);
+}
+
 TEST_F(ReplayTest, OutputOverTheInputIsRefusedAndTheInputKept) {
   const std::string before = slurp(log_);
   EXPECT_THROW(run(log_, log_, cfg_), std::runtime_error);

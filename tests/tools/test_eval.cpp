@@ -23,7 +23,6 @@
 #include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/report.hpp"
 #include "lcmloc/eval/log_reader.hpp"
-#include "lcmloc/eval/read_ahead.hpp"
 #include "lcmloc/fault_event_t.hpp"
 #include "lcmloc/gate_decision_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"
@@ -361,97 +360,6 @@ TEST_F(EvalTest, ADirectoryIsNotALog) {
     EXPECT_NE(std::string(e.what()).find("is a directory"), std::string::npos) << e.what();
   }
   EXPECT_THROW(eval::scanLog(dir_.string(), [](const eval::RawEvent&) {}), std::runtime_error);
-}
-
-/// Everything a scanner says about each event, and at the end.
-template <typename Scanner>
-std::vector<std::string> scanRecord(const std::string& path, std::vector<eval::LogIssue>& issues) {
-  Scanner s(path, &issues);
-  std::vector<std::string> rec;
-  std::size_t issues_seen = 0;
-  while (const lcm::LogEvent* ev = s.next()) {
-    std::string r = ev->channel + " " + std::to_string(ev->eventnum) + " " + std::to_string(ev->timestamp) + " " +
-                    std::string(static_cast<const char*>(ev->data), static_cast<std::size_t>(ev->datalen)) + " at " +
-                    std::to_string(s.eventOffset()) + " to " + std::to_string(s.position()) + " read " +
-                    std::to_string(s.eventsRead()) + " unreadable " + std::to_string(s.bytesUnreadable());
-    // Damage is appended when the event after it is returned, not before, not later.
-    r += " issues " + std::to_string(issues.size() - issues_seen);
-    issues_seen = issues.size();
-    rec.push_back(r);
-  }
-  rec.push_back("end at " + std::to_string(s.position()) + " of " + std::to_string(s.fileSize()) + " read " +
-                std::to_string(s.eventsRead()) + " unreadable " + std::to_string(s.bytesUnreadable()) +
-                (s.damaged() ? " damaged" : "") + " issues " + std::to_string(issues.size()));
-  return rec;
-}
-
-TEST_F(EvalTest, ReadAheadScannerGivesWhatLogScannerGivesOverDamageAndBlockBoundaries) {
-  // 20,000 events (several of ReadAheadScanner's blocks) on three channels, payloads of 0 to
-  // 300 bytes; damage in the middle, right after a block's worth of events, and at the end.
-  const std::string path = file("many.lcmlog");
-  std::vector<int64_t> starts;
-  {
-    lcm::LogFile log(path, "w");
-    int64_t offset = 0;
-    for (int i = 0; i < 20000; ++i) {
-      std::string payload((i * 37) % 301, static_cast<char>('a' + i % 26));
-      lcm::LogEvent ev;
-      ev.eventnum = i;
-      ev.timestamp = 1000 + 10 * i;
-      ev.channel = i % 7 == 0 ? "MAGRULER" : i % 3 == 0 ? "IMU" : "ODOMETRY";
-      ev.datalen = static_cast<int32_t>(payload.size());
-      ev.data = payload.data();
-      starts.push_back(offset);
-      offset += 28 + static_cast<int64_t>(ev.channel.size()) + ev.datalen;
-      ASSERT_EQ(log.writeEvent(&ev), 0);
-    }
-  }
-  const auto size = static_cast<int64_t>(fs::file_size(path));
-  {
-    std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
-    for (std::size_t bad : {std::size_t{10}, std::size_t{4096}, std::size_t{4097}, std::size_t{12000}}) {
-      f.seekp(starts[bad]);  // its sync word
-      f.write("\x00\x00\x00\x00", 4);
-    }
-  }
-  fs::resize_file(path, static_cast<uintmax_t>(size - 3));  // the last event truncated
-  std::vector<eval::LogIssue> plain_issues, ahead_issues;
-  const auto plain = scanRecord<eval::LogScanner>(path, plain_issues);
-  const auto ahead = scanRecord<eval::ReadAheadScanner>(path, ahead_issues);
-  ASSERT_EQ(plain.size(), 20000u - 5u + 1u);  // four corrupt events and the truncated one lost
-  ASSERT_EQ(ahead.size(), plain.size());
-  for (std::size_t i = 0; i < plain.size(); ++i) ASSERT_EQ(ahead[i], plain[i]) << "event " << i;
-  ASSERT_EQ(plain_issues.size(), 4u);  // (4096 and 4097 are one stretch)
-  ASSERT_EQ(ahead_issues.size(), plain_issues.size());
-  for (std::size_t i = 0; i < plain_issues.size(); ++i) {
-    EXPECT_EQ(ahead_issues[i].describe(), plain_issues[i].describe());
-    EXPECT_EQ(ahead_issues[i].event_index, plain_issues[i].event_index);
-  }
-  EXPECT_NE(plain_issues.back().what.find("truncated"), std::string::npos) << plain_issues.back().what;
-}
-
-TEST_F(EvalTest, ReadAheadScannerStopsWhenLeftEarlyAndThrowsForAMissingFile) {
-  const std::string path = file("many.lcmlog");
-  {
-    lcm::LogFile log(path, "w");
-    const std::string payload(200, 'x');
-    for (int i = 0; i < 50000; ++i) {
-      lcm::LogEvent ev;
-      ev.eventnum = i;
-      ev.timestamp = i;
-      ev.channel = "ODOMETRY";
-      ev.datalen = static_cast<int32_t>(payload.size());
-      ev.data = const_cast<char*>(payload.data());
-      ASSERT_EQ(log.writeEvent(&ev), 0);
-    }
-  }
-  for (int taken : {0, 1, 5000}) {  // the reading thread is still reading, or waiting for a free block
-    eval::ReadAheadScanner s(path, nullptr);
-    for (int i = 0; i < taken; ++i) ASSERT_NE(s.next(), nullptr);
-    EXPECT_EQ(s.eventsRead(), taken);
-  }  // (destroyed with events left: must not hang)
-  EXPECT_THROW(eval::ReadAheadScanner(file("nope.lcmlog"), nullptr), std::runtime_error);
-  EXPECT_THROW(eval::ReadAheadScanner(dir_.string(), nullptr), std::runtime_error);
 }
 
 TEST(TruthAt, InterpolatesInsideAndRefusesFarOutside) {

@@ -4,15 +4,17 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <memory>
+#include <thread>
 
 #include <lcm/lcm-cpp.hpp>
 #include <spdlog/spdlog.h>
 
 #include "daemon/daemon.hpp"
 #include "lcmloc/core/text.hpp"
-#include "lcmloc/eval/read_ahead.hpp"
 #include "lcmloc/replay/log_bus.hpp"
+#include "handoff.hpp"
 
 namespace lcmloc::replay {
 
@@ -26,57 +28,255 @@ bool isDaemonOutput(const common::ChannelConfig& ch, const std::string& c) {
 
 namespace {
 
-/// Feeds every event of the scanner (LogScanner, or ReadAheadScanner: the same events) to the
-/// daemon over bus; fills in what the scanner and the daemon counted.
-template <typename Scanner>
-void replayEvents(Scanner& scanner, LogBus& bus, fusion::FusionDaemon& daemon, const common::SystemConfig& cfg,
-                  const ReplayOptions& opts, ReplayResult& r) {
-  using Clock = std::chrono::steady_clock;
-  const auto t0 = Clock::now();
-  r.file_size = scanner.fileSize();
-  auto next_progress = t0 + std::chrono::duration<double>(opts.progress_period_s);
-  std::size_t issues_reported = 0;
+/// A stretch of the input log as the reading side made it, for the applying side: one record
+/// per event, in file order, and one at the end (Record::end). What a record stands for, in this
+/// order: the damage met before it (`issues` of the block's issues), its copy (--with-inputs),
+/// what the daemon's intake made of it (`items` of the block's items, in order).
+struct Block {
+  struct Record {
+    int64_t position = 0, unreadable = 0;  ///< the scanner's, after reading the event (at the end)
+    uint32_t items = 0;
+    uint16_t issues = 0;
+    bool old_output = false, dispatched = false, copy = false;
+    bool end = false;  ///< the end of the log: no event
+  };
+  struct Copy {
+    std::size_t at;  ///< channel, then payload, in bytes
+    uint32_t channel_len, data_len;
+    int64_t timestamp;
+  };
+  /// A block is handed over once it holds this many records or bytes of copies: a thousand
+  /// messages or so, one hand-over (a lock, a wake-up) for all of them.
+  static constexpr std::size_t kRecords = 1024, kBytes = std::size_t{1} << 18;
+
+  std::vector<Record> records;
+  std::vector<eval::LogIssue> issues;
+  std::vector<Copy> copies;
+  std::vector<uint8_t> bytes;
+  /// The intake's items, items_used of them this time (the rest kept for their storage: the
+  /// intake fills a used item in place, strings and all, without allocating).
+  std::vector<fusion::IntakeItem> items;
+  std::size_t items_used = 0;
+  bool last = false;         ///< nothing after it
+  bool interrupted = false;  ///< (with last) ReplayOptions::stop asked
+  std::exception_ptr error;  ///< (with last) what stopped the reading side
+  void clear() {
+    records.clear();
+    issues.clear();
+    copies.clear();
+    bytes.clear();
+    items_used = 0;
+    last = interrupted = false;
+    error = nullptr;
+  }
+  bool full() const { return records.size() >= kRecords || bytes.size() >= kBytes; }
+  /// The item for the intake to fill next (of the last record).
+  fusion::IntakeItem& nextItem() {
+    ++records.back().items;
+    if (items_used == items.size()) items.emplace_back();
+    return items[items_used++];
+  }
+};
+
+/// The reading side: reads the log and hands each input event to the daemon's subscriptions on
+/// the bus; the daemon's intake makes items of them, which it diverts into the block being filled.
+class Reader {
+ public:
+  Reader(const std::string& path, const common::SystemConfig& cfg, const ReplayOptions& opts)
+      : scanner_(path, &issues_), cfg_(cfg), opts_(opts) {}
+  void attach(LogBus& bus, fusion::FusionDaemon& daemon) {
+    bus_ = &bus;
+    daemon.divert([this]() -> fusion::IntakeItem& { return block_->nextItem(); });
+  }
+  int64_t fileSize() const { return scanner_.fileSize(); }
+
+  /// Fills b (cleared) with the next events until it is full; false when the log (or the replay:
+  /// ReplayOptions::stop) ended there.
+  bool fill(Block& b) {
+    block_ = &b;
+    while (!b.full()) {
+      if ((scanner_.eventsRead() & 255) == 0 && opts_.stop && opts_.stop()) {  // (every 256 events)
+        b.interrupted = true;
+        return end(b);
+      }
+      const lcm::LogEvent* ev = scanner_.next();
+      if (!ev) return end(b);
+      b.records.push_back(record());
+      takeIssues(b);
+      if (last_channel_.empty() || !core::sameText(ev->channel, last_channel_)) {
+        last_channel_ = ev->channel;
+        last_is_output_ = isDaemonOutput(cfg_.channels, ev->channel);
+      }
+      if (last_is_output_) {
+        b.records.back().old_output = true;  // the recorded run's estimates: never fed back, never copied
+        continue;
+      }
+      if (opts_.with_inputs && ev->channel != cfg_.channels.heartbeat && ev->channel != "LCM_SELF_TEST") copy(b, *ev);
+      const bool dispatched =
+          bus_->dispatch(ev->channel, ev->data, static_cast<std::size_t>(ev->datalen), ev->timestamp) > 0;
+      b.records.back().dispatched = dispatched;
+    }
+    return true;
+  }
+
+ private:
+  Block::Record record() const {
+    Block::Record r;
+    r.position = scanner_.position();
+    r.unreadable = scanner_.bytesUnreadable();
+    return r;
+  }
+  bool end(Block& b) {
+    b.records.push_back(record());
+    b.records.back().end = true;
+    takeIssues(b);  // (damage at the end of the file)
+    b.last = true;
+    return false;
+  }
+  /// The damage the scanner met before the event just read (or before the end), to its record.
+  void takeIssues(Block& b) {
+    for (auto& is : issues_) b.issues.push_back(std::move(is));
+    b.records.back().issues = static_cast<uint16_t>(issues_.size());  // (one per damaged stretch: a few)
+    issues_.clear();
+  }
+  void copy(Block& b, const lcm::LogEvent& ev) {
+    const std::size_t at = b.bytes.size();
+    const auto* ch = reinterpret_cast<const uint8_t*>(ev.channel.data());
+    const auto* d = static_cast<const uint8_t*>(ev.data);
+    b.bytes.insert(b.bytes.end(), ch, ch + ev.channel.size());
+    b.bytes.insert(b.bytes.end(), d, d + ev.datalen);
+    b.copies.push_back({at, static_cast<uint32_t>(ev.channel.size()), static_cast<uint32_t>(ev.datalen), ev.timestamp});
+    b.records.back().copy = true;
+  }
+
+  std::vector<eval::LogIssue> issues_;  ///< the scanner's, until taken into a block
+  eval::LogScanner scanner_;
+  const common::SystemConfig& cfg_;
+  const ReplayOptions& opts_;
+  LogBus* bus_ = nullptr;
+  Block* block_ = nullptr;  ///< being filled
   // Whether the channel is one of the daemon's outputs, kept for the channel of the event before
   // (most events are on the same channel as the one before).
-  std::string last_channel;
-  bool last_is_output = false;
-  while (true) {
-    if ((scanner.eventsRead() & 255) == 0 && opts.stop && opts.stop()) {  // (every 256 events)
-      r.interrupted = true;
-      break;
-    }
-    if (!bus.writeError().empty()) break;  // the output cannot hold more
-    const lcm::LogEvent* ev = scanner.next();
-    for (; issues_reported < r.issues.size(); ++issues_reported) {
-      const auto& is = r.issues[issues_reported];
-      spdlog::warn("input log damaged: event {} at byte {}: {}", is.event_index, is.byte_offset, is.what);
-    }
-    if (!ev) break;
-    if (last_channel.empty() || !core::sameText(ev->channel, last_channel)) {
-      last_channel = ev->channel;
-      last_is_output = isDaemonOutput(cfg.channels, ev->channel);
-    }
-    if (last_is_output) {
-      ++r.old_outputs;  // the recorded run's estimates: never fed back, never copied
-      continue;
-    }
-    if (opts.with_inputs && ev->channel != cfg.channels.heartbeat && ev->channel != "LCM_SELF_TEST") {
-      bus.copy(ev->channel, ev->data, static_cast<std::size_t>(ev->datalen), ev->timestamp);
-      ++r.copied;
-    }
-    if (bus.dispatch(ev->channel, ev->data, static_cast<std::size_t>(ev->datalen), ev->timestamp) > 0)
-      ++r.dispatched;
-    if (opts.progress_period_s > 0 && (scanner.eventsRead() & 1023) == 0 && Clock::now() >= next_progress) {
-      next_progress = Clock::now() + std::chrono::duration<double>(opts.progress_period_s);
-      const double pct = r.file_size > 0 ? 100.0 * static_cast<double>(scanner.position()) / r.file_size : 100.0;
-      const double secs = std::chrono::duration<double>(Clock::now() - t0).count();
-      spdlog::info("{:5.1f} %: {} events read, {} used, {} written ({:.0f} events/s)", pct, scanner.eventsRead(),
-                   daemon.processed(), bus.written(), scanner.eventsRead() / std::max(secs, 1e-9));
-    }
+  std::string last_channel_;
+  bool last_is_output_ = false;
+};
+
+/// The applying side: the daemon's work after its intake, the copies, the damage reports and
+/// the counts, record by record, as the events were read.
+class Applier {
+ public:
+  Applier(LogBus& bus, fusion::FusionDaemon& daemon, const ReplayOptions& opts, ReplayResult& r)
+      : bus_(bus), daemon_(daemon), opts_(opts), r_(r) {
+    next_progress_ = t0_ + period();
   }
-  r.events_read = scanner.eventsRead();
-  r.bytes_unreadable = scanner.bytesUnreadable();
-  r.damaged = scanner.damaged();
+  /// Applies b; false when the replay ends with it (the end of the log, or the output failed).
+  bool apply(Block& b) {
+    std::size_t item = 0, issue = 0, copy = 0;
+    for (const Block::Record& rec : b.records) {
+      if (!bus_.writeError().empty()) return false;  // the output cannot hold more
+      r_.bytes_unreadable = rec.unreadable;
+      if (!rec.end) {
+        ++r_.events_read;
+        position_ = rec.position;
+        if (rec.old_output) ++r_.old_outputs;
+        if (rec.dispatched) ++r_.dispatched;
+        if (opts_.progress_period_s > 0 && (r_.events_read & 1023) == 0) progress();
+      }
+      for (const std::size_t n = issue + rec.issues; issue < n; ++issue) {
+        const eval::LogIssue& is = b.issues[issue];
+        spdlog::warn("input log damaged: event {} at byte {}: {}", is.event_index, is.byte_offset, is.what);
+        r_.issues.push_back(is);
+      }
+      if (rec.copy) {
+        const Block::Copy& c = b.copies[copy++];
+        const auto* p = b.bytes.data() + c.at;
+        channel_.assign(reinterpret_cast<const char*>(p), c.channel_len);
+        bus_.copy(channel_, p + c.channel_len, c.data_len, c.timestamp);
+        ++r_.copied;
+      }
+      for (const std::size_t n = item + rec.items; item < n; ++item) daemon_.apply(b.items[item]);
+    }
+    if (b.error) std::rethrow_exception(b.error);
+    if (b.interrupted) r_.interrupted = true;
+    return !b.last;
+  }
+
+ private:
+  std::chrono::steady_clock::duration period() const {
+    return std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+        std::chrono::duration<double>(opts_.progress_period_s));
+  }
+  void progress() {
+    using Clock = std::chrono::steady_clock;
+    if (Clock::now() < next_progress_) return;
+    next_progress_ = Clock::now() + period();
+    const double pct = r_.file_size > 0 ? 100.0 * static_cast<double>(position_) / r_.file_size : 100.0;
+    const double secs = std::chrono::duration<double>(Clock::now() - t0_).count();
+    spdlog::info("{:5.1f} %: {} events read, {} used, {} written ({:.0f} events/s)", pct, r_.events_read,
+                 daemon_.processed(), bus_.written(), r_.events_read / std::max(secs, 1e-9));
+  }
+
+  LogBus& bus_;
+  fusion::FusionDaemon& daemon_;
+  const ReplayOptions& opts_;
+  ReplayResult& r_;
+  const std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
+  std::chrono::steady_clock::time_point next_progress_;
+  int64_t position_ = 0;
+  std::string channel_;  ///< of the copy being written
+};
+
+/// Blocks in flight between the reading thread and the applying one: the reading side is at
+/// most this far ahead.
+constexpr int kBlocks = 4;
+
+/// Reads on a thread of its own while the caller applies: the two sides overlap on two cores.
+void replayThreaded(Reader& reader, Applier& applier) {
+  Handoff<Block> handoff(kBlocks);
+  std::thread thread([&] {
+    while (Block* b = handoff.acquire()) {
+      b->clear();
+      bool more = false;
+      try {
+        more = reader.fill(*b);
+      } catch (...) {  // (memory running out): the applying side rethrows it after what came before
+        b->error = std::current_exception();
+        b->last = true;
+      }
+      handoff.publish(b);
+      if (!more) return;
+    }
+  });
+  // The reading thread ends on its own after its last block, or when stopped.
+  struct Join {
+    Handoff<Block>& h;
+    std::thread& t;
+    ~Join() {
+      h.stop();
+      t.join();
+    }
+  } join{handoff, thread};
+  while (true) {
+    Block* b = handoff.take();
+    bool more = false;
+    try {
+      more = applier.apply(*b);
+    } catch (...) {
+      handoff.release(b);
+      throw;
+    }
+    handoff.release(b);
+    if (!more) return;
+  }
+}
+
+/// Both sides in the caller's thread, a block at a time.
+void replayInline(Reader& reader, Applier& applier) {
+  Block b;
+  do {
+    b.clear();
+    reader.fill(b);
+  } while (applier.apply(b));
 }
 
 }  // namespace
@@ -86,20 +286,19 @@ ReplayResult replayLog(const common::SystemConfig& cfg, const ReplayOptions& opt
   const auto t0 = Clock::now();
   ReplayResult r;
   if (!opts.output.empty()) common::refuseOutputOverInputs("--output", opts.output, {opts.input}, "input log");
-  std::unique_ptr<eval::ReadAheadScanner> ahead;
-  std::unique_ptr<eval::LogScanner> inline_scanner;
-  if (opts.read_ahead)
-    ahead = std::make_unique<eval::ReadAheadScanner>(opts.input, &r.issues);
-  else
-    inline_scanner = std::make_unique<eval::LogScanner>(opts.input, &r.issues);
+  Reader reader(opts.input, cfg, opts);
+  r.file_size = reader.fileSize();
   LogBus bus(opts.output);
   fusion::FusionDaemon daemon(cfg, bus);
-  if (ahead)
-    replayEvents(*ahead, bus, daemon, cfg, opts, r);
+  reader.attach(bus, daemon);
+  Applier applier(bus, daemon, opts, r);
+  if (opts.read_ahead)
+    replayThreaded(reader, applier);
   else
-    replayEvents(*inline_scanner, bus, daemon, cfg, opts, r);
+    replayInline(reader, applier);
   daemon.shutdown();
   bus.close();
+  r.damaged = r.bytes_unreadable > 0;
   r.messages_in = daemon.messagesIn();
   r.used = daemon.processed();
   r.rejected = daemon.rejected();
