@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -10,11 +11,22 @@
 
 namespace lcmloc::logger {
 namespace {
+// Big-endian stores (a byte swap and one store on a little-endian machine).
 void put32(uint8_t* p, uint32_t v) {
+#if __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  v = __builtin_bswap32(v);
+  std::memcpy(p, &v, sizeof v);
+#else
   for (int i = 3; i >= 0; --i, v >>= 8) p[i] = static_cast<uint8_t>(v & 0xff);
+#endif
 }
 void put64(uint8_t* p, uint64_t v) {
+#if __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  v = __builtin_bswap64(v);
+  std::memcpy(p, &v, sizeof v);
+#else
   for (int i = 7; i >= 0; --i, v >>= 8) p[i] = static_cast<uint8_t>(v & 0xff);
+#endif
 }
 }  // namespace
 
@@ -34,32 +46,31 @@ EventFile::EventFile(const std::string& path, std::size_t buffer_bytes)
   fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd_ < 0)
     throw std::runtime_error("cannot open log file '" + path + "' for writing: " + std::strerror(errno));
-  buf_.reserve(buffer_bytes_ + 65536);
+  buf_.resize(buffer_bytes_ + 65536);  // (the storage; used_ of it hold events)
 }
 
 EventFile::~EventFile() { close(); }
 
 int EventFile::append(int64_t utime, const std::string& channel, const void* data, std::size_t size) {
   if (fd_ < 0) return EBADF;
-  uint8_t header[28];
-  encodeEventHeader(header, events_, utime, static_cast<uint32_t>(channel.size()), static_cast<uint32_t>(size));
-  // (insert, not resize and copy: no zero fill of bytes about to be overwritten)
-  buf_.insert(buf_.end(), header, header + sizeof header);
-  const auto* ch = reinterpret_cast<const uint8_t*>(channel.data());
-  buf_.insert(buf_.end(), ch, ch + channel.size());
-  const auto* d = static_cast<const uint8_t*>(data);
-  if (size) buf_.insert(buf_.end(), d, d + size);
-  ends_.push_back(buf_.size());
+  const std::size_t n = 28 + channel.size() + size;
+  if (used_ + n > buf_.size()) buf_.resize(std::max(2 * buf_.size(), used_ + n));  // (an event beyond the buffer)
+  uint8_t* p = buf_.data() + used_;
+  encodeEventHeader(p, events_, utime, static_cast<uint32_t>(channel.size()), static_cast<uint32_t>(size));
+  std::memcpy(p + 28, channel.data(), channel.size());
+  if (size) std::memcpy(p + 28 + channel.size(), data, size);
+  used_ += n;
+  ends_.push_back(used_);
   ++events_;
-  if (buf_.size() >= buffer_bytes_) return writeOut();
+  if (used_ >= buffer_bytes_) return writeOut();
   return 0;
 }
 
 int EventFile::writeOut() {
   std::size_t done = 0;
   int err = 0;
-  while (done < buf_.size()) {
-    const ssize_t n = ::write(fd_, buf_.data() + done, buf_.size() - done);
+  while (done < used_) {
+    const ssize_t n = ::write(fd_, buf_.data() + done, used_ - done);
     if (n < 0) {
       if (errno == EINTR) continue;
       err = errno;
@@ -69,7 +80,7 @@ int EventFile::writeOut() {
     done += static_cast<std::size_t>(n);
   }
   if (err == 0) {
-    file_bytes_ += static_cast<int64_t>(buf_.size());
+    file_bytes_ += static_cast<int64_t>(used_);
     events_written_ += static_cast<int64_t>(ends_.size());
   } else {
     // Keep only whole events: cut the file back to the last event that was written entirely.
@@ -85,14 +96,14 @@ int EventFile::writeOut() {
     ::lseek(fd_, file_bytes_, SEEK_SET);
     events_ = events_written_;
   }
-  buf_.clear();
+  used_ = 0;
   ends_.clear();
   return err;
 }
 
 int EventFile::flush(bool sync) {
   if (fd_ < 0) return EBADF;
-  if (const int err = buf_.empty() ? 0 : writeOut()) return err;
+  if (const int err = used_ == 0 ? 0 : writeOut()) return err;
   if (sync && ::fsync(fd_) != 0) return errno;
   return 0;
 }

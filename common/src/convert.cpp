@@ -1,6 +1,8 @@
 // lcmtypes <-> core structs, with NaN/Inf and range validation on the way in.
 #include "lcmloc/common/convert.hpp"
 
+#include "lcmloc/core/text.hpp"
+
 #include <cmath>
 #include <cstdio>
 
@@ -175,16 +177,21 @@ void toLcm(const core::FilterState& s, const std::string& filter, int64_t seq, l
   m.state_names.resize(n);
   for (int i = 0; i < n; ++i) {
     if (i < static_cast<int>(s.names.size())) {
-      if (m.state_names[i] != s.names[i]) m.state_names[i] = s.names[i];
+      if (!core::sameText(m.state_names[i], s.names[i])) m.state_names[i] = s.names[i];
     } else {
       m.state_names[i] = "s" + std::to_string(i);
     }
   }
   m.covariance.resize(n);
+  const bool whole = s.P.rows() == n && s.P.cols() == n;
   for (int i = 0; i < n; ++i) {
     auto& row = m.covariance[i];
     row.resize(n);
-    for (int j = 0; j < n; ++j) row[j] = i < s.P.rows() && j < s.P.cols() ? s.P(i, j) : 0.0;
+    if (whole) {
+      for (int j = 0; j < n; ++j) row[j] = s.P(i, j);
+    } else {
+      for (int j = 0; j < n; ++j) row[j] = i < s.P.rows() && j < s.P.cols() ? s.P(i, j) : 0.0;
+    }
   }
 }
 

@@ -210,7 +210,7 @@ class DeadReckoningFilter final : public Filter {
     s.utime = utime_;
     s.x = x_;
     s.P = P_;
-    s.names = names_;
+    detail::setNames(s, names_);
     s.status = FilterStatus::DeadReckoning;
   }
   FilterStatus status() const override { return FilterStatus::DeadReckoning; }
@@ -304,7 +304,7 @@ class RulerUkf final : public Filter {
     s.utime = utime_;
     s.x = ukf_.x();
     s.P = ukf_.P();
-    s.names = names_;
+    detail::setNames(s, names_);
     s.status = book_.status;
   }
   FilterStatus status() const override { return book_.status; }

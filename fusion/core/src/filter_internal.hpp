@@ -24,6 +24,12 @@ std::unique_ptr<Filter> makeGnssFilter(const FilterConfig& cfg);
 /// The landmark/beacon filter ("ukf_landmarks") over the map; nullptr for another type.
 std::unique_ptr<Filter> makeLandmarkFilter(const FilterConfig& cfg, const MarkerMap& map);
 
+/// s.names = names, unless they are the same already (the engine fills one FilterState for
+/// every state it publishes: the names seldom change).
+inline void setNames(FilterState& s, const std::vector<std::string>& names) {
+  if (s.names != names) s.names = names;
+}
+
 /// Pose process noise of one odometry step (x, y, theta variances): Pw over pw_distance of
 /// travel plus pw_turn |dtheta| on the heading.
 Vec3 poseProcessNoise(const FilterConfig& c, double ds, double dtheta);

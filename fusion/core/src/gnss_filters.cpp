@@ -110,7 +110,7 @@ class GnssFilterBase : public Filter {
   void stateInto(FilterState& s) const override {
     s.utime = utime_;
     fillState(s.x, s.P);
-    s.names = names();
+    detail::setNames(s, names());
     s.status = status();
   }
 

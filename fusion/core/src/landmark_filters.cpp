@@ -42,7 +42,7 @@ class LandmarkUkf final : public Filter {
     s.utime = utime_;
     s.x = ukf_.x();
     s.P = ukf_.P();
-    s.names = names_;
+    detail::setNames(s, names_);
     s.status = book_.status;
   }
   void initialize(const FilterState& from) override {

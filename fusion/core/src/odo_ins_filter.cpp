@@ -88,7 +88,7 @@ class OdoInsAdapter : public Filter {
     J(3, ins::kKc) = J(3, ins::kKr) = 1.0;
     for (int k = 0; k < kExtra; ++k) J(4 + k, kExtraStates[k].index) = 1.0;
     out.P = J * kf_.covariance() * J.transpose();
-    out.names = names_;
+    detail::setNames(out, names_);
     out.status = status_;
   }
 

@@ -30,7 +30,7 @@ class EventFile {
 
   const std::string& path() const { return path_; }
   /// Bytes in the file plus bytes buffered.
-  int64_t size() const { return file_bytes_ + static_cast<int64_t>(buf_.size()); }
+  int64_t size() const { return file_bytes_ + static_cast<int64_t>(used_); }
   /// Events appended (buffered ones included) / events written to the kernel.
   int64_t events() const { return events_; }
   int64_t eventsWritten() const { return events_written_; }
@@ -43,7 +43,8 @@ class EventFile {
   std::string path_;
   int fd_ = -1;
   std::size_t buffer_bytes_;
-  std::vector<uint8_t> buf_;
+  std::vector<uint8_t> buf_;       ///< storage: the first used_ bytes are buffered events
+  std::size_t used_ = 0;
   std::vector<std::size_t> ends_;  ///< end of each buffered event within buf_
   int64_t file_bytes_ = 0, events_ = 0, events_written_ = 0;
 };
