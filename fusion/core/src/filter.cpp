@@ -94,6 +94,30 @@ void addToBatch(const FilterConfig& c, const OdometryInput& odo, OdometryBatch& 
   batch.add(odo.delta_s, dth, odo.utime, poseProcessNoise(c, odo.delta_s, dth));
 }
 
+/// The odometry increments a batching filter took since its last time update
+/// (Filter::accumulate), composed into an OdometryBatch when the update comes, in one loop: the
+/// work of a step that does not depend on the step before (eq. 2's tangent, the half-angle sine
+/// and cosine, the process noise) then overlaps with the steps around it, which it cannot while
+/// each step comes between the daemon's work for one message and the next. The same operations
+/// in the same order as composing each step when it comes: the same numbers.
+class PendingOdometry {
+ public:
+  void add(const OdometryInput& odo) { steps_.push_back(odo); }
+  bool empty() const { return steps_.empty(); }
+  void clear() { steps_.clear(); }
+  /// The batch of the waiting steps (non-finite ones skipped); forgets the steps.
+  const OdometryBatch& compose(const FilterConfig& c) {
+    batch_.clear();
+    for (const OdometryInput& odo : steps_) addToBatch(c, odo, batch_);
+    steps_.clear();
+    return batch_;
+  }
+
+ private:
+  std::vector<OdometryInput> steps_;
+  OdometryBatch batch_;
+};
+
 /// Initial state and covariance of a filter with these state names.
 void initialState(const FilterConfig& c, const std::vector<std::string>& names,
                   Eigen::VectorXd& x, Eigen::MatrixXd& P) {
@@ -222,26 +246,27 @@ class DeadReckoningFilter final : public Filter {
     x_ = x;
     P_ = P;
     utime_ = from.utime;
-    batch_.clear();
+    pending_.clear();
   }
   bool accumulate(const OdometryInput& odo) override {
-    addToBatch(cfg_, odo, batch_);
+    pending_.add(odo);
     return true;
   }
   /// The Jacobians of eq. 1 are I + [0 0 -dy_k; 0 0 dx_k; 0 0 0] (world displacement of step k):
   /// their product over the batch is the same form with the batch's world displacement, exact.
   void applyAccumulated() override {
-    if (batch_.empty()) return;
+    if (pending_.empty()) return;
+    const OdometryBatch& batch = pending_.compose(cfg_);
+    if (batch.empty()) return;
     const OdometryBatch::Heading h(x_.z());
     const double c = h.c, s = h.s;
     Mat3 F = Mat3::Identity();
-    F(0, 2) = -s * batch_.dx - c * batch_.dy;
-    F(1, 2) = c * batch_.dx - s * batch_.dy;
-    const Mat3 Q = batch_.noise(h);
-    x_ = batch_.apply(x_, h);
+    F(0, 2) = -s * batch.dx - c * batch.dy;
+    F(1, 2) = c * batch.dx - s * batch.dy;
+    const Mat3 Q = batch.noise(h);
+    x_ = batch.apply(x_, h);
     P_ = F * P_ * F.transpose() + Q;
-    utime_ = batch_.utime;
-    batch_.clear();
+    utime_ = batch.utime;
   }
   void predict(const OdometryInput& odo) override {
     if (!isFinite(odo)) return;
@@ -270,7 +295,7 @@ class DeadReckoningFilter final : public Filter {
   Vec3 x_;
   Mat3 P_;
   int64_t utime_ = 0;
-  OdometryBatch batch_;
+  PendingOdometry pending_;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -317,7 +342,7 @@ class RulerUkf final : public Filter {
     ukf_.reset(x, P);
     utime_ = from.utime;
     book_.reset();
-    batch_.clear();
+    pending_.clear();
   }
 
   /// Batching needs a process model that does not depend on the state: (x, y, theta) only.
@@ -325,15 +350,16 @@ class RulerUkf final : public Filter {
     if constexpr (N != 3) {
       return false;
     } else {
-      addToBatch(cfg_, odo, batch_);
+      pending_.add(odo);
       return true;
     }
   }
   /// One time update with the composed increment (the same mean as the steps one by one) and
   /// the process noise of the steps as the remaining steps carry it (linearised at the mean).
   void applyAccumulated() override {
-    if (batch_.empty()) return;
-    const OdometryBatch& b = batch_;
+    if (pending_.empty()) return;
+    const OdometryBatch& b = pending_.compose(cfg_);
+    if (b.empty()) return;
     const OdometryBatch::Heading mean(ukf_.x()(2));  // the sigma points' headings lie around it
     auto f = [&b, &mean](const typename U::Vector& s) {
       typename U::Vector out = s;
@@ -343,7 +369,6 @@ class RulerUkf final : public Filter {
     typename U::Matrix Q = U::Matrix::Zero();
     Q.template topLeftCorner<3, 3>() = b.noise(mean);
     if (ukf_.predict(f, Q)) utime_ = b.utime;
-    batch_.clear();
   }
 
   void predict(const OdometryInput& odo) override {
@@ -451,7 +476,7 @@ class RulerUkf final : public Filter {
   std::vector<std::string> names_;
   int64_t utime_ = 0;
   detail::GateBook book_;  ///< gate decisions and lock-out
-  OdometryBatch batch_;
+  PendingOdometry pending_;
 };
 
 }  // namespace
