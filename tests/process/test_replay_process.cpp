@@ -709,7 +709,12 @@ TEST_F(ReplayProcessTest, BenchStopsOnSigintAndChecksAKeptLog) {
     EXPECT_EQ(c.wait(60s).value_or(-1), 0) << c.output();
     return c.output();
   };
-  EXPECT_NE(bench("10", "b10.out").find("generated 1000 odometry"), std::string::npos);
+  const std::string first = bench("10", "b10.out");
+  EXPECT_NE(first.find("generated 1000 odometry"), std::string::npos) << first;
+  // The two-thread replay is measured against the one-thread one, and the aim judged on it.
+  EXPECT_NE(first.find("ukf_gated, output_every 10, one thread"), std::string::npos) << first;
+  EXPECT_NE(first.find("ukf_gated, output_every 10 / read+decode ="), std::string::npos) << first;
+  EXPECT_EQ(first.find("one thread / read+decode"), std::string::npos) << first;
   std::string out = bench("10", "b10again.out");
   EXPECT_EQ(out.find("generat"), std::string::npos) << out;  // kept: the same length
   out = bench("20", "b20.out");

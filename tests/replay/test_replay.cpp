@@ -422,6 +422,22 @@ TEST_F(ReplayTest, ReadingAheadOnAThreadGivesWhatReadingInLineGives) {
   EXPECT_NE(both(path("short.lcmlog"), path("short"), true, 0).find("read 50 "), std::string::npos);
   writeEvents(path("empty.lcmlog"), {});
   EXPECT_NE(both(path("empty.lcmlog"), path("empty"), false, 0).find("read 0 "), std::string::npos);
+
+  // lcmloc-replay --one-thread: the same output file and summary as the default.
+  std::string summary[2];
+  for (int one = 0; one < 2; ++one) {
+    std::vector<std::string> args{path("damaged.lcmlog"), "-o", path("exe" + std::to_string(one) + ".lcmlog"),
+                                  "--config", LCMLOC_PAPER_YAML, "--with-inputs"};
+    if (one) args.push_back("--one-thread");
+    Child exe(LCMLOC_REPLAY, args, path("exe" + std::to_string(one) + ".out"));
+    EXPECT_EQ(exe.wait(60s).value_or(-1), 3) << exe.output();  // (damaged)
+    const std::string out = exe.output();
+    const auto at = out.find("\nread ");  // the summary line
+    ASSERT_NE(at, std::string::npos) << out;
+    summary[one] = out.substr(at, out.find("; final filter", at) - at);
+  }
+  EXPECT_EQ(summary[1], summary[0]);
+  EXPECT_TRUE(slurp(path("exe0.lcmlog")) == slurp(path("exe1.lcmlog")));
 }
 
 TEST_F(ReplayTest, OutputOverTheInputIsRefusedAndTheInputKept) {

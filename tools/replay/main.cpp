@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
   common::CommonOptions opts;
   common::addCommonOptions(app, opts);
   std::string input, output, filter, shadow;
-  bool with_inputs = false, no_shadow = false, bench = false;
+  bool with_inputs = false, no_shadow = false, bench = false, one_thread = false;
   double progress = 2.0;
   replay::BenchOptions bo;
   app.add_option("log", input, "input LCM log file");
@@ -42,6 +42,9 @@ int main(int argc, char** argv) {
   app.add_flag("--no-shadow", no_shadow, "run no shadow filters")->excludes(o_shadow);
   app.add_flag("--with-inputs", with_inputs,
                "copy the input events to the output too (all but the old outputs, HEARTBEAT and LCM_SELF_TEST)");
+  app.add_flag("--one-thread", one_thread,
+               "read the log and apply it in one thread (by default a second thread reads, decodes and validates "
+               "ahead); the output is the same either way");
   app.add_option("--progress", progress, "[s, wall] between progress lines; 0 = none")->capture_default_str()->check(lcmloc::common::wallSeconds());
   app.add_flag("--bench", bench,
                "benchmark instead: generate a synthetic log, measure read+decode, dead_reckoning and ukf_gated "
@@ -92,6 +95,7 @@ int main(int argc, char** argv) {
     ro.output = output;
     ro.with_inputs = with_inputs;
     ro.progress_period_s = progress;
+    ro.read_ahead = !one_thread;
     ro.stop = [] { return common::stopRequested(); };
     const auto r = replay::replayLog(cfg, ro);
     std::cout << fmt::format("replayed {} ({}) with filter {} (shadow: {}) -> {}\n", input, bytes(r.file_size),

@@ -1,6 +1,7 @@
 #pragma once
 // Offline replay: reads an LCM log directly (eval::LogScanner, no network),
-// feeds every event through the fusion daemon's own code (fusion::FusionDaemon over a LogBus):
+// feeds every event through the fusion daemon's own code (fusion::FusionDaemon over a LogBus,
+// its intake on a reading thread and the rest on the caller's, ReplayOptions::read_ahead):
 // the sensor channels and the recorded FUSION_CONTROL commands, in canonical order by message
 // time (core::FusionEngine). The daemon's publications (POSE, POSE_<TYPE>, GATE, FUSION_STATUS)
 // are written to an output log, byte for byte as the daemon publishes them live.
@@ -23,8 +24,10 @@ struct ReplayOptions {
   /// heartbeats and LCM_SELF_TEST), so the output log is complete for lcmloc-eval.
   bool with_inputs = false;
   double progress_period_s = 2.0;  ///< [s, wall] between progress lines (<= 0: none)
-  /// Read the log on a thread of its own (eval::ReadAheadScanner), overlapping with the fusion
-  /// on a second core; false: in line (eval::LogScanner). The outputs are the same either way.
+  /// Two threads: one reads the log and runs the daemon's intake on each message (decoding,
+  /// validation, the sequence check: fusion::DaemonIntake), the other the rest of the daemon
+  /// (FusionDaemon::apply: the engine, the filters, the outputs), on the items in their order.
+  /// false: both in the caller's thread. The outputs and the result are the same either way.
   bool read_ahead = true;
   std::function<bool()> stop;      ///< polled every 256 events (and before the first): true ends the replay early
 };
