@@ -500,13 +500,13 @@ TEST(OdometryBatch, ComposedIncrementMovesAPoseAsTheStepsOneByOne) {
   EXPECT_EQ(b.utime, 49000);
   for (double a = -0.26; a <= 0.26; a += 0.0007) {  // the polynomial range and both sides of it
     double s, c;
-    OdometryBatch::sinCosSmall(a, s, c);
+    sinCosSmall(a, s, c);
     EXPECT_NEAR(s, std::sin(a), 1.2e-16) << a;
     EXPECT_NEAR(c, std::cos(a), 2.3e-16) << a;
   }
   // Near a heading by angle addition: within rounding of libm, exactly libm's at the heading.
   for (double theta : {-3.1, -1.0, 0.0, 0.5, 3.1}) {
-    const OdometryBatch::Heading h(theta);
+    const SinCosNear h(theta);
     for (double d = -0.3; d <= 0.3; d += 0.0011) {
       double s, c;
       h.sinCos(theta + d, s, c);

@@ -258,7 +258,7 @@ class DeadReckoningFilter final : public Filter {
     if (pending_.empty()) return;
     const OdometryBatch& batch = pending_.compose(cfg_);
     if (batch.empty()) return;
-    const OdometryBatch::Heading h(x_.z());
+    const SinCosNear h(x_.z());
     const double c = h.c, s = h.s;
     Mat3 F = Mat3::Identity();
     F(0, 2) = -s * batch.dx - c * batch.dy;
@@ -360,7 +360,7 @@ class RulerUkf final : public Filter {
     if (pending_.empty()) return;
     const OdometryBatch& b = pending_.compose(cfg_);
     if (b.empty()) return;
-    const OdometryBatch::Heading mean(ukf_.x()(2));  // the sigma points' headings lie around it
+    const SinCosNear mean(ukf_.x()(2));  // the sigma points' headings lie around it
     auto f = [&b, &mean](const typename U::Vector& s) {
       typename U::Vector out = s;
       out.template head<3>() = b.apply(s.template head<3>(), mean);
@@ -376,14 +376,15 @@ class RulerUkf final : public Filter {
     const double L = cfg_.wheelbase;
     // eq. 1-2; with N = 5 the increments are corrected by the calibration states.
     const double dth_meas = headingIncrement(odo, L);
-    auto f = [&odo, L, dth_meas](const typename U::Vector& s) {
+    const SinCosNear mid(ukf_.x()(2) + 0.5 * dth_meas);  // the sigma points' midpoint headings lie around it
+    auto f = [&odo, L, dth_meas, &mid](const typename U::Vector& s) {
       typename U::Vector out = s;
       double ds = odo.delta_s, dth = dth_meas;
       if constexpr (N == 5) {
         ds *= 1.0 + s[3];
         if (odo.has_steering) dth = headingIncrement(ds, odo.steering - s[4], L);
       }
-      out.template head<3>() = propagatePose(s.template head<3>(), ds, dth);
+      out.template head<3>() = propagatePose(s.template head<3>(), ds, dth, mid);
       return out;
     };
     typename U::Matrix Q = U::Matrix::Zero();

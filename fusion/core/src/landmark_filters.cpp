@@ -63,7 +63,8 @@ class LandmarkUkf final : public Filter {
     const double dth = headingIncrement(odo, cfg_.wheelbase);
     if (!std::isfinite(odo.delta_s) || !std::isfinite(dth)) return;
     const double ds = odo.delta_s;
-    auto f = [ds, dth](const U::Vector& s) -> U::Vector { return propagatePose(s, ds, dth); };
+    const SinCosNear mid(ukf_.x()(2) + 0.5 * dth);  // the sigma points' midpoint headings lie around it
+    auto f = [ds, dth, &mid](const U::Vector& s) -> U::Vector { return propagatePose(s, ds, dth, mid); };
     U::Matrix Q = U::Matrix::Zero();
     Q.diagonal() = detail::poseProcessNoise(cfg_, ds, dth);
     if (ukf_.predict(f, Q)) utime_ = odo.utime;

@@ -3,6 +3,7 @@
 // simulator's dead reckoning, every filter and the tests.
 #include <cmath>
 
+#include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/types.hpp"
 
 namespace lcmloc::core {
@@ -13,6 +14,13 @@ inline double headingIncrement(double ds, double psi, double wheelbase) { return
 /// eq. 1: pose after moving ds along an arc that turns dtheta (midpoint heading).
 /// Returned theta is wrapped to (-pi, pi].
 Pose propagatePose(const Pose& pose, double ds, double dtheta);
+/// The same with the midpoint heading's cosine and sine taken near `mid` (SinCosNear::sinCos):
+/// for the sigma points of a UKF, whose midpoint headings lie around the mean's.
+inline Pose propagatePose(const Pose& pose, double ds, double dtheta, const SinCosNear& mid) {
+  double s, c;
+  mid.sinCos(pose.z() + 0.5 * dtheta, s, c);
+  return Pose(pose.x() + ds * c, pose.y() + ds * s, wrapAngle(pose.z() + dtheta));
+}
 
 /// Heading increment of an odometry input: eq. 2 from steering when has_steering,
 /// otherwise delta_theta as given. (Inline: called once per odometry message per filter.)
