@@ -6,8 +6,10 @@
 #include <map>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include "lcmloc/core/channel_name.hpp"
 #include "lcmloc/core/engine.hpp"
 #include "lcmloc/core/filter.hpp"
 #include "lcmloc/core/odometry_batch.hpp"
@@ -823,4 +825,31 @@ TEST(Engine, InputsFarInThePastAreDroppedAsTooOldUnlessThreeInARowStartANewTimeB
   ASSERT_EQ(after.states.size(), clean.states.size() + 1);  // + the corrupt input's
   EXPECT_EQ(after.states.back().x, clean.states.back().x);
   EXPECT_EQ(after.states.back().P, clean.states.back().P);
+}
+
+TEST(ChannelNameTest, OneCopyPerNameWhereverAndOnWhicheverThreadItIsMade) {
+  const std::string odo = "ODOMETRY";
+  const ChannelName a(odo), b(std::string_view("ODOMETRY_AND_MORE").substr(0, 8)), c("MAGRULER");
+  EXPECT_TRUE(a == b);
+  EXPECT_EQ(&a.str(), &b.str());  // the same copy
+  EXPECT_FALSE(a == c);
+  EXPECT_TRUE(a != c);
+  EXPECT_TRUE(a == odo);
+  EXPECT_TRUE(c == "MAGRULER");
+  EXPECT_TRUE(c < a);  // by the names, not by where they are stored
+  EXPECT_FALSE(a < c);
+  EXPECT_EQ(a + " seq 3", "ODOMETRY seq 3");
+  EXPECT_EQ("on " + c, "on MAGRULER");
+  EXPECT_TRUE(ChannelName().empty());
+  EXPECT_TRUE(ChannelName() == ChannelName(""));
+  // Made at once on several threads, a new name is still stored once.
+  std::vector<const std::string*> seen(8);
+  std::vector<std::thread> threads;
+  for (std::size_t i = 0; i < seen.size(); ++i)
+    threads.emplace_back([&seen, i] {
+      for (int k = 0; k < 1000; ++k) seen[i] = &ChannelName("CHANNEL_" + std::to_string(k)).str();
+    });
+  for (auto& t : threads) t.join();
+  for (const std::string* p : seen) EXPECT_EQ(p, &ChannelName("CHANNEL_999").str());
+  EXPECT_EQ(*seen[0], "CHANNEL_999");
 }

@@ -21,38 +21,13 @@ class Handoff {
   }
 
   /// Producer: a free block (waits for one); nullptr once stop() was called.
-  Block* acquire() {
-    std::unique_lock<std::mutex> lock(mutex_);
-    cv_.wait(lock, [this] { return stopped_ || !free_.empty(); });
-    if (stopped_) return nullptr;
-    Block* b = free_.front();
-    free_.pop_front();
-    return b;
-  }
+  Block* acquire() { return pop(free_, true); }
   /// Producer: b, filled, to the consumer.
-  void publish(Block* b) {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      full_.push_back(b);
-    }
-    cv_.notify_all();
-  }
+  void publish(Block* b) { push(full_, b); }
   /// Consumer: the next full block, in the order published (waits for it).
-  Block* take() {
-    std::unique_lock<std::mutex> lock(mutex_);
-    cv_.wait(lock, [this] { return !full_.empty(); });
-    Block* b = full_.front();
-    full_.pop_front();
-    return b;
-  }
+  Block* take() { return pop(full_, false); }
   /// Consumer: b back to the producer.
-  void release(Block* b) {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      free_.push_back(b);
-    }
-    cv_.notify_all();
-  }
+  void release(Block* b) { push(free_, b); }
   /// The consumer takes no more: a producer waiting for a free block (or asking for the next)
   /// gets nullptr.
   void stop() {
@@ -64,6 +39,23 @@ class Handoff {
   }
 
  private:
+  /// The first block of q, waiting for one; nullptr if `stoppable` and stop() was called.
+  Block* pop(std::deque<Block*>& q, bool stoppable) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    cv_.wait(lock, [&] { return (stoppable && stopped_) || !q.empty(); });
+    if (stoppable && stopped_) return nullptr;
+    Block* b = q.front();
+    q.pop_front();
+    return b;
+  }
+  void push(std::deque<Block*>& q, Block* b) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      q.push_back(b);
+    }
+    cv_.notify_all();
+  }
+
   std::vector<std::unique_ptr<Block>> blocks_;
   std::mutex mutex_;
   std::condition_variable cv_;
