@@ -3,6 +3,7 @@
 
 #include "lcmloc/core/text.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -183,15 +184,13 @@ void toLcm(const core::FilterState& s, const std::string& filter, int64_t seq, l
     }
   }
   m.covariance.resize(n);
-  const bool whole = s.P.rows() == n && s.P.cols() == n;
   for (int i = 0; i < n; ++i) {
     auto& row = m.covariance[i];
     row.resize(n);
-    if (whole) {
-      for (int j = 0; j < n; ++j) row[j] = s.P(i, j);
-    } else {
-      for (int j = 0; j < n; ++j) row[j] = i < s.P.rows() && j < s.P.cols() ? s.P(i, j) : 0.0;
-    }
+    // P's part of the row, zeros beyond it (a P smaller than x)
+    const int known = i < s.P.rows() ? std::min(n, static_cast<int>(s.P.cols())) : 0;
+    for (int j = 0; j < known; ++j) row[j] = s.P(i, j);
+    std::fill(row.begin() + known, row.end(), 0.0);
   }
 }
 

@@ -147,21 +147,24 @@ class FusionDaemon {
 
  private:
   /// Messages of type T on channel through the intake's `take` (and undecodable ones through
-  /// its decodeError), then deliver().
+  /// its decodeError), then intakeOne().
   template <typename T>
   void subscribe(const std::string& channel, void (DaemonIntake::*take)(const std::string&, const T&, IntakeItem&)) {
     bus_.subscribe<T>(
         channel,
         [this, take](const std::string& c, const T& m, int64_t) {
-          IntakeItem& item = slot_ ? slot_() : item_;
-          (intake_.*take)(c, m, item);
-          if (!slot_) apply(item);
+          intakeOne([&](IntakeItem& item) { (intake_.*take)(c, m, item); });
         },
         [this](const std::string& c, const std::string& why) {
-          IntakeItem& item = slot_ ? slot_() : item_;
-          intake_.decodeError(c, why, item);
-          if (!slot_) apply(item);
+          intakeOne([&](IntakeItem& item) { intake_.decodeError(c, why, item); });
         });
+  }
+  /// fill(item) into the item divert() gives, or into item_ and apply() it at once.
+  template <typename Fill>
+  void intakeOne(Fill&& fill) {
+    IntakeItem& item = slot_ ? slot_() : item_;
+    fill(item);
+    if (!slot_) apply(item);
   }
   /// What the sequence tracker found about a message (a gap, a restart, an ignored seq):
   /// counted, a warning and a status event.

@@ -222,6 +222,29 @@ TEST(DeadReckoning, Eq1AndLinearisedCovariance) {
   EXPECT_LT((f->state().x - truth).norm(), 1e-12);
 }
 
+TEST(Batching, ALongBatchMovesTheMeanAsTheStepsOneByOne) {
+  // 150 steps in one batch (more than are held before they are composed: folded on the way)
+  // with a non-finite one among them (skipped, as predict() skips it).
+  for (const std::string type : {"dead_reckoning", "ukf_gated"}) {
+    FilterConfig c = config(type);
+    c.p0_diag = c.pw_diag = Vec3(1e-12, 1e-12, 1e-12);  // the UKF's mean then follows eq. 1-2 too
+    auto batched = makeFilter(c, {});
+    Pose truth = batched->state().x;
+    for (int k = 0; k < 150; ++k) {
+      const double ds = k == 77 ? std::numeric_limits<double>::quiet_NaN() : 0.1;
+      ASSERT_TRUE(batched->accumulate(odometry(1000 * (k + 1), ds, 0.2))) << type;
+      if (k != 77) truth = propagatePose(truth, 0.1, headingIncrement(0.1, 0.2, 2.5));
+    }
+    batched->applyAccumulated();
+    const FilterState s = batched->state();
+    EXPECT_EQ(s.utime, 150000) << type;
+    EXPECT_LT((s.x.head<3>() - truth).norm(), 1e-9) << type;
+    batched->applyAccumulated();  // nothing waiting: nothing changes
+    EXPECT_EQ(batched->state().x, s.x) << type;
+    EXPECT_EQ(batched->state().P, s.P) << type;
+  }
+}
+
 TEST(ProcessNoise, ScaledByDistanceOrPerStep) {
   auto f = makeFilter(config("ukf_gated"), {});
   f->predict(odometry(1, 0.0));

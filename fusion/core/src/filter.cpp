@@ -95,25 +95,39 @@ void addToBatch(const FilterConfig& c, const OdometryInput& odo, OdometryBatch& 
 }
 
 /// The odometry increments a batching filter took since its last time update
-/// (Filter::accumulate), composed into an OdometryBatch when the update comes, in one loop: the
-/// work of a step that does not depend on the step before (eq. 2's tangent, the half-angle sine
-/// and cosine, the process noise) then overlaps with the steps around it, which it cannot while
-/// each step comes between the daemon's work for one message and the next. The same operations
-/// in the same order as composing each step when it comes: the same numbers.
+/// (Filter::accumulate), composed into an OdometryBatch in one loop: when the update comes, or
+/// every kFold steps (so that a long batch, fusion.output_every up to a million, holds no more
+/// than kFold steps). The work of a step that does not depend on the step before (eq. 2's
+/// tangent, the half-angle sine and cosine, the process noise) then overlaps with the steps
+/// around it, which it cannot while each step comes between the daemon's work for one message
+/// and the next. The same operations in the same order as composing each step when it comes:
+/// the same numbers.
 class PendingOdometry {
  public:
-  void add(const OdometryInput& odo) { steps_.push_back(odo); }
-  bool empty() const { return steps_.empty(); }
-  void clear() { steps_.clear(); }
-  /// The batch of the waiting steps (non-finite ones skipped); forgets the steps.
-  const OdometryBatch& compose(const FilterConfig& c) {
-    batch_.clear();
-    for (const OdometryInput& odo : steps_) addToBatch(c, odo, batch_);
+  void add(const FilterConfig& c, const OdometryInput& odo) {
+    steps_.push_back(odo);
+    if (steps_.size() == kFold) fold(c);
+  }
+  bool empty() const { return steps_.empty() && batch_.empty(); }
+  void clear() {
     steps_.clear();
-    return batch_;
+    batch_.clear();
+  }
+  /// The batch of the steps since the last one (non-finite ones skipped); the next add starts
+  /// a new batch.
+  OdometryBatch compose(const FilterConfig& c) {
+    fold(c);
+    OdometryBatch b = batch_;
+    batch_.clear();
+    return b;
   }
 
  private:
+  static constexpr std::size_t kFold = 64;
+  void fold(const FilterConfig& c) {
+    for (const OdometryInput& odo : steps_) addToBatch(c, odo, batch_);
+    steps_.clear();
+  }
   std::vector<OdometryInput> steps_;
   OdometryBatch batch_;
 };
@@ -249,14 +263,14 @@ class DeadReckoningFilter final : public Filter {
     pending_.clear();
   }
   bool accumulate(const OdometryInput& odo) override {
-    pending_.add(odo);
+    pending_.add(cfg_, odo);
     return true;
   }
   /// The Jacobians of eq. 1 are I + [0 0 -dy_k; 0 0 dx_k; 0 0 0] (world displacement of step k):
   /// their product over the batch is the same form with the batch's world displacement, exact.
   void applyAccumulated() override {
     if (pending_.empty()) return;
-    const OdometryBatch& batch = pending_.compose(cfg_);
+    const OdometryBatch batch = pending_.compose(cfg_);
     if (batch.empty()) return;
     const SinCosNear h(x_.z());
     const double c = h.c, s = h.s;
@@ -350,7 +364,7 @@ class RulerUkf final : public Filter {
     if constexpr (N != 3) {
       return false;
     } else {
-      pending_.add(odo);
+      pending_.add(cfg_, odo);
       return true;
     }
   }
@@ -358,7 +372,7 @@ class RulerUkf final : public Filter {
   /// the process noise of the steps as the remaining steps carry it (linearised at the mean).
   void applyAccumulated() override {
     if (pending_.empty()) return;
-    const OdometryBatch& b = pending_.compose(cfg_);
+    const OdometryBatch b = pending_.compose(cfg_);
     if (b.empty()) return;
     const SinCosNear mean(ukf_.x()(2));  // the sigma points' headings lie around it
     auto f = [&b, &mean](const typename U::Vector& s) {

@@ -67,8 +67,7 @@ struct OdometryBatch {
     return Pose(pose.x() + c * dx - s * dy, pose.y() + s * dx + c * dy, wrapAngle(pose.z() + dtheta));
   }
 
-  /// Process noise of the whole batch for a batch starting at heading theta0 (world frame).
-  Mat3 noise(double theta0) const { return noise(SinCosNear(theta0)); }
+  /// Process noise of the whole batch for a batch starting at heading h0.theta (world frame).
   Mat3 noise(const SinCosNear& h0) const {
     const Vec2 d(dx, dy);
     const double s0 = q_sum.z();
