@@ -1,6 +1,7 @@
 #include "lcmloc/logger/event_file.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -43,6 +44,12 @@ EventFile::EventFile(const std::string& path, std::size_t buffer_bytes)
   const auto parent = std::filesystem::path(path).parent_path();
   std::error_code ec;
   if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+  // A file truncated on open is written out to disk when it is closed (ext4's auto_da_alloc: a
+  // forced flush of the whole file, tens of ms for tens of MB), a new one when the kernel sees fit:
+  // an existing regular file with no other name is replaced by a new one. A symlink, a file with
+  // other hard links, or one whose directory forbids the unlink is truncated in place, as before.
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode) && st.st_nlink == 1) ::unlink(path.c_str());
   fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd_ < 0)
     throw std::runtime_error("cannot open log file '" + path + "' for writing: " + std::strerror(errno));

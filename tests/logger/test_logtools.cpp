@@ -2,6 +2,7 @@
 // lcm-logger uses) and with our EventFile; damaged logs; the file-name pattern.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -637,6 +638,52 @@ TEST(EventFile, WritesTheStandardFormatThatLcmReads) {
   }
   EXPECT_EQ(i, 10);
   fs::remove(file);
+}
+
+// An existing file is replaced by a new one (a new inode: nothing of the old file's pages to flush
+// when the new one is closed), unless other names would lose it: a hard link keeps seeing the
+// file, a symlink is written through.
+TEST(EventFile, ReplacesAnOldFileButWritesThroughLinks) {
+  const auto dir = fs::temp_directory_path() / ("lcmloc_eventfile_replace_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  auto inode = [](const fs::path& p) {
+    struct stat st {};
+    EXPECT_EQ(::lstat(p.c_str(), &st), 0) << p;
+    return st.st_ino;
+  };
+  auto content = [](const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  auto writeLog = [](const fs::path& p) {
+    lcmloc::logger::EventFile f(p.string());
+    const uint8_t d[3] = {1, 2, 3};
+    ASSERT_EQ(f.append(5, "CH", d, sizeof d), 0);
+    ASSERT_EQ(f.close(false), 0);
+  };
+  const std::string old(1000, 'x');
+  const fs::path plain = dir / "plain.lcmlog", linked = dir / "linked.lcmlog", other = dir / "other_name.lcmlog",
+                 target = dir / "target.lcmlog", sym = dir / "sym.lcmlog";
+  for (const auto& p : {plain, linked, target}) std::ofstream(p) << old;
+  fs::create_hard_link(linked, other);
+  fs::create_symlink(target, sym);
+  const auto linked_before = inode(linked), target_before = inode(target);
+  std::ifstream held(plain, std::ios::binary);  // (the old file, open: it lives on while held)
+
+  writeLog(plain);
+  writeLog(linked);
+  writeLog(sym);
+  const std::string expected = content(plain);
+  EXPECT_EQ(expected.size(), 28u + 2u + 3u) << "one event, nothing of the old content";
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(held), {}), old)
+      << "a file of one name is replaced by a new one, not overwritten";
+  EXPECT_EQ(inode(linked), linked_before) << "a file of two names is truncated in place";
+  EXPECT_EQ(content(other), expected) << "the other name sees the new log";
+  EXPECT_TRUE(fs::is_symlink(sym));
+  EXPECT_EQ(inode(target), target_before);
+  EXPECT_EQ(content(target), expected) << "written through the symlink";
+  fs::remove_all(dir);
 }
 
 TEST(FileName, ExpandsStrftimeAndIndexAndNeverReusesATakenName) {

@@ -14,7 +14,9 @@ namespace lcmloc::logger {
 
 class EventFile {
  public:
-  /// Creates (truncates) path, making parent directories; throws std::runtime_error.
+  /// Creates path, making parent directories; throws std::runtime_error. An existing regular
+  /// file there with no other hard link is replaced by a new file (unlinked, then created); a
+  /// symlink, a file with other links, or one that cannot be unlinked is truncated in place.
   explicit EventFile(const std::string& path, std::size_t buffer_bytes = 1 << 20);
   ~EventFile();
   EventFile(const EventFile&) = delete;
