@@ -148,6 +148,10 @@ int runBench(const common::SystemConfig& base, const BenchOptions& opts) {
     bool file = true;
     bool one_thread = false;  ///< ReplayOptions::read_ahead off (the live daemon's: all in one thread)
     std::vector<double> wall, cpu;  ///< messages per wall / CPU second, one per repetition
+    /// wall, cpu over those of the read + decode measured just before it (side by side: the
+    /// shared machine's load changes within a repetition).
+    std::vector<double> wall_ratio, cpu_ratio;
+    std::vector<double> reading_ns, applying_ns;  ///< CPU per message of each side [ns]
     ReplayResult last;
   };
   std::vector<Case> cases;
@@ -178,14 +182,18 @@ int runBench(const common::SystemConfig& base, const BenchOptions& opts) {
   }
   std::vector<double> rate_read, cpu_read;
   int64_t events = 0, decoded = 0;
-  for (int rep = 0; rep < opts.repetitions && !common::stopRequested(); ++rep) {
-    auto t0 = Clock::now();
-    double c0 = cpuSeconds();
+  auto readOnce = [&] {
+    const auto t0 = Clock::now();
+    const double c0 = cpuSeconds();
     events = readAndDecode(log, cfg.channels, &decoded);
     rate_read.push_back(events / std::chrono::duration<double>(Clock::now() - t0).count());
     cpu_read.push_back(events / (cpuSeconds() - c0));
-    std::string line = fmt::format("repetition {}: read+decode {:.0f}/s", rep + 1, rate_read.back());
+  };
+  int reps_done = 0;
+  for (int rep = 0; rep < opts.repetitions && !common::stopRequested(); ++rep) {
+    std::string line = fmt::format("repetition {}:", rep + 1);
     for (Case& k : cases) {
+      readOnce();  // the baseline next to each case
       common::SystemConfig c = cfg;
       c.fusion.filter.type = k.filter;
       c.fusion.output_every = k.output_every;
@@ -194,41 +202,55 @@ int runBench(const common::SystemConfig& base, const BenchOptions& opts) {
       if (k.file) ro.output = out;  // otherwise the outputs are encoded but not written
       ro.progress_period_s = 0;
       ro.read_ahead = !k.one_thread;
-      c0 = cpuSeconds();
+      const double c0 = cpuSeconds();
       const ReplayResult r = replayLog(c, ro);
       k.wall.push_back(r.events_read / r.seconds);
       k.cpu.push_back(r.events_read / (cpuSeconds() - c0));
+      k.reading_ns.push_back(1e9 * r.reading_cpu_s / static_cast<double>(r.events_read));
+      k.applying_ns.push_back(1e9 * r.applying_cpu_s / static_cast<double>(r.events_read));
+      k.wall_ratio.push_back(k.wall.back() / rate_read.back());
+      k.cpu_ratio.push_back(k.cpu.back() / cpu_read.back());
       k.last = r;
-      line += fmt::format(", {} {:.0f}/s", k.label, k.wall.back());
+      // Each case writes a new output file (what a replay into a new path costs), not one in
+      // place of the case's before: removing that one is not the replay's work.
+      std::error_code ec;
+      fs::remove(out, ec);
+      line += fmt::format(" read+decode {:.0f}/s, {} {:.0f}/s ({:.2f});", rate_read.back(), k.label, k.wall.back(),
+                          k.wall_ratio.back());
     }
     spdlog::info("{}", line);
+    ++reps_done;
   }
-  if (rate_read.empty()) return common::kExitRuntimeError;
+  if (reps_done == 0) return common::kExitRuntimeError;
   const double m_read = median(rate_read), c_read = median(cpu_read);
   std::string table = fmt::format("{:<40}{:>14}{:>10}{:>16}{:>10}{:>11}\n", "what", "messages/s", "ratio",
                                   "msgs/CPU-s", "ratio", "written");
   table += fmt::format("{:<40}{:>14.0f}{:>10.2f}{:>16.0f}{:>10.2f}{:>11}\n", "read+decode", m_read, 1.0, c_read, 1.0, "");
   nlohmann::json j;
   j["log"] = {{"events", events}, {"decoded", decoded}, {"duration_s", opts.duration_s}, {"path", log}};
-  j["repetitions"] = rate_read.size();
+  j["repetitions"] = reps_done;
   j["read_decode"] = {{"median_msgs_per_s", m_read}, {"runs", rate_read},
                       {"median_msgs_per_cpu_s", c_read}, {"cpu_runs", cpu_read}};
   std::string verdict;
+  std::string sides = fmt::format("CPU per message [ns], medians:\n{:<40}{:>10}{:>10}\n{:<40}{:>10.0f}\n", "what",
+                                  "reading", "applying", "read+decode", 1e9 / c_read);
   for (const Case& k : cases) {
-    const double w = median(k.wall), c = median(k.cpu);
-    table += fmt::format("{:<40}{:>14.0f}{:>10.2f}{:>16.0f}{:>10.2f}{:>11}\n", k.label, w, w / m_read, c, c / c_read,
-                         k.last.written);
+    const double w = median(k.wall), c = median(k.cpu), wr = median(k.wall_ratio), cr = median(k.cpu_ratio);
+    table += fmt::format("{:<40}{:>14.0f}{:>10.2f}{:>16.0f}{:>10.2f}{:>11}\n", k.label, w, wr, c, cr, k.last.written);
     j[k.key] = {{"filter", k.filter}, {"output_every", k.output_every}, {"output_file", k.file},
-                {"one_thread", k.one_thread}, {"median_msgs_per_s", w}, {"runs", k.wall}, {"ratio_to_read", w / m_read},
-                {"median_msgs_per_cpu_s", c}, {"cpu_runs", k.cpu}, {"cpu_ratio_to_read", c / c_read},
-                {"used", k.last.used}, {"written", k.last.written}};
+                {"one_thread", k.one_thread}, {"median_msgs_per_s", w}, {"runs", k.wall},
+                {"ratio_to_read", wr}, {"ratio_runs", k.wall_ratio}, {"median_msgs_per_cpu_s", c}, {"cpu_runs", k.cpu},
+                {"cpu_ratio_to_read", cr}, {"cpu_ratio_runs", k.cpu_ratio}, {"used", k.last.used},
+                {"written", k.last.written}, {"median_reading_cpu_ns_per_msg", median(k.reading_ns)},
+                {"median_applying_cpu_ns_per_msg", median(k.applying_ns)}};
+    sides += fmt::format("{:<40}{:>10.0f}{:>10.0f}\n", k.label, median(k.reading_ns), median(k.applying_ns));
     if (k.filter == "ukf_gated" && k.file && !k.one_thread)
-      verdict += fmt::format("{} / read+decode = {:.2f} (per CPU second {:.2f}): aim (>= 0.5) {}\n", k.label,
-                             w / m_read, c / c_read, w / m_read >= 0.5 ? "met" : "not met");
+      verdict += fmt::format("{} / read+decode = {:.2f} (per CPU second {:.2f}): aim (>= 0.5) {}\n", k.label, wr, cr,
+                             wr >= 0.5 ? "met" : "not met");
   }
   std::cout << fmt::format(
-      "synthetic log: {} events ({} decoded sensor messages), {:.0f} s of message time, {} repetitions\n{}{}",
-      events, decoded, opts.duration_s, rate_read.size(), table, verdict);
+      "synthetic log: {} events ({} decoded sensor messages), {:.0f} s of message time, {} repetitions\n{}{}{}",
+      events, decoded, opts.duration_s, reps_done, table, sides, verdict);
   const std::string report = (fs::path(opts.dir) / "bench.json").string();
   eval::writeJson(j, report);
   std::cout << "report: " << report << "\n";

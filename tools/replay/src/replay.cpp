@@ -8,6 +8,8 @@
 #include <memory>
 #include <thread>
 
+#include <time.h>
+
 #include <lcm/lcm-cpp.hpp>
 #include <spdlog/spdlog.h>
 
@@ -32,7 +34,7 @@ namespace {
 /// per event, in file order, and one at the end (Record::end). What a record stands for, in this
 /// order: the damage met before it (`issues` of the block's issues), its copy (--with-inputs),
 /// what the daemon's intake made of it (`items` of the block's items, in order).
-struct Block {
+struct alignas(fusion::kLinePair) Block {
   struct Record {
     int64_t position = 0, unreadable = 0;  ///< the scanner's, after reading the event (at the end)
     uint32_t items = 0;
@@ -230,14 +232,36 @@ class Applier {
 /// most this far ahead.
 constexpr int kBlocks = 4;
 
+/// CPU time of the calling thread [s].
+double threadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+/// Adds the calling thread's CPU time from construction to destruction to `sum`.
+class CpuTimer {
+ public:
+  explicit CpuTimer(double& sum) : sum_(sum), t0_(threadCpuSeconds()) {}
+  ~CpuTimer() { sum_ += threadCpuSeconds() - t0_; }
+  CpuTimer(const CpuTimer&) = delete;
+  CpuTimer& operator=(const CpuTimer&) = delete;
+
+ private:
+  double& sum_;
+  double t0_;
+};
+
 /// Reads on a thread of its own while the caller applies: the two sides overlap on two cores.
-void replayThreaded(Reader& reader, Applier& applier) {
+void replayThreaded(Reader& reader, Applier& applier, ReplayResult& r) {
   Handoff<Block> handoff(kBlocks);
+  double reading_cpu_s = 0;  // (the thread's own until it ended: r is the applying side's)
   std::thread thread([&] {
     while (Block* b = handoff.acquire()) {
       b->clear();
       bool more = false;
       try {
+        const CpuTimer t(reading_cpu_s);
         more = reader.fill(*b);
       } catch (...) {  // (memory running out): the applying side rethrows it after what came before
         b->error = std::current_exception();
@@ -251,15 +275,19 @@ void replayThreaded(Reader& reader, Applier& applier) {
   struct Join {
     Handoff<Block>& h;
     std::thread& t;
+    double& from;
+    double& to;
     ~Join() {
       h.stop();
       t.join();
+      to += from;
     }
-  } join{handoff, thread};
+  } join{handoff, thread, reading_cpu_s, r.reading_cpu_s};
   while (true) {
     Block* b = handoff.take();
     bool more = false;
     try {
+      const CpuTimer t(r.applying_cpu_s);
       more = applier.apply(*b);
     } catch (...) {
       handoff.release(b);
@@ -271,12 +299,17 @@ void replayThreaded(Reader& reader, Applier& applier) {
 }
 
 /// Both sides in the caller's thread, a block at a time.
-void replayInline(Reader& reader, Applier& applier) {
+void replayInline(Reader& reader, Applier& applier, ReplayResult& r) {
   Block b;
-  do {
+  while (true) {
     b.clear();
-    reader.fill(b);
-  } while (applier.apply(b));
+    {
+      const CpuTimer t(r.reading_cpu_s);
+      reader.fill(b);
+    }
+    const CpuTimer t(r.applying_cpu_s);
+    if (!applier.apply(b)) return;
+  }
 }
 
 }  // namespace
@@ -284,18 +317,21 @@ void replayInline(Reader& reader, Applier& applier) {
 ReplayResult replayLog(const common::SystemConfig& cfg, const ReplayOptions& opts) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
-  ReplayResult r;
+  // Each on cache lines of its own (fusion::kLinePair): the reader is the reading thread's, the
+  // result and the applier the applying thread's, and the bus and the daemon keep their two
+  // threads' parts apart inside.
+  alignas(fusion::kLinePair) ReplayResult r;
   if (!opts.output.empty()) common::refuseOutputOverInputs("--output", opts.output, {opts.input}, "input log");
-  Reader reader(opts.input, cfg, opts);
+  alignas(fusion::kLinePair) Reader reader(opts.input, cfg, opts);
   r.file_size = reader.fileSize();
-  LogBus bus(opts.output);
-  fusion::FusionDaemon daemon(cfg, bus);
+  alignas(fusion::kLinePair) LogBus bus(opts.output);
+  alignas(fusion::kLinePair) fusion::FusionDaemon daemon(cfg, bus);
   reader.attach(bus, daemon);
-  Applier applier(bus, daemon, opts, r);
+  alignas(fusion::kLinePair) Applier applier(bus, daemon, opts, r);
   if (opts.read_ahead)
-    replayThreaded(reader, applier);
+    replayThreaded(reader, applier, r);
   else
-    replayInline(reader, applier);
+    replayInline(reader, applier, r);
   daemon.shutdown();
   bus.close();
   r.damaged = r.bytes_unreadable > 0;

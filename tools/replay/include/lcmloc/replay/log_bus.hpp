@@ -61,7 +61,9 @@ class LogBus : public common::MessageBus {
   /// The last route_ entry looked up (most events are on the channel of the event before).
   const std::string* last_channel_ = nullptr;
   const std::vector<std::size_t>* last_route_ = nullptr;
-  std::unique_ptr<class LogWriter> writer_;
+  // The above is read by the replay's reading thread for every event, what follows written by its
+  // applying thread for every output: on cache lines of their own (see fusion::kLinePair).
+  alignas(128) std::unique_ptr<class LogWriter> writer_;
   int64_t written_ = 0;
   std::string write_error_;
   std::vector<std::pair<std::string, int64_t>> per_channel_;

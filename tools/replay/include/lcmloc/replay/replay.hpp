@@ -51,6 +51,10 @@ struct ReplayResult {
   int64_t bytes_unreadable = 0;
   std::vector<eval::LogIssue> issues;  ///< damage of the input, with event index and byte offset
   double seconds = 0;              ///< wall time of the replay
+  /// CPU time [s] of each side (ReplayOptions::read_ahead: of each thread, otherwise of each part
+  /// of the one): reading (the log, the bus's dispatch, the daemon's intake) and applying (the
+  /// rest of the daemon, the outputs). With two threads, the busier one sets the replay's rate.
+  double reading_cpu_s = 0, applying_cpu_s = 0;
 };
 
 /// Replays opts.input with cfg (filter, shadows, channels, reorder window). Throws
