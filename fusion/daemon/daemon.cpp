@@ -260,6 +260,7 @@ void DaemonIntake::start(IntakeItem& out, IntakeItem::Kind kind, const std::stri
 
 void DaemonIntake::tracked(IntakeItem& out, const std::string& ch, int64_t seq, int64_t utime) {
   start(out, IntakeItem::Kind::Nothing, ch, seq, utime);
+  if (gaps_.follows(ch, seq)) return;
   const common::SeqGap gap = gaps_.observe(ch, seq);
   if (gap.missing > 0 || gap.uncounted > 0 || gap.ignored || gap.restarted) {
     out.seq_event = true;

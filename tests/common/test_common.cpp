@@ -615,6 +615,39 @@ TEST(Transport, InvalidChannelRegexThrowsInsteadOfCrashing) {
 // ---------------------------------------------------------------------------------------------
 // Process helpers
 
+// follows() takes the in-order message of the key observed last and nothing else: what it
+// refuses, observe() then judges as if follows() had not been asked.
+TEST(Process, SeqTrackerFollowsTakesOnlyTheNextSeqOfTheLastKey) {
+  common::SeqTracker t, u;  // u: observe() alone
+  EXPECT_FALSE(t.follows("A", 0)) << "no key yet";
+  auto both = [&](const char* key, int64_t seq) {
+    const bool took = t.follows(key, seq);
+    const common::SeqGap g = took ? common::SeqGap{} : t.observe(key, seq);
+    const common::SeqGap ref = u.observe(key, seq);
+    EXPECT_EQ(g.missing, ref.missing) << key << " " << seq;
+    EXPECT_EQ(g.restarted, ref.restarted) << key << " " << seq;
+    EXPECT_EQ(g.ignored, ref.ignored) << key << " " << seq;
+    EXPECT_EQ(t.gaps(), u.gaps());
+    EXPECT_EQ(t.ignored(), u.ignored());
+    return took;
+  };
+  EXPECT_FALSE(both("A", 5));
+  EXPECT_TRUE(both("A", 6));
+  EXPECT_TRUE(both("A", 7));
+  EXPECT_FALSE(both("A", 9)) << "a gap";
+  EXPECT_TRUE(both("A", 10));
+  EXPECT_FALSE(both("B", 11)) << "another key";
+  EXPECT_FALSE(both("A", 11)) << "in order, but not on the key observed last";
+  EXPECT_TRUE(both("A", 12));
+  EXPECT_FALSE(both("A", 12)) << "a duplicate";
+  EXPECT_FALSE(both("A", 3)) << "a step back";
+  EXPECT_FALSE(both("A", 13)) << "after a step back, observe() decides";
+  EXPECT_TRUE(both("A", 14));
+  EXPECT_EQ(t.gaps("A"), 1) << "8";
+  EXPECT_EQ(t.gaps("A"), u.gaps("A"));
+  EXPECT_EQ(t.ignored("A"), u.ignored("A"));
+}
+
 TEST(Process, SeqTrackerCountsGapsPerKey) {
   common::SeqTracker t;
   auto missing = [&](const char* key, int64_t seq) { return t.observe(key, seq).missing; };

@@ -137,6 +137,7 @@ class Reader {
   }
   /// The damage the scanner met before the event just read (or before the end), to its record.
   void takeIssues(Block& b) {
+    if (issues_.empty()) return;  // (records start with none)
     for (auto& is : issues_) b.issues.push_back(std::move(is));
     b.records.back().issues = static_cast<uint16_t>(issues_.size());  // (one per damaged stretch: a few)
     issues_.clear();

@@ -15,6 +15,7 @@
 #include <CLI/CLI.hpp>
 
 #include "lcmloc/common/transport.hpp"
+#include "lcmloc/core/text.hpp"
 
 namespace lcmloc::common {
 
@@ -173,6 +174,16 @@ class SeqTracker {
   static constexpr int64_t kMaxSeqGap = int64_t{1} << 24;  ///< 16.8 million: 46 h of a 100 Hz channel
   /// The messages missing before this one (missing = 0 in order).
   SeqGap observe(const std::string& key, int64_t seq);
+  /// observe() of the usual message, inline: true when seq follows on the key observed last (the
+  /// message is taken, nothing to report); false, nothing changed, otherwise: observe() it then.
+  bool follows(const std::string& key, int64_t seq) {
+    if (last_ >= entries_.size()) return false;
+    auto& [k, e] = entries_[last_];
+    if (e.pending || e.last == INT64_MAX || seq != e.last + 1 || !core::sameText(k, key)) return false;
+    e.jump_missing = 0;  // (as observe() takes it)
+    e.last = seq;
+    return true;
+  }
   int64_t gaps() const { return total_; }
   int64_t gaps(const std::string& key) const;
   /// Seqs ignored as lone outliers (SeqGap::ignored).

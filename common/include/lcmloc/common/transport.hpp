@@ -80,9 +80,10 @@ class MessageBus {
                  ErrorHandler on_error = nullptr) {
     subscribeRaw(
         channel,
-        [this, handler = std::move(handler), on_error = std::move(on_error)](
-            const std::string& ch, const uint8_t* data, std::size_t size, int64_t recv_utime) {
-          T msg;
+        [this, handler = std::move(handler), on_error = std::move(on_error), msg = T()](
+            const std::string& ch, const uint8_t* data, std::size_t size, int64_t recv_utime) mutable {
+          // msg: decoded into again and again (every field is written; its arrays keep their
+          // storage), not made anew per message.
           std::string why;
           try {
             if (decodeMessage(msg, data, size) >= 0) {
