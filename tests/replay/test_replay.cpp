@@ -393,7 +393,16 @@ TEST_F(ReplayTest, ReadingAheadOnAThreadGivesWhatReadingInLineGives) {
       o.read_ahead = ahead == 1;
       int polled = 0;
       if (stop_after > 0) o.stop = [&polled, stop_after] { return ++polled > stop_after; };
-      report[ahead] = describe(replay::replayLog(cfg_, o));
+      const replay::ReplayResult r = replay::replayLog(cfg_, o);
+      report[ahead] = describe(r);
+      // Each side's CPU time: some, and no more than the wall time (inline, both together).
+      EXPECT_GT(r.reading_cpu_s, 0.0);
+      EXPECT_GT(r.applying_cpu_s, 0.0);
+      EXPECT_LE(r.reading_cpu_s, r.seconds + 1e-3);
+      EXPECT_LE(r.applying_cpu_s, r.seconds + 1e-3);
+      if (!o.read_ahead) {
+        EXPECT_LE(r.reading_cpu_s + r.applying_cpu_s, r.seconds + 1e-3);
+      }
       if (!output.empty() && output != "/dev/full") file[ahead] = slurp(o.output);
     }
     EXPECT_EQ(report[1], report[0]) << input << " -> " << output;
