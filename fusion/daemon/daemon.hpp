@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "lcmloc/common/cache_line.hpp"
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/geodesy.hpp"
 #include "lcmloc/common/process.hpp"
@@ -28,10 +29,6 @@
 #include "lcmloc/pose_t.hpp"
 
 namespace lcmloc::fusion {
-
-/// Two cache lines (the unit an x86 core's adjacent-line prefetcher fetches): data of two threads
-/// kept this far apart shares no line.
-inline constexpr std::size_t kLinePair = 128;
 
 /// One message as the daemon's intake (DaemonIntake) made it: decoded, validated, converted,
 /// its seq checked. What the daemon then does with it (FusionDaemon::apply: counting, reporting,
@@ -188,11 +185,10 @@ class FusionDaemon {
   common::MessageBus& bus_;
   std::unique_ptr<core::FusionEngine> engine_;
   /// The intake and slot_ are the replay's reading thread's, the rest its applying thread's:
-  /// kept on cache lines of their own (128 bytes: lines are fetched in pairs), so that neither
-  /// thread's writes take the line from under the other's reads, message after message.
-  alignas(kLinePair) DaemonIntake intake_;
+  /// kept on cache lines of their own (common::kLinePair), message after message.
+  alignas(common::kLinePair) DaemonIntake intake_;
   std::function<IntakeItem&()> slot_;  ///< divert()
-  alignas(kLinePair) IntakeItem item_;  ///< the intake's item of the message being taken in (its storage reused)
+  alignas(common::kLinePair) IntakeItem item_;  ///< the intake's item of the message being taken in (its storage reused)
   int64_t gaps_ = 0;  ///< messages missing according to the intake's sequence checks
   std::map<std::string, int64_t> out_seq_;  ///< per output channel
   /// Per (filter, active): its POSE channel, that channel's seq counter (a node of out_seq_) and

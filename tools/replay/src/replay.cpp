@@ -34,7 +34,7 @@ namespace {
 /// per event, in file order, and one at the end (Record::end). What a record stands for, in this
 /// order: the damage met before it (`issues` of the block's issues), its copy (--with-inputs),
 /// what the daemon's intake made of it (`items` of the block's items, in order).
-struct alignas(fusion::kLinePair) Block {
+struct alignas(common::kLinePair) Block {
   struct Record {
     int64_t position = 0, unreadable = 0;  ///< the scanner's, after reading the event (at the end)
     uint32_t items = 0;
@@ -318,17 +318,17 @@ void replayInline(Reader& reader, Applier& applier, ReplayResult& r) {
 ReplayResult replayLog(const common::SystemConfig& cfg, const ReplayOptions& opts) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
-  // Each on cache lines of its own (fusion::kLinePair): the reader is the reading thread's, the
+  // Each on cache lines of its own (common::kLinePair): the reader is the reading thread's, the
   // result and the applier the applying thread's, and the bus and the daemon keep their two
   // threads' parts apart inside.
-  alignas(fusion::kLinePair) ReplayResult r;
+  alignas(common::kLinePair) ReplayResult r;
   if (!opts.output.empty()) common::refuseOutputOverInputs("--output", opts.output, {opts.input}, "input log");
-  alignas(fusion::kLinePair) Reader reader(opts.input, cfg, opts);
+  alignas(common::kLinePair) Reader reader(opts.input, cfg, opts);
   r.file_size = reader.fileSize();
-  alignas(fusion::kLinePair) LogBus bus(opts.output);
-  alignas(fusion::kLinePair) fusion::FusionDaemon daemon(cfg, bus);
+  alignas(common::kLinePair) LogBus bus(opts.output);
+  alignas(common::kLinePair) fusion::FusionDaemon daemon(cfg, bus);
   reader.attach(bus, daemon);
-  alignas(fusion::kLinePair) Applier applier(bus, daemon, opts, r);
+  alignas(common::kLinePair) Applier applier(bus, daemon, opts, r);
   if (opts.read_ahead)
     replayThreaded(reader, applier, r);
   else

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "lcmloc/common/cache_line.hpp"
 #include "lcmloc/common/transport.hpp"
 
 namespace lcmloc::replay {
@@ -62,8 +63,8 @@ class LogBus : public common::MessageBus {
   const std::string* last_channel_ = nullptr;
   const std::vector<std::size_t>* last_route_ = nullptr;
   // The above is read by the replay's reading thread for every event, what follows written by its
-  // applying thread for every output: on cache lines of their own (see fusion::kLinePair).
-  alignas(128) std::unique_ptr<class LogWriter> writer_;
+  // applying thread for every output: on cache lines of their own (common::kLinePair).
+  alignas(common::kLinePair) std::unique_ptr<class LogWriter> writer_;
   int64_t written_ = 0;
   std::string write_error_;
   std::vector<std::pair<std::string, int64_t>> per_channel_;

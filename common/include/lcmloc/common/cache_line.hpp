@@ -1,0 +1,12 @@
+#pragma once
+// Keeping two threads' data apart in memory.
+#include <cstddef>
+
+namespace lcmloc::common {
+
+/// Two cache lines (the unit an x86 core's adjacent-line prefetcher fetches): data of two threads
+/// kept this far apart (alignas(kLinePair)) shares no line, so that neither thread's writes take
+/// a line from under the other's reads.
+inline constexpr std::size_t kLinePair = 128;
+
+}  // namespace lcmloc::common
