@@ -13,7 +13,8 @@ usage() {
 usage: tools/demo.sh [--fast] [--factor X] [--out DIR] [--no-build]
   --fast        run the simulation 10x faster than real time (default: 1.0, live pace)
   --factor X    real-time factor X (1.0 = live, 10 = ten times faster; X > 1 also
-                scales fusion.reorder_window by X, a window of message time)
+                scales fusion.reorder_window and fusion.max_time_jump by X, both
+                spans of message time)
   --out DIR     output directory (default: out/demo)
   --no-build    skip package installation and build (use what is in build/)
 Environment: LCMLOC_BUILD_DIR (default build/), LCM_DEFAULT_URL (default
@@ -55,20 +56,27 @@ log="$out/run.lcmlog"
 rm -f "$log"
 # The run's scenario: config/paper.yaml with this run's real-time factor and log file. The
 # fusion's reorder window is message time: at X times real time it is X times shorter in wall
-# time, so it is scaled by X (X > 1) to keep the same margin for late UDP deliveries. Offline
-# replay of the log uses the same scenario, so both order the inputs alike.
+# time, so it is scaled by X (X > 1) to keep the same margin for late UDP deliveries; so is the
+# time-jump guard (an input later than it is taken for a new time base, whatever the window, and
+# the window must stay below it). Offline replay of the log uses the same scenario, so both order
+# the inputs alike.
 scenario="$out/scenario.yaml"
-base_window=$(sed -n 's|^  reorder_window: *\([0-9.eE+-]*\).*|\1|p' "$LCMLOC_ROOT/config/paper.yaml")
-if ! window=$(awk -v w="$base_window" -v f="$factor" \
-  'BEGIN { if (w !~ /^[0-9.eE+-]+$/ || f !~ /^[0-9.eE+-]+$/) exit 1; printf "%g", (f > 1 ? w * f : w) }'); then
-  lcmloc_log "--factor must be a number (got '$factor'); config/paper.yaml needs fusion.reorder_window"
+scaled() {  # scaled KEY: config/paper.yaml's fusion.KEY, times the factor when it is above 1
+  local base
+  base=$(sed -n "s|^  $1: *\([0-9.eE+-]*\).*|\1|p" "$LCMLOC_ROOT/config/paper.yaml")
+  awk -v w="$base" -v f="$factor" \
+    'BEGIN { if (w !~ /^[0-9.eE+-]+$/ || f !~ /^[0-9.eE+-]+$/) exit 1; printf "%g", (f > 1 ? w * f : w) }'
+}
+if ! window=$(scaled reorder_window) || ! jump=$(scaled max_time_jump); then
+  lcmloc_log "--factor must be a number (got '$factor'); config/paper.yaml needs fusion.reorder_window and fusion.max_time_jump"
   exit 2
 fi
 sed -e "s|^\(  realtime_factor:\)[^#]*|\1 $factor   |" -e "s|^\(  output:\)[^#]*|\1 $log   |" \
-  -e "s|^\(  reorder_window:\)[^#]*|\1 $window   |" "$LCMLOC_ROOT/config/paper.yaml" > "$scenario"
+  -e "s|^\(  reorder_window:\)[^#]*|\1 $window   |" -e "s|^\(  max_time_jump:\)[^#]*|\1 $jump   |" \
+  "$LCMLOC_ROOT/config/paper.yaml" > "$scenario"
 if [[ $(grep -c -e "^  realtime_factor: $factor " -e "^  output: $log " -e "^  reorder_window: $window " \
-  "$scenario") -ne 3 ]]; then
-  lcmloc_log "could not set realtime_factor, reorder_window and logger output in $scenario"
+  -e "^  max_time_jump: $jump " "$scenario") -ne 4 ]]; then
+  lcmloc_log "could not set realtime_factor, reorder_window, max_time_jump and logger output in $scenario"
   exit 1
 fi
 

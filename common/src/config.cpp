@@ -280,6 +280,13 @@ void parseFusion(KeyReader& root, FusionConfig& f) {
   r.get("reorder_window", f.reorder_window, 0.0, 10.0);
   r.get("status_period", f.status_period, 0.01, 3600.0);
   r.get("max_time_jump", f.max_time_jump, 0.0, 1e9);
+  // An input later than max_time_jump is taken for a source whose time started over, however wide
+  // the reorder window: a window as wide would hold late inputs only to refuse them.
+  if (f.max_time_jump > 0.0 && f.reorder_window >= f.max_time_jump)
+    throw ConfigError(root.file(), "fusion.reorder_window",
+                      fmt::format("{} s is not less than fusion.max_time_jump ({} s): an input that late is taken "
+                                  "for a new time base, not reordered (widen max_time_jump with it, or 0 = off)",
+                                  f.reorder_window, f.max_time_jump));
   r.get("map_file", f.map_file);
   if (!f.map_file.empty() && f.map_file[0] != '/') {
     const auto slash = root.file().rfind('/');

@@ -185,6 +185,18 @@ TEST(Config, OutputEveryIsAPositiveInteger) {
             std::string::npos);
 }
 
+// A reorder window as wide as the time-jump guard: a late input within the window was refused
+// as "too old" all the same (a live test's widened window did this under load).
+TEST(Config, TheReorderWindowIsNarrowerThanTheTimeJumpGuard) {
+  EXPECT_EQ(errorOf("fusion: {reorder_window: 2.0}"),
+            "test.yaml: fusion.reorder_window: 2 s is not less than fusion.max_time_jump (1 s): an input that late is "
+            "taken for a new time base, not reordered (widen max_time_jump with it, or 0 = off)");
+  EXPECT_NE(errorOf("fusion: {reorder_window: 1.0}"), "(no error)");
+  EXPECT_EQ(errorOf("fusion: {reorder_window: 2.0, max_time_jump: 5.0}"), "(no error)");
+  EXPECT_EQ(errorOf("fusion: {reorder_window: 2.0, max_time_jump: 0}"), "(no error)");
+  EXPECT_EQ(errorOf("fusion: {reorder_window: 0.99}"), "(no error)");
+}
+
 TEST(Config, OdometryGapKeysAreCheckedAndNamed) {
   const auto c = common::parseSystemConfig("fusion: {max_odometry_gap: 0.5, odometry_gap_accel: 1.0, odometry_gap_yaw_rate: 0.1}", "g.yaml");
   EXPECT_EQ(c.fusion.max_odometry_gap, 0.5);
