@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <random>
 
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/chi2.hpp"
@@ -39,6 +41,35 @@ TEST(VehicleModel, HeadingIncrementEq2) {
   EXPECT_NEAR(headingIncrement(car, 2.5), 0.4, 1e-15);  // from steering, ignores delta_theta
   OdometryInput diff{0, 0.0, 0.0, false, 0.3};
   EXPECT_DOUBLE_EQ(headingIncrement(diff, 2.5), 0.3);  // turn in place: as given
+}
+
+namespace {
+bool sameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+}  // namespace
+
+// The cache gives, bit for bit, what std::tan gives: for angles met again (hits), for more
+// distinct angles than it has entries (replaced entries), for +0 and -0 (different bits) and NaN.
+TEST(VehicleModel, TanCacheReturnsExactlyWhatTanReturns) {
+  TanCache tan;
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> level(-600, 600);  // 1201 steering steps of 0.0005 rad
+  for (int i = 0; i < 20000; ++i) {
+    const double psi = 0.0005 * level(rng);
+    ASSERT_TRUE(sameBits(tan(psi), std::tan(psi))) << psi;
+  }
+  for (double psi : {0.0, -0.0, 0.3, -0.0, 0.0, 1.5707963267948966, -1e-300}) {
+    EXPECT_TRUE(sameBits(tan(psi), std::tan(psi))) << psi;
+  }
+  EXPECT_TRUE(std::signbit(tan(-0.0)));
+  EXPECT_FALSE(std::signbit(tan(0.0)));
+  EXPECT_TRUE(std::isnan(tan(std::nan(""))));
+  // headingIncrement through the cache is eq. 2 as headingIncrement computes it, bit for bit.
+  for (int k = -50; k <= 50; ++k) {
+    const OdometryInput car{0, 0.013 * k, 0.0007 * k * k, true, 99.0};
+    EXPECT_TRUE(sameBits(headingIncrement(car, 2.5, tan), headingIncrement(car, 2.5)));
+  }
+  const OdometryInput diff{0, 0.1, 0.2, false, 0.3};
+  EXPECT_DOUBLE_EQ(headingIncrement(diff, 2.5, tan), 0.3);
 }
 
 TEST(VehicleModel, PropagatePoseEq1MidpointHeading) {

@@ -88,9 +88,9 @@ using detail::poseProcessNoise;
 
 /// Composes one increment of eq. 1-2 and its process noise into a batch (a non-finite one is
 /// skipped, as predict() skips it).
-void addToBatch(const FilterConfig& c, const OdometryInput& odo, OdometryBatch& batch) {
+void addToBatch(const FilterConfig& c, const OdometryInput& odo, OdometryBatch& batch, TanCache& tan) {
   if (!isFinite(odo)) return;
-  const double dth = headingIncrement(odo, c.wheelbase);
+  const double dth = headingIncrement(odo, c.wheelbase, tan);
   batch.add(odo.delta_s, dth, odo.utime, poseProcessNoise(c, odo.delta_s, dth));
 }
 
@@ -125,11 +125,12 @@ class PendingOdometry {
  private:
   static constexpr std::size_t kFold = 64;
   void fold(const FilterConfig& c) {
-    for (const OdometryInput& odo : steps_) addToBatch(c, odo, batch_);
+    for (const OdometryInput& odo : steps_) addToBatch(c, odo, batch_, tan_);
     steps_.clear();
   }
   std::vector<OdometryInput> steps_;
   OdometryBatch batch_;
+  TanCache tan_;
 };
 
 /// Initial state and covariance of a filter with these state names.
@@ -284,7 +285,7 @@ class DeadReckoningFilter final : public Filter {
   }
   void predict(const OdometryInput& odo) override {
     if (!isFinite(odo)) return;
-    const double ds = odo.delta_s, dth = headingIncrement(odo, cfg_.wheelbase);
+    const double ds = odo.delta_s, dth = headingIncrement(odo, cfg_.wheelbase, tan_);
     const double mid = x_.z() + 0.5 * dth;
     Mat3 F = Mat3::Identity();
     F(0, 2) = -ds * std::sin(mid);
@@ -310,6 +311,7 @@ class DeadReckoningFilter final : public Filter {
   Mat3 P_;
   int64_t utime_ = 0;
   PendingOdometry pending_;
+  TanCache tan_;  ///< for predict()
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -389,7 +391,7 @@ class RulerUkf final : public Filter {
     if (!isFinite(odo)) return;
     const double L = cfg_.wheelbase;
     // eq. 1-2; with N = 5 the increments are corrected by the calibration states.
-    const double dth_meas = headingIncrement(odo, L);
+    const double dth_meas = headingIncrement(odo, L, tan_);
     const SinCosNear mid(ukf_.x()(2) + 0.5 * dth_meas);  // the sigma points' midpoint headings lie around it
     auto f = [&odo, L, dth_meas, &mid](const typename U::Vector& s) {
       typename U::Vector out = s;
@@ -492,6 +494,7 @@ class RulerUkf final : public Filter {
   int64_t utime_ = 0;
   detail::GateBook book_;  ///< gate decisions and lock-out
   PendingOdometry pending_;
+  TanCache tan_;  ///< for predict()
 };
 
 }  // namespace

@@ -1,7 +1,10 @@
 #pragma once
 // Car-like kinematics of the magnetic-ruler paper, eq. 1-2. Written once, used by the
 // simulator's dead reckoning, every filter and the tests.
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/types.hpp"
@@ -26,6 +29,39 @@ inline Pose propagatePose(const Pose& pose, double ds, double dtheta, const SinC
 /// otherwise delta_theta as given. (Inline: called once per odometry message per filter.)
 inline double headingIncrement(const OdometryInput& odo, double wheelbase) {
   return odo.has_steering ? headingIncrement(odo.delta_s, odo.steering, wheelbase) : odo.delta_theta;
+}
+
+/// std::tan of the steering angles met lately, remembered: a steering encoder (or a digitized
+/// potentiometer) gives few distinct angles, each again and again (the benchmark's hour of
+/// driving: 381 of them in 360,000 increments, a new value in 93 % of the increments). A table
+/// of kSize entries, each found by the angle's bits, holds the last angle mapped to it and its
+/// tangent: a hit returns exactly what std::tan returned for it, a miss calls std::tan.
+class TanCache {
+ public:
+  double operator()(double a) {
+    uint64_t bits;
+    std::memcpy(&bits, &a, sizeof bits);
+    Entry& e = table_[(bits * 0x9E3779B97F4A7C15ull) >> (64 - kBits)];
+    if (e.bits != bits) {
+      e.bits = bits;
+      e.tan = std::tan(a);
+    }
+    return e.tan;
+  }
+
+ private:
+  static constexpr int kBits = 8;
+  static constexpr std::size_t kSize = std::size_t{1} << kBits;  ///< 4 KiB
+  struct Entry {
+    uint64_t bits = 0;  ///< +0.0, whose tangent is +0.0
+    double tan = 0.0;
+  };
+  std::array<Entry, kSize> table_{};
+};
+
+/// headingIncrement(odo, wheelbase) with the steering's tangent from `tan`: the same value.
+inline double headingIncrement(const OdometryInput& odo, double wheelbase, TanCache& tan) {
+  return odo.has_steering ? odo.delta_s * tan(odo.steering) / wheelbase : odo.delta_theta;
 }
 
 }  // namespace lcmloc::core
