@@ -15,10 +15,13 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "lcmloc/common/config.hpp"
+#include "lcmloc/common/process.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/logger/event_file.hpp"
 #include "lcmloc/logger/log_writer.hpp"
+#include "lcmloc/logtool/log_tool.hpp"
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
@@ -398,6 +401,47 @@ TEST_F(LogTools, CutKeepsTheTimeWindowAndChannelsAndLcmReadsTheResult) {
   EXPECT_EQ(self.rc, 2) << self.err;
   EXPECT_NE(self.err.find("is the input log"), std::string::npos) << self.err;
   EXPECT_EQ(fs::file_size(log), size);
+}
+
+// The subcommands are a library (lcmloc-log's main is their command line): cut called in-process
+// keeps a window of log times, refuses an empty window as a bad argument, and says a truncated
+// log is damaged while keeping its intact events.
+TEST_F(LogTools, CutAsALibraryKeepsTheUtimeWindowAndReportsDamage) {
+  const std::string log = path("ref.lcmlog");
+  const std::vector<int64_t> starts = writeReference(log);
+  lcmloc::logtool::CutOptions o;
+  o.channels = {"ODOMETRY"};
+  o.from_utime = kT0 + 100000;
+  o.to_utime = kT0 + 190000;
+  ASSERT_EQ(lcmloc::logtool::cut(log, path("window.lcmlog"), o), lcmloc::common::kExitOk);
+  std::vector<int64_t> seqs;
+  lcm::LogFile in(path("window.lcmlog"), "r");
+  ASSERT_TRUE(in.good());
+  while (const lcm::LogEvent* ev = in.readNextEvent()) {
+    lcmloc::odometry_t m;
+    ASSERT_GE(m.decode(ev->data, 0, ev->datalen), 0);
+    seqs.push_back(m.seq);
+  }
+  ASSERT_EQ(seqs.size(), 10u);
+  EXPECT_EQ(seqs.front(), 10);
+  EXPECT_EQ(seqs.back(), 19);
+
+  lcmloc::logtool::CutOptions empty;
+  empty.from = 0.5;
+  empty.to = 0.2;
+  EXPECT_THROW(lcmloc::logtool::cut(log, path("empty.lcmlog"), empty), lcmloc::common::ConfigError);
+
+  // Cut short inside the event that starts at starts[40]: everything before it is kept.
+  const std::string truncated = path("truncated.lcmlog");
+  fs::copy_file(log, truncated);
+  fs::resize_file(truncated, static_cast<std::uintmax_t>(starts[40] + 10));
+  ASSERT_EQ(lcmloc::logtool::cut(truncated, path("kept.lcmlog"), lcmloc::logtool::CutOptions{}),
+            lcmloc::common::kExitInputDamaged);
+  lcm::LogFile kept(path("kept.lcmlog"), "r");
+  ASSERT_TRUE(kept.good());
+  int64_t n = 0;
+  while (kept.readNextEvent()) ++n;
+  EXPECT_EQ(n, 40);
 }
 
 // A CSV on stdout that cannot be written (a full disk behind a redirection, a closed pipe) was
