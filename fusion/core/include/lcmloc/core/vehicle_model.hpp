@@ -11,8 +11,13 @@
 
 namespace lcmloc::core {
 
-/// eq. 2: heading increment of a car with wheelbase L [m] for a distance ds [m] at steering psi [rad].
-inline double headingIncrement(double ds, double psi, double wheelbase) { return ds * std::tan(psi) / wheelbase; }
+/// eq. 2 from the steering's tangent: heading increment of a car with wheelbase L [m] for a
+/// distance ds [m] at a steering angle whose tangent is tan_psi (see TanCache).
+inline double headingIncrementOfTan(double ds, double tan_psi, double wheelbase) { return ds * tan_psi / wheelbase; }
+/// eq. 2: the same at steering psi [rad].
+inline double headingIncrement(double ds, double psi, double wheelbase) {
+  return headingIncrementOfTan(ds, std::tan(psi), wheelbase);
+}
 
 /// eq. 1: pose after moving ds along an arc that turns dtheta (midpoint heading).
 /// Returned theta is wrapped to (-pi, pi].
@@ -61,7 +66,7 @@ class TanCache {
 
 /// headingIncrement(odo, wheelbase) with the steering's tangent from `tan`: the same value.
 inline double headingIncrement(const OdometryInput& odo, double wheelbase, TanCache& tan) {
-  return odo.has_steering ? odo.delta_s * tan(odo.steering) / wheelbase : odo.delta_theta;
+  return odo.has_steering ? headingIncrementOfTan(odo.delta_s, tan(odo.steering), wheelbase) : odo.delta_theta;
 }
 
 }  // namespace lcmloc::core
