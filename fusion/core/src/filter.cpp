@@ -101,12 +101,13 @@ void addToBatch(const FilterConfig& c, const OdometryInput& odo, OdometryBatch& 
 /// tangent, the half-angle sine and cosine, the process noise) then overlaps with the steps
 /// around it, which it cannot while each step comes between the daemon's work for one message
 /// and the next. The same operations in the same order as composing each step when it comes:
-/// the same numbers.
+/// the same numbers. eq. 2's tangent comes from the filter's TanCache (the one its predict()
+/// uses).
 class PendingOdometry {
  public:
-  void add(const FilterConfig& c, const OdometryInput& odo) {
+  void add(const FilterConfig& c, const OdometryInput& odo, TanCache& tan) {
     steps_.push_back(odo);
-    if (steps_.size() == kFold) fold(c);
+    if (steps_.size() == kFold) fold(c, tan);
   }
   bool empty() const { return steps_.empty() && batch_.empty(); }
   void clear() {
@@ -115,8 +116,8 @@ class PendingOdometry {
   }
   /// The batch of the steps since the last one (non-finite ones skipped); the next add starts
   /// a new batch.
-  OdometryBatch compose(const FilterConfig& c) {
-    fold(c);
+  OdometryBatch compose(const FilterConfig& c, TanCache& tan) {
+    fold(c, tan);
     OdometryBatch b = batch_;
     batch_.clear();
     return b;
@@ -124,13 +125,12 @@ class PendingOdometry {
 
  private:
   static constexpr std::size_t kFold = 64;
-  void fold(const FilterConfig& c) {
-    for (const OdometryInput& odo : steps_) addToBatch(c, odo, batch_, tan_);
+  void fold(const FilterConfig& c, TanCache& tan) {
+    for (const OdometryInput& odo : steps_) addToBatch(c, odo, batch_, tan);
     steps_.clear();
   }
   std::vector<OdometryInput> steps_;
   OdometryBatch batch_;
-  TanCache tan_;
 };
 
 /// Initial state and covariance of a filter with these state names.
@@ -264,14 +264,14 @@ class DeadReckoningFilter final : public Filter {
     pending_.clear();
   }
   bool accumulate(const OdometryInput& odo) override {
-    pending_.add(cfg_, odo);
+    pending_.add(cfg_, odo, tan_);
     return true;
   }
   /// The Jacobians of eq. 1 are I + [0 0 -dy_k; 0 0 dx_k; 0 0 0] (world displacement of step k):
   /// their product over the batch is the same form with the batch's world displacement, exact.
   void applyAccumulated() override {
     if (pending_.empty()) return;
-    const OdometryBatch batch = pending_.compose(cfg_);
+    const OdometryBatch batch = pending_.compose(cfg_, tan_);
     if (batch.empty()) return;
     const SinCosNear h(x_.z());
     const double c = h.c, s = h.s;
@@ -311,7 +311,7 @@ class DeadReckoningFilter final : public Filter {
   Mat3 P_;
   int64_t utime_ = 0;
   PendingOdometry pending_;
-  TanCache tan_;  ///< for predict()
+  TanCache tan_;  ///< eq. 2's tangent, for predict() and the batch
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -366,7 +366,7 @@ class RulerUkf final : public Filter {
     if constexpr (N != 3) {
       return false;
     } else {
-      pending_.add(cfg_, odo);
+      pending_.add(cfg_, odo, tan_);
       return true;
     }
   }
@@ -374,7 +374,7 @@ class RulerUkf final : public Filter {
   /// the process noise of the steps as the remaining steps carry it (linearised at the mean).
   void applyAccumulated() override {
     if (pending_.empty()) return;
-    const OdometryBatch b = pending_.compose(cfg_);
+    const OdometryBatch b = pending_.compose(cfg_, tan_);
     if (b.empty()) return;
     const SinCosNear mean(ukf_.x()(2));  // the sigma points' headings lie around it
     auto f = [&b, &mean](const typename U::Vector& s) {
@@ -494,7 +494,7 @@ class RulerUkf final : public Filter {
   int64_t utime_ = 0;
   detail::GateBook book_;  ///< gate decisions and lock-out
   PendingOdometry pending_;
-  TanCache tan_;  ///< for predict()
+  TanCache tan_;  ///< eq. 2's tangent, for predict() and the batch
 };
 
 }  // namespace
