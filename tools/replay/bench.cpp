@@ -111,6 +111,61 @@ int runBench(const common::SystemConfig& base, const BenchOptions& opts) {
   cfg.scenario = ovalScenario(base.scenario, OvalTrack{}, opts.duration_s);
   cfg.fusion.shadow.clear();
 
+  /// One measured configuration: filter, fusion.output_every, output file or not, one thread or two.
+  struct Case {
+    std::string key, label, filter;
+    int output_every = 1;
+    bool file = true;
+    bool one_thread = false;  ///< ReplayOptions::read_ahead off (the live daemon's: all in one thread)
+    std::vector<double> wall, cpu;  ///< messages per wall / CPU second, one per repetition
+    /// wall, cpu over those of the read + decode measured just before it (side by side: the
+    /// shared machine's load changes within a repetition).
+    std::vector<double> wall_ratio, cpu_ratio;
+    std::vector<double> reading_ns, applying_ns;  ///< CPU per message of each side [ns]
+    std::vector<double> sleeps;                   ///< ReplayResult::handoff_sleeps
+    ReplayResult last;
+  };
+  std::vector<Case> cases;
+  auto add = [&cases](const std::string& key, const std::string& label, const char* filter, int every, bool file,
+                      bool one_thread = false) {
+    Case k;
+    k.key = key;
+    k.label = label;
+    k.filter = filter;
+    k.output_every = every;
+    k.file = file;
+    k.one_thread = one_thread;
+    cases.push_back(std::move(k));
+  };
+  add("dead_reckoning", "dead_reckoning replay", "dead_reckoning", 1, true);
+  add("ukf_gated", "ukf_gated replay", "ukf_gated", 1, true);
+  add("ukf_gated_no_output_file", "ukf_gated, no output file", "ukf_gated", 1, false);
+  add("ukf_gated_one_thread", "ukf_gated, one thread", "ukf_gated", 1, true, true);
+  if (opts.output_every > 1) {
+    const std::string n = std::to_string(opts.output_every);
+    add("dead_reckoning_output_every_" + n, "dead_reckoning, output_every " + n, "dead_reckoning", opts.output_every,
+        true);
+    add("ukf_gated_output_every_" + n, "ukf_gated, output_every " + n, "ukf_gated", opts.output_every, true);
+    add("ukf_gated_output_every_" + n + "_no_output_file", "ukf_gated, output_every " + n + ", no file", "ukf_gated",
+        opts.output_every, false);
+    add("ukf_gated_output_every_" + n + "_one_thread", "ukf_gated, output_every " + n + ", one thread", "ukf_gated",
+        opts.output_every, true, true);
+  }
+  if (!opts.cases.empty()) {
+    std::vector<Case> chosen;
+    for (const std::string& key : opts.cases) {
+      const auto it = std::find_if(cases.begin(), cases.end(), [&](const Case& k) { return k.key == key; });
+      if (it == cases.end()) {
+        std::string known;
+        for (const Case& k : cases) known += (known.empty() ? "" : ", ") + k.key;
+        spdlog::error("--bench-case {}: no such case (with --bench-output-every {}: {})", key, opts.output_every,
+                      known);
+        return common::kExitConfigError;
+      }
+      if (std::none_of(chosen.begin(), chosen.end(), [&](const Case& k) { return k.key == key; })) chosen.push_back(*it);
+    }
+    cases = std::move(chosen);
+  }
   bool generate = !(opts.keep_log && fs::exists(log));
   if (!generate) {
     const std::string why = keptLogProblem(log, cfg, opts.duration_s);
@@ -141,45 +196,6 @@ int runBench(const common::SystemConfig& base, const BenchOptions& opts) {
                  std::chrono::duration<double>(Clock::now() - t0).count());
   }
 
-  /// One measured configuration: filter, fusion.output_every, output file or not, one thread or two.
-  struct Case {
-    std::string key, label, filter;
-    int output_every = 1;
-    bool file = true;
-    bool one_thread = false;  ///< ReplayOptions::read_ahead off (the live daemon's: all in one thread)
-    std::vector<double> wall, cpu;  ///< messages per wall / CPU second, one per repetition
-    /// wall, cpu over those of the read + decode measured just before it (side by side: the
-    /// shared machine's load changes within a repetition).
-    std::vector<double> wall_ratio, cpu_ratio;
-    std::vector<double> reading_ns, applying_ns;  ///< CPU per message of each side [ns]
-    ReplayResult last;
-  };
-  std::vector<Case> cases;
-  auto add = [&cases](const std::string& key, const std::string& label, const char* filter, int every, bool file,
-                      bool one_thread = false) {
-    Case k;
-    k.key = key;
-    k.label = label;
-    k.filter = filter;
-    k.output_every = every;
-    k.file = file;
-    k.one_thread = one_thread;
-    cases.push_back(std::move(k));
-  };
-  add("dead_reckoning", "dead_reckoning replay", "dead_reckoning", 1, true);
-  add("ukf_gated", "ukf_gated replay", "ukf_gated", 1, true);
-  add("ukf_gated_no_output_file", "ukf_gated, no output file", "ukf_gated", 1, false);
-  add("ukf_gated_one_thread", "ukf_gated, one thread", "ukf_gated", 1, true, true);
-  if (opts.output_every > 1) {
-    const std::string n = std::to_string(opts.output_every);
-    add("dead_reckoning_output_every_" + n, "dead_reckoning, output_every " + n, "dead_reckoning", opts.output_every,
-        true);
-    add("ukf_gated_output_every_" + n, "ukf_gated, output_every " + n, "ukf_gated", opts.output_every, true);
-    add("ukf_gated_output_every_" + n + "_no_output_file", "ukf_gated, output_every " + n + ", no file", "ukf_gated",
-        opts.output_every, false);
-    add("ukf_gated_output_every_" + n + "_one_thread", "ukf_gated, output_every " + n + ", one thread", "ukf_gated",
-        opts.output_every, true, true);
-  }
   std::vector<double> rate_read, cpu_read;
   int64_t events = 0, decoded = 0;
   auto readOnce = [&] {
@@ -208,6 +224,7 @@ int runBench(const common::SystemConfig& base, const BenchOptions& opts) {
       k.cpu.push_back(r.events_read / (cpuSeconds() - c0));
       k.reading_ns.push_back(1e9 * r.reading_cpu_s / static_cast<double>(r.events_read));
       k.applying_ns.push_back(1e9 * r.applying_cpu_s / static_cast<double>(r.events_read));
+      k.sleeps.push_back(static_cast<double>(r.handoff_sleeps));
       k.wall_ratio.push_back(k.wall.back() / rate_read.back());
       k.cpu_ratio.push_back(k.cpu.back() / cpu_read.back());
       k.last = r;
@@ -232,8 +249,10 @@ int runBench(const common::SystemConfig& base, const BenchOptions& opts) {
   j["read_decode"] = {{"median_msgs_per_s", m_read}, {"runs", rate_read},
                       {"median_msgs_per_cpu_s", c_read}, {"cpu_runs", cpu_read}};
   std::string verdict;
-  std::string sides = fmt::format("CPU per message [ns], medians:\n{:<40}{:>10}{:>10}\n{:<40}{:>10.0f}\n", "what",
-                                  "reading", "applying", "read+decode", 1e9 / c_read);
+  std::string sides =
+      fmt::format("CPU per message [ns] of each side, and times a thread slept for the other, medians:\n"
+                  "{:<40}{:>10}{:>10}{:>10}\n{:<40}{:>10.0f}\n",
+                  "what", "reading", "applying", "sleeps", "read+decode", 1e9 / c_read);
   for (const Case& k : cases) {
     const double w = median(k.wall), c = median(k.cpu), wr = median(k.wall_ratio), cr = median(k.cpu_ratio);
     table += fmt::format("{:<40}{:>14.0f}{:>10.2f}{:>16.0f}{:>10.2f}{:>11}\n", k.label, w, wr, c, cr, k.last.written);
@@ -242,8 +261,10 @@ int runBench(const common::SystemConfig& base, const BenchOptions& opts) {
                 {"ratio_to_read", wr}, {"ratio_runs", k.wall_ratio}, {"median_msgs_per_cpu_s", c}, {"cpu_runs", k.cpu},
                 {"cpu_ratio_to_read", cr}, {"cpu_ratio_runs", k.cpu_ratio}, {"used", k.last.used},
                 {"written", k.last.written}, {"median_reading_cpu_ns_per_msg", median(k.reading_ns)},
-                {"median_applying_cpu_ns_per_msg", median(k.applying_ns)}};
-    sides += fmt::format("{:<40}{:>10.0f}{:>10.0f}\n", k.label, median(k.reading_ns), median(k.applying_ns));
+                {"median_applying_cpu_ns_per_msg", median(k.applying_ns)},
+                {"median_handoff_sleeps", median(k.sleeps)}};
+    sides += fmt::format("{:<40}{:>10.0f}{:>10.0f}{:>10}\n", k.label, median(k.reading_ns), median(k.applying_ns),
+                         k.one_thread ? std::string() : fmt::format("{:.0f}", median(k.sleeps)));
     if (k.filter == "ukf_gated" && k.file && !k.one_thread)
       verdict += fmt::format("{} / read+decode = {:.2f} (per CPU second {:.2f}): aim (>= 0.5) {}\n", k.label, wr, cr,
                              wr >= 0.5 ? "met" : "not met");

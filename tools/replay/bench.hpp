@@ -1,5 +1,6 @@
 #pragma once
 #include <string>
+#include <vector>
 
 #include "lcmloc/common/config.hpp"
 
@@ -13,6 +14,8 @@ struct BenchOptions {
   /// fusion.output_every of the batched rows (measured in the same run as the default rows);
   /// 1 = no batched rows.
   int output_every = 10;
+  /// Only the cases with these keys (those of bench.json); empty: all.
+  std::vector<std::string> cases;
 };
 
 /// Generates the synthetic log, measures read+decode, dead_reckoning and ukf_gated replay

@@ -62,6 +62,9 @@ int main(int argc, char** argv) {
   app.add_flag("--bench-keep-log", bo.keep_log, "reuse the synthetic log of an earlier run if present");
   app.add_option("--bench-output-every", bo.output_every,
                  "fusion.output_every of the batched rows (1 = none)")->capture_default_str()->check(lcmloc::common::positive());
+  app.add_option("--bench-case", bo.cases,
+                 "measure only these cases (their keys in bench.json, e.g. ukf_gated_output_every_10; repeatable); "
+                 "read+decode is measured beside each");
   app.footer("--lcm-url is accepted for uniformity and unused: the replay reads and writes files only.");
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-replay", [&]() -> int {

@@ -55,6 +55,9 @@ struct ReplayResult {
   /// of the one): reading (the log, the bus's dispatch, the daemon's intake) and applying (the
   /// rest of the daemon, the outputs). With two threads, the busier one sets the replay's rate.
   double reading_cpu_s = 0, applying_cpu_s = 0;
+  /// ReplayOptions::read_ahead: times either thread slept waiting for the other (for a block to
+  /// fill, or a block to read into); each sleep ends in a wake-up.
+  int64_t handoff_sleeps = 0;
 };
 
 /// Replays opts.input with cfg (filter, shadows, channels, reorder window). Throws
