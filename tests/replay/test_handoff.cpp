@@ -96,6 +96,18 @@ TEST(Handoff, ABatchLargerThanHalfTheBlocksIsCutSoThatNeitherSideWaitsForTheOthe
   EXPECT_EQ(b.received, upTo(30));
 }
 
+TEST(Handoff, AfterTheLastBlockTakeSaysSoInsteadOfWaitingForever) {
+  Handoff<Numbered> h(4, 2);
+  Numbered* a = h.acquire();
+  a->n = 7;
+  h.publish(a, true);
+  Numbered* got = h.take();
+  ASSERT_EQ(got, a);
+  EXPECT_EQ(got->n, 7);
+  h.release(got);
+  EXPECT_EQ(h.take(), nullptr);
+}
+
 TEST(Handoff, StopWakesAProducerWaitingForAFreeBlock) {
   Handoff<Numbered> h(2, 1);
   Numbered* a = h.acquire();

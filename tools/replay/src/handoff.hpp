@@ -36,12 +36,13 @@ class Handoff {
   /// Producer: b, filled, to the consumer; `last`: nothing follows it (a consumer waiting for
   /// a batch takes what there is).
   void publish(Block* b, bool last = false) { push(full_, b, last); }
-  /// Consumer: the next full block, in the order published (waits for it).
+  /// Consumer: the next full block, in the order published (waits for it); nullptr once the last
+  /// one was taken (publish(b, true)): nothing would ever come.
   Block* take() { return pop(full_, false); }
   /// Consumer: b back to the producer.
   void release(Block* b) { push(free_, b, false); }
-  /// The consumer takes no more: a producer waiting for a free block (or asking for the next)
-  /// gets nullptr.
+  /// The consumer takes no more (called by the consumer, so only the producer may be waiting):
+  /// a producer waiting for a free block (or asking for the next) gets nullptr.
   void stop() {
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -63,9 +64,11 @@ class Handoff {
     bool done = false;     ///< nothing more will be pushed (the last block is in)
   };
 
-  /// The first block of q, waiting for one; nullptr if `stoppable` and stop() was called.
+  /// The first block of q, waiting for one; nullptr if `stoppable` and stop() was called, or if
+  /// q is empty and done.
   Block* pop(Queue& q, bool stoppable) {
     std::unique_lock<std::mutex> lock(mutex_);
+    if (q.q.empty() && q.done) return nullptr;
     if (q.q.empty() && !(stoppable && stopped_)) {
       ++sleeps_;
       q.waiting = true;

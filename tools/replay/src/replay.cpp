@@ -285,8 +285,7 @@ void replayThreaded(Reader& reader, Applier& applier, ReplayResult& r) {
       r.handoff_sleeps = h.sleeps();
     }
   } join{handoff, thread, reading_cpu_s, r};
-  while (true) {
-    Block* b = handoff.take();
+  while (Block* b = handoff.take()) {
     bool more = false;
     try {
       const CpuTimer t(r.applying_cpu_s);
