@@ -41,6 +41,7 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
 FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& bus, Options opts)
     : cfg_(cfg), bus_(bus), intake_(cfg), hold_(opts.hold) {
   echo_ = opts.echo;
+  status_period_us_ = static_cast<int64_t>(std::llround(cfg.fusion.status_period * 1e6));
   if (echo_) echoes_.resize(kEchoSeqs);
   core::EngineConfig ec = common::engineConfig(cfg);
   max_jump_us_ = ec.max_time_jump_us;
@@ -260,7 +261,11 @@ void DaemonIntake::start(IntakeItem& out, IntakeItem::Kind kind, const std::stri
 
 void DaemonIntake::tracked(IntakeItem& out, const std::string& ch, int64_t seq, int64_t utime) {
   start(out, IntakeItem::Kind::Nothing, ch, seq, utime);
-  if (gaps_.follows(ch, seq)) return;
+  // The tracker's last key is the channel of the tracked message before: on that channel again
+  // (the usual case) the key need not be compared again.
+  const bool same = channel_ == tracked_channel_;
+  tracked_channel_ = channel_;
+  if (same ? gaps_.followsLast(seq) : gaps_.follows(ch, seq)) return;
   const common::SeqGap gap = gaps_.observe(ch, seq);
   if (gap.missing > 0 || gap.uncounted > 0 || gap.ignored || gap.restarted) {
     out.seq_event = true;
@@ -396,7 +401,7 @@ void FusionDaemon::publishState(const std::string& filter, bool active, const co
   }
   last_utime_ = s.utime;
   last_status_ = s.status;
-  const auto period = static_cast<int64_t>(std::llround(cfg_.fusion.status_period * 1e6));
+  const int64_t period = status_period_us_;
   // A time base in the past (fusion.max_time_jump): the schedule starts over.
   if (next_status_utime_ != INT64_MIN && core::apartBy(next_status_utime_, s.utime, 2 * period))
     next_status_utime_ = INT64_MIN;

@@ -88,6 +88,7 @@ class DaemonIntake {
   common::SeqTracker gaps_;
   common::LocalFrame frame_;  ///< lat/lon of GPS fixes -> local metric frame (cfg.datum)
   core::ChannelName channel_;  ///< the channel of the message before
+  core::ChannelName tracked_channel_;  ///< the channel of the seq-tracked message before
 };
 
 /// The daemon is written against common::MessageBus: lcmloc-fusion runs it over LCM, the
@@ -214,6 +215,7 @@ class FusionDaemon {
   int64_t foreign_outputs_ = 0;
   common::LogThrottle log_throttle_;  ///< per kind of problem: first 5, then 1 in 1000
   int64_t messages_in_ = 0, rejected_ = 0, last_utime_ = 0, next_status_utime_ = INT64_MIN;
+  int64_t status_period_us_ = 0;  ///< fusion.status_period [us]
   core::FilterStatus last_status_ = core::FilterStatus::Uninitialized;
   bool event_seen_ = false;
   bool hold_ = false;

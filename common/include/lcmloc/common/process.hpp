@@ -177,9 +177,14 @@ class SeqTracker {
   /// observe() of the usual message, inline: true when seq follows on the key observed last (the
   /// message is taken, nothing to report); false, nothing changed, otherwise: observe() it then.
   bool follows(const std::string& key, int64_t seq) {
+    return last_ < entries_.size() && core::sameText(entries_[last_].first, key) && followsLast(seq);
+  }
+  /// follows() for a caller that knows the key is the one observed last (the one of its
+  /// previous observe() or follows()): no comparison of the key.
+  bool followsLast(int64_t seq) {
     if (last_ >= entries_.size()) return false;
-    auto& [k, e] = entries_[last_];
-    if (e.pending || e.last == INT64_MAX || seq != e.last + 1 || !core::sameText(k, key)) return false;
+    Entry& e = entries_[last_].second;
+    if (e.pending || e.last == INT64_MAX || seq != e.last + 1) return false;
     e.jump_missing = 0;  // (as observe() takes it)
     e.last = seq;
     return true;
