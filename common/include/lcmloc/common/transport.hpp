@@ -73,30 +73,31 @@ class MessageBus {
   }
   virtual bool publishRaw(const std::string& channel, const void* data, std::size_t size) = 0;
 
-  /// Typed subscription; channel is an LCM regex.
-  template <typename T>
-  void subscribe(const std::string& channel,
-                 std::function<void(const std::string&, const T&, int64_t)> handler,
-                 ErrorHandler on_error = nullptr) {
+  /// Typed subscription; channel is an LCM regex. handler(channel, const T& msg, recv_utime): any
+  /// callable, kept as it is inside the raw handler (a lambda is called inline there, not through
+  /// a second std::function per message).
+  template <typename T, typename Handler>
+  void subscribe(const std::string& channel, Handler handler, ErrorHandler on_error = nullptr) {
     subscribeRaw(
         channel,
         [this, handler = std::move(handler), on_error = std::move(on_error), msg = T()](
             const std::string& ch, const uint8_t* data, std::size_t size, int64_t recv_utime) mutable {
           // msg: decoded into again and again (every field is written; its arrays keep their
           // storage), not made anew per message.
-          std::string why;
+          const char* array = nullptr;  // (the reason is built only for a message that fails)
           try {
             if (decodeMessage(msg, data, size) >= 0) {
               handler(ch, msg, recv_utime);
               return;
             }
-            why = "cannot decode " + std::string(T::getTypeName()) + " (" + std::to_string(size) +
-                  " bytes; wrong type or corrupt)";
           } catch (const std::bad_alloc&) {
-            why = "cannot decode " + std::string(T::getTypeName()) + ": absurd array length";
+            array = ": absurd array length";
           } catch (const std::length_error&) {
-            why = "cannot decode " + std::string(T::getTypeName()) + ": negative array length";
+            array = ": negative array length";
           }
+          const std::string why = "cannot decode " + std::string(T::getTypeName()) +
+                                  (array ? std::string(array)
+                                         : " (" + std::to_string(size) + " bytes; wrong type or corrupt)");
           decodeFailed(ch, why);
           if (on_error) on_error(ch, why);
         });
