@@ -57,6 +57,22 @@ struct EngineInput {
       payload;
 };
 
+/// The reorder window's move of an input into a reused slot (ReorderBuffer, assignSlot): an
+/// odometry input into a slot that held one, as in nearly every slot, copies the increment
+/// directly instead of going through the variant's move assignment (a jump table per message).
+/// Every field of EngineInput is assigned here.
+inline void assignSlot(EngineInput& slot, EngineInput&& in) {
+  slot.channel = in.channel;
+  slot.seq = in.seq;
+  slot.utime = in.utime;
+  auto* to = std::get_if<OdometryInput>(&slot.payload);
+  const auto* from = std::get_if<OdometryInput>(&in.payload);
+  if (to && from)
+    *to = *from;
+  else
+    slot.payload = std::move(in.payload);
+}
+
 /// Outputs are delivered through callbacks, in processing order.
 struct EngineOutputs {
   /// (filter name, state) after every processed odometry or ruler input, and after every IMU

@@ -13,6 +13,13 @@
 
 namespace lcmloc::core {
 
+/// How ReorderBuffer moves an item into a reused slot: move assignment, unless an overload for
+/// the item's type (found by argument-dependent lookup) does it faster.
+template <typename T>
+void assignSlot(T& slot, T&& item) {
+  slot = std::move(item);
+}
+
 struct OrderKey {
   int64_t utime = 0;
   int rank = 0;     ///< fixed per channel (e.g. odometry before ruler at equal utime)
@@ -53,7 +60,7 @@ class ReorderBuffer {
     } else {
       slot = free_.back();
       free_.pop_back();
-      slots_[slot] = std::move(item);
+      assignSlot(slots_[slot], std::move(item));
     }
     keys_.insert(at, Key{key, slot});
     if (advance) newest_utime_ = std::max(newest_utime_, key.utime);
