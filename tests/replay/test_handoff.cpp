@@ -2,6 +2,7 @@
 // batched wake-ups, the end of the blocks and stop().
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <set>
 #include <thread>
@@ -83,6 +84,40 @@ TEST(Handoff, AConsumerAheadOfItsProducerWaitsForABatchAndTakesTheLastShortOne) 
   EXPECT_EQ(r.received, upTo(41));
   EXPECT_GE(r.sleeps, 5);
   EXPECT_LE(r.sleeps, 41 / 4 + 2);
+}
+
+TEST(Handoff, TheConsumersFirstBlockIsHandedOverAtOnceNotWithABatch) {
+  // At the start the consumer has nothing to work on: it gets the first block as soon as it is
+  // published (later it waits for a batch of 4). The producer publishes one block, then waits
+  // until the consumer has it (up to 5 s) before it publishes the rest.
+  Handoff<Numbered> h(8, 4);
+  std::atomic<bool> got_first{false};
+  bool waited_in_vain = true;
+  std::thread producer([&] {
+    Numbered* b = h.acquire();
+    b->n = 0;
+    h.publish(b);
+    for (int i = 0; i < 500 && waited_in_vain; ++i) {
+      if (got_first) waited_in_vain = false;
+      else std::this_thread::sleep_for(10ms);
+    }
+    for (int i = 1; i < 8; ++i) {
+      Numbered* c = h.acquire();
+      c->n = i;
+      h.publish(c, i == 7);
+    }
+  });
+  Numbered* first = h.take();
+  got_first = true;
+  std::vector<int> received{first->n};
+  h.release(first);
+  while (Numbered* b = h.take()) {
+    received.push_back(b->n);
+    h.release(b);
+  }
+  producer.join();
+  EXPECT_FALSE(waited_in_vain) << "the first block waited for a batch: take() returned only after the producer gave up";
+  EXPECT_EQ(received, upTo(8));
 }
 
 TEST(Handoff, ABatchLargerThanHalfTheBlocksIsCutSoThatNeitherSideWaitsForTheOther) {

@@ -4,7 +4,7 @@
 // once the blocks have grown. One lock per block: a block carries many items.
 //
 // A side that runs out of blocks sleeps until `batch` of them are ready for it (or the other
-// side has finished), not until the first one is: then it works through several blocks before
+// side has finished), not until the first one is (except for the consumer's first block): then it works through several blocks before
 // it waits again. On a virtual machine a wake-up is an interrupt to the other CPU, tens of
 // microseconds of the waking side's time; with batch = capacity / 2 the faster side is woken
 // once per batch blocks, not once per block.
@@ -29,6 +29,7 @@ class Handoff {
       blocks_.push_back(std::make_unique<Block>());
       free_.q.push_back(blocks_.back().get());
     }
+    free_.wake_at = static_cast<std::size_t>(batch_);
   }
 
   /// Producer: a free block (waits for one); nullptr once stop() was called.
@@ -60,7 +61,10 @@ class Handoff {
   struct Queue {
     std::deque<Block*> q;
     std::condition_variable cv;
-    bool waiting = false;  ///< its taker sleeps until `batch_` blocks (or `done`)
+    bool waiting = false;  ///< its taker sleeps until `wake_at` blocks (or `done`)
+    /// batch_, but 1 for the consumer's first block: at the start it has nothing to work on,
+    /// and waiting for a batch would only delay it.
+    std::size_t wake_at = 1;
     bool done = false;     ///< nothing more will be pushed (the last block is in)
   };
 
@@ -78,6 +82,7 @@ class Handoff {
     if (stoppable && stopped_) return nullptr;
     Block* b = q.q.front();
     q.q.pop_front();
+    q.wake_at = static_cast<std::size_t>(batch_);
     return b;
   }
   void push(Queue& q, Block* b, bool last) {
@@ -86,7 +91,7 @@ class Handoff {
       std::lock_guard<std::mutex> lock(mutex_);
       q.q.push_back(b);
       if (last) q.done = true;
-      if (q.waiting && (q.q.size() >= static_cast<std::size_t>(batch_) || q.done)) {
+      if (q.waiting && (q.q.size() >= q.wake_at || q.done)) {
         q.waiting = false;
         wake = true;
       }
