@@ -85,8 +85,7 @@ void LogBus::subscribeRaw(const std::string& channel, RawHandler handler) {
   last_route_ = nullptr;
 }
 
-const std::vector<std::size_t>& LogBus::handlersFor(const std::string& channel) {
-  if (last_channel_ && core::sameText(*last_channel_, channel)) return *last_route_;
+const std::vector<std::size_t>& LogBus::route(const std::string& channel) {
   auto it = route_.find(channel);
   if (it == route_.end()) {
     std::vector<std::size_t> idx;
@@ -99,10 +98,18 @@ const std::vector<std::size_t>& LogBus::handlersFor(const std::string& channel) 
   return it->second;
 }
 
-bool LogBus::subscribed(const std::string& channel) { return !handlersFor(channel).empty(); }
-
 int LogBus::dispatch(const std::string& channel, const void* data, std::size_t size, int64_t recv_utime) {
-  const auto& idx = handlersFor(channel);
+  // (the usual case, the channel of the event before, inline: no call per event)
+  const auto& idx = last_channel_ && core::sameText(*last_channel_, channel) ? *last_route_ : route(channel);
+  return call(idx, channel, data, size, recv_utime);
+}
+
+int LogBus::dispatchAgain(const std::string& channel, const void* data, std::size_t size, int64_t recv_utime) {
+  return call(*last_route_, channel, data, size, recv_utime);
+}
+
+int LogBus::call(const std::vector<std::size_t>& idx, const std::string& channel, const void* data, std::size_t size,
+                 int64_t recv_utime) {
   for (std::size_t i : idx) subs_[i].handler(channel, static_cast<const uint8_t*>(data), size, recv_utime);
   return static_cast<int>(idx.size());
 }

@@ -35,10 +35,11 @@ class LogBus : public common::MessageBus {
   /// Hands one input event to every subscription whose regex matches the channel. Returns the
   /// number of handlers called (0: nobody subscribes to this channel).
   int dispatch(const std::string& channel, const void* data, std::size_t size, int64_t recv_utime);
+  /// dispatch() of an event whose channel is that of the last dispatch() (the caller knows it:
+  /// the channel is not looked up again).
+  int dispatchAgain(const std::string& channel, const void* data, std::size_t size, int64_t recv_utime);
   /// Copies an input event to the output unchanged (timestamp: the message's utime).
   bool copy(const std::string& channel, const void* data, std::size_t size, int64_t fallback_utime);
-  /// Channels with at least one subscription among those seen so far.
-  bool subscribed(const std::string& channel);
 
   int64_t written() const { return written_; }
   /// What failed writing the output log ("" while every write succeeded); nothing is written
@@ -50,8 +51,12 @@ class LogBus : public common::MessageBus {
 
  private:
   bool write(const std::string& channel, const void* data, std::size_t size, int64_t timestamp);
+  int call(const std::vector<std::size_t>& handlers, const std::string& channel, const void* data, std::size_t size,
+           int64_t recv_utime);
   bool writeFailed(int err);
-  const std::vector<std::size_t>& handlersFor(const std::string& channel);
+  /// The subscriptions whose regex matches a channel other than the last one dispatched (cached
+  /// per channel); it becomes the last one.
+  [[gnu::noinline]] const std::vector<std::size_t>& route(const std::string& channel);
 
   struct Sub {
     std::regex re;
@@ -59,7 +64,7 @@ class LogBus : public common::MessageBus {
   };
   std::vector<Sub> subs_;
   std::map<std::string, std::vector<std::size_t>> route_;  ///< channel -> matching subs (cached)
-  /// The last route_ entry looked up (most events are on the channel of the event before).
+  /// The route_ entry of the last dispatch (most events are on the channel of the event before).
   const std::string* last_channel_ = nullptr;
   const std::vector<std::size_t>* last_route_ = nullptr;
   // The above is read by the replay's reading thread for every event, what follows written by its
