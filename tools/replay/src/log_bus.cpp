@@ -10,12 +10,13 @@ namespace lcmloc::replay {
 
 /// The output log: the standard LCM log format (events numbered 0, 1, ... as lcm::LogFile numbers
 /// them), written through a 1 MB user-space buffer (one write(2) per MB, not several stdio calls
-/// per event).
+/// per event), on a thread of its own (EventFile's background writing: the replay's applying
+/// thread, the busier one, does not wait for the kernel to take each MB).
 class LogWriter {
  public:
   explicit LogWriter(const std::string& path) {
     try {
-      file = std::make_unique<logger::EventFile>(path, std::size_t{1} << 20);
+      file = std::make_unique<logger::EventFile>(path, std::size_t{1} << 20, true);
     } catch (const std::exception& e) {
       throw std::runtime_error("cannot create output log '" + path + "': " + e.what());
     }
