@@ -154,11 +154,10 @@ int EventFile::dropBuffered(int err) {
 }
 
 int EventFile::writeOut() {
-  const int err = writeEvents(buf_.data(), used_, ends_);
+  if (const int err = writeEvents(buf_.data(), used_, ends_)) return dropBuffered(err);
   used_ = 0;
   ends_.clear();
-  if (err != 0) events_ = events_written_;
-  return err;
+  return 0;
 }
 
 int EventFile::writeEvents(const uint8_t* data, std::size_t used, const std::vector<std::size_t>& ends) {
