@@ -106,6 +106,7 @@ int LogBus::dispatch(const std::string& channel, const void* data, std::size_t s
 }
 
 int LogBus::dispatchAgain(const std::string& channel, const void* data, std::size_t size, int64_t recv_utime) {
+  if (!last_route_) return dispatch(channel, data, size, recv_utime);  // (no dispatch before it)
   return call(*last_route_, channel, data, size, recv_utime);
 }
 
