@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 
 namespace lcmloc::common {
 
@@ -192,6 +193,73 @@ void toLcm(const core::FilterState& s, const std::string& filter, int64_t seq, l
     for (int j = 0; j < known; ++j) row[j] = s.P(i, j);
     std::fill(row.begin() + known, row.end(), 0.0);
   }
+}
+
+namespace {
+
+/// LCM's wire format: big-endian integers, IEEE doubles as their big-endian bit pattern, a string
+/// as int32 strlen + 1 followed by its bytes and a NUL (lcm_coretypes.h).
+struct WireWriter {
+  uint8_t* p;
+  void u64(uint64_t v) {
+    v = __builtin_bswap64(v);
+    std::memcpy(p, &v, 8);
+    p += 8;
+  }
+  void u32(uint32_t v) {
+    v = __builtin_bswap32(v);
+    std::memcpy(p, &v, 4);
+    p += 4;
+  }
+  void f64(double d) {
+    uint64_t v;
+    std::memcpy(&v, &d, 8);
+    u64(v);
+  }
+  void str(const char* c, std::size_t len) {
+    u32(static_cast<uint32_t>(len + 1));
+    std::memcpy(p, c, len);
+    p[len] = 0;
+    p += len + 1;
+  }
+};
+
+/// What lcm-gen's string encode writes of s: up to its first NUL (it encodes c_str()).
+std::size_t wireLength(const std::string& s) { return std::strlen(s.c_str()); }
+
+}  // namespace
+
+std::size_t encodePose(const core::FilterState& s, const std::string& filter, int64_t seq,
+                       std::vector<uint8_t>& out) {
+  const auto n = static_cast<int>(s.x.size());
+  const int named = std::min(n, static_cast<int>(s.names.size()));
+  const int p_rows = std::min(n, static_cast<int>(s.P.rows()));
+  const int p_cols = std::min(n, static_cast<int>(s.P.cols()));
+  const std::size_t filter_len = wireLength(filter);
+  std::size_t size = 8 + 8 + 8 + (4 + filter_len + 1) + 4 + 4 + 8 * static_cast<std::size_t>(n) * (n + 1);
+  for (int i = 0; i < named; ++i) size += 4 + wireLength(s.names[i]) + 1;
+  for (int i = named; i < n; ++i) size += 4 + std::to_string(i).size() + 2;  // "s<i>"
+  if (out.size() < size) out.resize(size);
+  WireWriter w{out.data()};
+  w.u64(static_cast<uint64_t>(lcmloc::pose_t::getHash()));
+  w.u64(static_cast<uint64_t>(s.utime));
+  w.u64(static_cast<uint64_t>(seq));
+  w.str(filter.c_str(), filter_len);
+  w.u32(static_cast<uint32_t>(static_cast<int32_t>(s.status)));
+  w.u32(static_cast<uint32_t>(n));
+  for (int i = 0; i < n; ++i) w.f64(s.x[i]);
+  for (int i = 0; i < named; ++i) w.str(s.names[i].c_str(), wireLength(s.names[i]));
+  for (int i = named; i < n; ++i) {
+    const std::string name = "s" + std::to_string(i);
+    w.str(name.c_str(), name.size());
+  }
+  // P's part of each row, zeros beyond it (a P smaller than x), as toLcm fills the rows.
+  for (int i = 0; i < n; ++i) {
+    const int known = i < p_rows ? p_cols : 0;
+    for (int j = 0; j < known; ++j) w.f64(s.P(i, j));
+    for (int j = known; j < n; ++j) w.f64(0.0);
+  }
+  return size;
 }
 
 lcmloc::gate_decision_t toLcm(const core::GateDecision& d, const std::string& filter, int64_t seq) {

@@ -17,16 +17,17 @@ namespace lcmloc::fusion {
 namespace {
 
 /// FNV-1a over a POSE's utime, filter and state: what tells this daemon's POSE from another's.
-uint64_t fingerprint(const lcmloc::pose_t& m) {
+uint64_t fingerprint(int64_t utime, const std::string& filter, const double* state, std::size_t n) {
   uint64_t h = 14695981039346656037ull;
   auto add = [&h](const void* p, std::size_t n) {
     for (std::size_t i = 0; i < n; ++i) h = (h ^ static_cast<const unsigned char*>(p)[i]) * 1099511628211ull;
   };
-  add(&m.utime, sizeof m.utime);
-  add(m.filter.data(), m.filter.size());
-  add(m.state.data(), m.state.size() * sizeof(double));
+  add(&utime, sizeof utime);
+  add(filter.data(), filter.size());
+  add(state, n * sizeof(double));
   return h;
 }
+uint64_t fingerprint(const lcmloc::pose_t& m) { return fingerprint(m.utime, m.filter, m.state.data(), m.state.size()); }
 
 std::string upper(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::toupper(c); });
@@ -392,12 +393,14 @@ void FusionDaemon::publishState(const std::string& filter, bool active, const co
     pose_out_.push_back(std::move(n));
     po = &pose_out_.back();
   }
-  common::toLcm(s, filter, (*po->seq)++, &po->msg);
-  bus_.publish(po->channel, po->msg);
+  const int64_t seq = (*po->seq)++;
+  const std::size_t size = common::encodePose(s, filter, seq, po->bytes);
+  bus_.publishRaw(po->channel, po->bytes.data(), size);
   if (!active) return;
   if (echo_) {
-    echoes_[static_cast<std::size_t>(po->msg.seq % kEchoSeqs)] = Echo{fingerprint(po->msg), false};
-    pose_seqs_ = po->msg.seq + 1;
+    echoes_[static_cast<std::size_t>(seq % kEchoSeqs)] =
+        Echo{fingerprint(s.utime, filter, s.x.data(), static_cast<std::size_t>(s.x.size())), false};
+    pose_seqs_ = seq + 1;
   }
   last_utime_ = s.utime;
   last_status_ = s.status;

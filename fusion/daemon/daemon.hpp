@@ -193,13 +193,13 @@ class FusionDaemon {
   int64_t gaps_ = 0;  ///< messages missing according to the intake's sequence checks
   std::map<std::string, int64_t> out_seq_;  ///< per output channel
   /// Per (filter, active): its POSE channel, that channel's seq counter (a node of out_seq_) and
-  /// the message, reused for every state it publishes (no per-message allocations).
+  /// the encode buffer, reused for every state it publishes (no per-message allocations).
   struct PoseOut {
     std::string filter;
     bool active = false;
     std::string channel;
     int64_t* seq = nullptr;
-    lcmloc::pose_t msg;
+    std::vector<uint8_t> bytes;  ///< common::encodePose's output
   };
   std::vector<PoseOut> pose_out_;
   /// The last kEchoSeqs POSE this daemon published on the active channel, by seq: a fingerprint

@@ -8,6 +8,9 @@
 #include <fstream>
 #include <filesystem>
 #include <limits>
+#include <algorithm>
+#include <utility>
+#include <vector>
 
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/convert.hpp"
@@ -364,6 +367,64 @@ TEST(Convert, RulerDetectionsOnlyAndValidated) {
   q.quality = 1.5;
   EXPECT_FALSE(common::toCore(q, "MAGRULER", &why));
   EXPECT_NE(why.find("quality"), std::string::npos);
+}
+
+namespace {
+/// pose_t::encode's bytes of toLcm(s, filter, seq): what encodePose must give.
+std::vector<uint8_t> lcmGenBytes(const core::FilterState& s, const std::string& filter, int64_t seq) {
+  const lcmloc::pose_t m = common::toLcm(s, filter, seq);
+  std::vector<uint8_t> b(static_cast<std::size_t>(m.getEncodedSize()));
+  const int size = m.encode(b.data(), 0, static_cast<int>(b.size()));
+  EXPECT_GT(size, 0);
+  // (shorter than getEncodedSize() only for a string with a NUL inside: getEncodedSize counts
+  // all of it, encode writes it up to the NUL)
+  b.resize(static_cast<std::size_t>(std::max(size, 0)));
+  return b;
+}
+}  // namespace
+
+TEST(Convert, EncodePoseGivesLcmGensBytesForEveryShapeOfState) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<std::pair<core::FilterState, std::string>> cases;
+  core::FilterState s;
+  s.utime = -7;  // negative and large values: the byte order of every field shows
+  s.x = Eigen::Vector3d(1.5, -2.25e7, 3.1);
+  s.P = Eigen::Matrix3d::Random();
+  s.names = {"x", "y", "theta"};
+  s.status = core::FilterStatus::DeadReckoning;
+  cases.push_back({s, "ukf_gated"});
+  s.x = Eigen::VectorXd::LinSpaced(5, -1.0, 1.0);
+  s.P = Eigen::MatrixXd::Random(5, 5);
+  s.P(4, 0) = nan;
+  s.names = {"x", "y", "theta", "odo_scale", "steer_bias"};
+  s.status = core::FilterStatus::Lockout;
+  cases.push_back({s, "ukf_calib"});
+  s.names = {"x", "y"};  // fewer names than states: "s2".. like toLcm
+  s.P = Eigen::MatrixXd::Random(3, 2);  // a P smaller than x: zeros beyond it
+  cases.push_back({s, ""});
+  s.x.resize(12);
+  s.x.setConstant(-0.0);
+  s.P = Eigen::MatrixXd::Identity(12, 12);
+  s.names.assign(12, std::string("a\0b", 3));  // lcm-gen encodes a string up to its first NUL
+  cases.push_back({s, "long_filter_name_for_a_shadow"});
+  s.x.resize(0);
+  s.P.resize(0, 0);
+  s.names.clear();
+  cases.push_back({s, "empty"});
+
+  std::vector<uint8_t> out;  // reused, as the daemon does: a smaller state after a larger one
+  int64_t seq = 1LL << 40;
+  for (const auto& [state, filter] : cases) {
+    const std::size_t size = common::encodePose(state, filter, seq, out);
+    const auto want = lcmGenBytes(state, filter, seq);
+    ASSERT_EQ(size, want.size()) << filter;
+    EXPECT_TRUE(std::equal(want.begin(), want.end(), out.begin())) << filter;
+    lcmloc::pose_t back;
+    ASSERT_EQ(back.decode(out.data(), 0, static_cast<int>(size)), static_cast<int>(size)) << filter;
+    EXPECT_EQ(back.seq, seq);
+    EXPECT_EQ(back.filter, filter);
+    ++seq;
+  }
 }
 
 TEST(Convert, ImuSamplesBeyondAnySensorsRangeAreRefused) {
