@@ -235,16 +235,17 @@ std::size_t encodePose(const core::FilterState& s, const std::string& filter, in
   const int named = std::min(n, static_cast<int>(s.names.size()));
   const int p_rows = std::min(n, static_cast<int>(s.P.rows()));
   const int p_cols = std::min(n, static_cast<int>(s.P.cols()));
-  const std::size_t filter_len = wireLength(filter);
-  std::size_t size = 8 + 8 + 8 + (4 + filter_len + 1) + 4 + 4 + 8 * static_cast<std::size_t>(n) * (n + 1);
-  for (int i = 0; i < named; ++i) size += 4 + wireLength(s.names[i]) + 1;
-  for (int i = named; i < n; ++i) size += 4 + std::to_string(i).size() + 2;  // "s<i>"
-  if (out.size() < size) out.resize(size);
+  // Room for the strings at their full size (the encoding may stop a string at a NUL inside it:
+  // the size returned is what was written).
+  std::size_t room = 8 + 8 + 8 + (4 + filter.size() + 1) + 4 + 4 + 8 * static_cast<std::size_t>(n) * (n + 1);
+  for (int i = 0; i < named; ++i) room += 4 + s.names[i].size() + 1;
+  for (int i = named; i < n; ++i) room += 4 + std::to_string(i).size() + 2;  // "s<i>"
+  if (out.size() < room) out.resize(room);
   WireWriter w{out.data()};
   w.u64(static_cast<uint64_t>(lcmloc::pose_t::getHash()));
   w.u64(static_cast<uint64_t>(s.utime));
   w.u64(static_cast<uint64_t>(seq));
-  w.str(filter.c_str(), filter_len);
+  w.str(filter.c_str(), wireLength(filter));
   w.u32(static_cast<uint32_t>(static_cast<int32_t>(s.status)));
   w.u32(static_cast<uint32_t>(n));
   for (int i = 0; i < n; ++i) w.f64(s.x[i]);
@@ -259,7 +260,7 @@ std::size_t encodePose(const core::FilterState& s, const std::string& filter, in
     for (int j = 0; j < known; ++j) w.f64(s.P(i, j));
     for (int j = known; j < n; ++j) w.f64(0.0);
   }
-  return size;
+  return static_cast<std::size_t>(w.p - out.data());
 }
 
 lcmloc::gate_decision_t toLcm(const core::GateDecision& d, const std::string& filter, int64_t seq) {
