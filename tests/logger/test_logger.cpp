@@ -402,7 +402,14 @@ TEST_F(LoggerTest, KillDashNineKeepsEverythingUpToTheLastFlushReadableByUsAndLcm
   ASSERT_EQ(logger->wait(5s), std::optional<int>(128 + SIGKILL));
 
   const auto r = readBack(path("crash.lcmlog"));
-  EXPECT_FALSE(r.scan.damaged);
+  // A SIGKILL that lands inside write(2) can leave part of an event at the end (the kernel stops
+  // copying at a page boundary once a fatal signal is pending): that tail, and nothing else, may be
+  // unreadable.
+  if (r.scan.damaged) {
+    ASSERT_EQ(r.scan.issues.size(), 1u);
+    EXPECT_NE(r.scan.issues[0].what.find("log ends in a damaged or truncated event"), std::string::npos)
+        << r.scan.issues[0].describe();
+  }
   ASSERT_GE(r.seqs.size(), 300u);
   for (std::size_t i = 0; i < r.seqs.size(); ++i) ASSERT_EQ(r.seqs[i], static_cast<int64_t>(i));
 
