@@ -1,8 +1,6 @@
 // lcmtypes <-> core structs, with NaN/Inf and range validation on the way in.
 #include "lcmloc/common/convert.hpp"
 
-#include "lcmloc/core/text.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -163,36 +161,23 @@ lcmloc::magruler_t toLcm(const models::RulerReading& r, int64_t seq) {
 
 lcmloc::pose_t toLcm(const core::FilterState& s, const std::string& filter, int64_t seq) {
   lcmloc::pose_t m;
-  toLcm(s, filter, seq, &m);
-  return m;
-}
-
-void toLcm(const core::FilterState& s, const std::string& filter, int64_t seq, lcmloc::pose_t* out) {
-  lcmloc::pose_t& m = *out;
   const auto n = static_cast<int>(s.x.size());
   m.utime = s.utime;
   m.seq = seq;
-  if (m.filter != filter) m.filter = filter;
+  m.filter = filter;
   m.status = static_cast<int32_t>(s.status);
   m.dim = n;
   m.state.assign(s.x.data(), s.x.data() + n);
   m.state_names.resize(n);
+  for (int i = 0; i < n; ++i)
+    m.state_names[i] = i < static_cast<int>(s.names.size()) ? s.names[i] : "s" + std::to_string(i);
+  m.covariance.assign(n, std::vector<double>(n, 0.0));
   for (int i = 0; i < n; ++i) {
-    if (i < static_cast<int>(s.names.size())) {
-      if (!core::sameText(m.state_names[i], s.names[i])) m.state_names[i] = s.names[i];
-    } else {
-      m.state_names[i] = "s" + std::to_string(i);
-    }
-  }
-  m.covariance.resize(n);
-  for (int i = 0; i < n; ++i) {
-    auto& row = m.covariance[i];
-    row.resize(n);
     // P's part of the row, zeros beyond it (a P smaller than x)
     const int known = i < s.P.rows() ? std::min(n, static_cast<int>(s.P.cols())) : 0;
-    for (int j = 0; j < known; ++j) row[j] = s.P(i, j);
-    std::fill(row.begin() + known, row.end(), 0.0);
+    for (int j = 0; j < known; ++j) m.covariance[i][j] = s.P(i, j);
   }
+  return m;
 }
 
 namespace {

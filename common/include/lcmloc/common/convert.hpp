@@ -45,8 +45,6 @@ lcmloc::imu_t toLcm(const models::ImuSample& s, int64_t seq);
 /// Local fix -> gps_fix_t (lat/lon about the frame's datum, altitude = datum altitude).
 lcmloc::gps_fix_t toLcm(const models::GpsFixSample& f, const LocalFrame& frame, int64_t seq);
 lcmloc::pose_t toLcm(const core::FilterState& s, const std::string& filter, int64_t seq);
-/// The same into an existing message, reusing its storage (the daemon's per-message path).
-void toLcm(const core::FilterState& s, const std::string& filter, int64_t seq, lcmloc::pose_t* out);
 lcmloc::gate_decision_t toLcm(const core::GateDecision& d, const std::string& filter, int64_t seq);
 /// The bytes pose_t::encode gives for toLcm(s, filter, seq) (hash first; the tests compare the
 /// two byte for byte), written straight from the state into out, which grows as needed. Returns
