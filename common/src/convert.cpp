@@ -53,28 +53,33 @@ inline bool validUtime(int64_t utime, std::string* why) { return utime >= 0 || n
 
 }  // namespace
 
-std::optional<core::OdometryInput> toCore(const lcmloc::odometry_t& m, std::string* why) {
+bool toCore(const lcmloc::odometry_t& m, core::OdometryInput& out, std::string* why) {
   if (!validUtime(m.utime, why) || !finiteField(m.delta_s, "delta_s", why) ||
       !finiteField(m.steering, "steering", why) || !finiteField(m.delta_theta, "delta_theta", why))
-    return std::nullopt;
+    return false;
   if (std::abs(m.delta_s) > kMaxStepDistance) {
     fail(why, "delta_s " + std::to_string(m.delta_s) + " m out of range");
-    return std::nullopt;
+    return false;
   }
   if (m.has_steering && std::abs(m.steering) >= kHalfPi) {
     fail(why, "steering " + std::to_string(m.steering) + " rad out of range (-pi/2, pi/2)");
-    return std::nullopt;
+    return false;
   }
   if (!m.has_steering && std::abs(m.delta_theta) > M_PI) {
     fail(why, "delta_theta " + std::to_string(m.delta_theta) + " rad out of range [-pi, pi]");
-    return std::nullopt;
+    return false;
   }
+  out.utime = m.utime;
+  out.delta_s = m.delta_s;
+  out.steering = m.steering;
+  out.has_steering = m.has_steering;
+  out.delta_theta = m.delta_theta;
+  return true;
+}
+
+std::optional<core::OdometryInput> toCore(const lcmloc::odometry_t& m, std::string* why) {
   core::OdometryInput in;
-  in.utime = m.utime;
-  in.delta_s = m.delta_s;
-  in.steering = m.steering;
-  in.has_steering = m.has_steering;
-  in.delta_theta = m.delta_theta;
+  if (!toCore(m, in, why)) return std::nullopt;
   return in;
 }
 

@@ -287,8 +287,18 @@ void DaemonIntake::convert(IntakeItem& out, std::optional<T>&& payload, std::str
 
 void DaemonIntake::odometry(const std::string& ch, const lcmloc::odometry_t& m, IntakeItem& out) {
   tracked(out, ch, m.seq, m.utime);
+  // Converted in place (into the odometry input a reused item nearly always holds already): a
+  // converted copy handed back and then moved in costs more than the conversion, as the copy's
+  // bytes are read back right after they were written, before the CPU can forward them.
+  auto* odo = std::get_if<core::OdometryInput>(&out.input.payload);
+  if (!odo) odo = &out.input.payload.emplace<core::OdometryInput>();
   std::string why;
-  convert(out, common::toCore(m, &why), std::move(why));
+  if (common::toCore(m, *odo, &why)) {
+    out.kind = IntakeItem::Kind::Input;
+  } else {
+    out.kind = IntakeItem::Kind::Rejected;
+    out.more().why = std::move(why);
+  }
 }
 
 void DaemonIntake::ruler(const std::string& ch, const lcmloc::magruler_t& m, IntakeItem& out) {

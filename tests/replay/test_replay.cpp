@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <variant>
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -421,7 +422,7 @@ TEST_F(ReplayTest, ReadingAheadOnAThreadGivesWhatReadingInLineGives) {
   const std::string stopped = both(path("damaged.lcmlog"), path("stop"), false, 10);
   EXPECT_NE(stopped.find("read 2560 "), std::string::npos) << stopped;  // polled every 256 events
   EXPECT_NE(stopped.find("interrupted"), std::string::npos) << stopped;
-  // An output that fails (a full disk) when its first megabyte is written out: the replay stops
+  // An output that fails (a full disk) when its first buffer is written out: the replay stops
   // there, at the same event either way.
   for (int k = 0; k < 3; ++k) mixed.insert(mixed.end(), mixed.begin(), mixed.begin() + 6000);  // (over 1 MB)
   writeEvents(path("long.lcmlog"), mixed);
@@ -449,6 +450,69 @@ TEST_F(ReplayTest, ReadingAheadOnAThreadGivesWhatReadingInLineGives) {
   }
   EXPECT_EQ(summary[1], summary[0]);
   EXPECT_TRUE(slurp(path("exe0.lcmlog")) == slurp(path("exe1.lcmlog")));
+}
+
+// The intake converts an odometry message straight into the item it is given, whatever that item
+// held before (the replay's items are reused, block after block): a detection, a refused message,
+// an odometry input.
+TEST(DaemonIntakeTest, ConvertsOdometryInPlaceIntoAnItemOfAnyKind) {
+  const common::SystemConfig cfg = common::loadSystemConfig(LCMLOC_PAPER_YAML);
+  fusion::DaemonIntake intake(cfg);
+  fusion::IntakeItem item;
+  lcmloc::magruler_t r{};
+  r.utime = 1000;
+  r.seq = 4;
+  r.num_sensors = 2;
+  r.readings = {0.5, 0.5};
+  r.detected = true;
+  r.lateral_offset = 0.05;
+  r.quality = 0.9;
+  intake.ruler(cfg.channels.magruler.front(), r, item);
+  ASSERT_EQ(item.kind, fusion::IntakeItem::Kind::Input);
+  ASSERT_TRUE(std::holds_alternative<core::Boxed<core::RulerDetection>>(item.input.payload));
+
+  lcmloc::odometry_t o{};
+  o.utime = 2000;
+  o.seq = 7;
+  o.delta_s = 0.25;
+  o.steering = 0.1;
+  o.has_steering = true;
+  o.delta_theta = 0.003;
+  intake.odometry(cfg.channels.odometry, o, item);
+  ASSERT_EQ(item.kind, fusion::IntakeItem::Kind::Input);
+  ASSERT_TRUE(std::holds_alternative<core::OdometryInput>(item.input.payload));
+  const auto expect = [&](const lcmloc::odometry_t& m) {
+    const auto& in = std::get<core::OdometryInput>(item.input.payload);
+    EXPECT_EQ(item.input.channel.str(), cfg.channels.odometry);
+    EXPECT_EQ(item.input.seq, m.seq);
+    EXPECT_EQ(item.input.utime, m.utime);
+    EXPECT_EQ(in.utime, m.utime);
+    EXPECT_EQ(in.delta_s, m.delta_s);
+    EXPECT_EQ(in.steering, m.steering);
+    EXPECT_EQ(in.has_steering, m.has_steering);
+    EXPECT_EQ(in.delta_theta, m.delta_theta);
+  };
+  expect(o);
+
+  lcmloc::odometry_t bad = o;  // refused: the reason with it, the kind says so
+  bad.seq = 8;
+  bad.utime = 3000;
+  bad.delta_s = std::nan("");
+  intake.odometry(cfg.channels.odometry, bad, item);
+  EXPECT_EQ(item.kind, fusion::IntakeItem::Kind::Rejected);
+  ASSERT_TRUE(item.detail);
+  EXPECT_NE(item.detail->why.find("delta_s"), std::string::npos) << item.detail->why;
+  EXPECT_EQ(item.input.seq, 8);
+
+  lcmloc::odometry_t next = o;  // into the item that held the refused one
+  next.seq = 9;
+  next.utime = 4000;
+  next.delta_s = -0.1;
+  next.has_steering = false;
+  next.delta_theta = -0.02;
+  intake.odometry(cfg.channels.odometry, next, item);
+  EXPECT_EQ(item.kind, fusion::IntakeItem::Kind::Input);
+  expect(next);
 }
 
 TEST_F(ReplayTest, OutputOverTheInputIsRefusedAndTheInputKept) {

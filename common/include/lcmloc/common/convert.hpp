@@ -26,6 +26,9 @@ namespace lcmloc::common {
 
 /// Returns nullopt and sets why when a field is NaN/Inf or out of range.
 std::optional<core::OdometryInput> toCore(const lcmloc::odometry_t& m, std::string* why = nullptr);
+/// The same into `out` (every field set when it returns true; left partly set when false): the
+/// daemon's intake converts straight into the item it hands on, with no copy in between.
+bool toCore(const lcmloc::odometry_t& m, core::OdometryInput& out, std::string* why = nullptr);
 /// Only detections (detected == true) convert; a non-detection returns nullopt with why = "".
 std::optional<core::RulerDetection> toCore(const lcmloc::magruler_t& m, const std::string& channel,
                                            std::string* why = nullptr);
