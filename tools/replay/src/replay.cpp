@@ -35,11 +35,17 @@ namespace {
 /// order: the damage met before it (`issues` of the block's issues), its copy (--with-inputs),
 /// what the daemon's intake made of it (`items` of the block's items, in order).
 struct alignas(common::kLinePair) Block {
+  /// position and unreadable are the scanner's, after reading the event (at the end), apart in
+  /// the record: side by side, the two would be read from the scanner in one wide load right
+  /// after the scanner stored them one by one, a load the CPU cannot forward from its store
+  /// buffer (a stall per event; see Reader::addRecord).
   struct Record {
-    int64_t position = 0, unreadable = 0;  ///< the scanner's, after reading the event (at the end)
+    int64_t position = 0;
     uint32_t items = 0;
     uint16_t issues = 0;
-    bool old_output = false, dispatched = false, copy = false;
+    bool old_output = false, dispatched = false;
+    int64_t unreadable = 0;
+    bool copy = false;
     bool end = false;  ///< the end of the log: no event
   };
   struct Copy {
@@ -59,6 +65,13 @@ struct alignas(common::kLinePair) Block {
   /// intake fills a used item in place, strings and all, without allocating).
   std::vector<fusion::IntakeItem> items;
   std::size_t items_used = 0;
+  /// Room for a full block from the start (kRecords events and the end, an item each): no vector
+  /// grows by moving what it holds to new storage while the first blocks are filled, which would
+  /// touch twice the memory, each new page a page fault (microseconds each on a virtual machine).
+  Block() {
+    records.reserve(kRecords + 1);
+    items.reserve(kRecords);
+  }
   /// Of the records: old_output ones, dispatched ones (summed as they are made, for the applying
   /// side's counts of a whole block at once).
   int64_t old_outputs = 0, dispatched = 0;
@@ -107,7 +120,7 @@ class Reader {
       }
       const lcm::LogEvent* ev = scanner_.next();
       if (!ev) return end(b);
-      b.records.push_back(record());
+      addRecord(b);
       takeIssues(b);
       // Same channel as the event before: that one was not an output either, so it went to the
       // bus, which then need not look the channel up again.
@@ -132,14 +145,15 @@ class Reader {
   }
 
  private:
-  Block::Record record() const {
-    Block::Record r;
+  /// The record of the event just read (or of the end), made in place: one made first and then
+  /// copied in would be read back whole right after its fields were stored (as Record says).
+  void addRecord(Block& b) const {
+    Block::Record& r = b.records.emplace_back();
     r.position = scanner_.position();
     r.unreadable = scanner_.bytesUnreadable();
-    return r;
   }
   bool end(Block& b) {
-    b.records.push_back(record());
+    addRecord(b);
     b.records.back().end = true;
     takeIssues(b);  // (damage at the end of the file)
     b.last = true;

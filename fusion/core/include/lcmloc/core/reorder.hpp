@@ -62,7 +62,14 @@ class ReorderBuffer {
       free_.pop_back();
       assignSlot(slots_[slot], std::move(item));
     }
-    keys_.insert(at, Key{key, slot});
+    // Written in place, field by field: a Key made first and then copied in would be read back
+    // whole (wide loads) right after its fields were stored one by one, which the CPU cannot
+    // forward from its store buffer: a stall of tens of cycles per item.
+    Key& k = *keys_.emplace(at);
+    k.key.utime = key.utime;
+    k.key.rank = key.rank;
+    k.key.seq = key.seq;
+    k.slot = slot;
     if (advance) newest_utime_ = std::max(newest_utime_, key.utime);
     return true;
   }
