@@ -496,6 +496,11 @@ struct FusionEngine::Impl {
   }
   void handle(const EngineInput& in, const BearingsInput& b) { landmarkFix(in, b); }
 
+  /// A boxed input: as the input itself (but a command, below).
+  template <typename T>
+  void handle(const EngineInput& in, const Boxed<T>& boxed) {
+    handle(in, *boxed);
+  }
   void handle(const EngineInput& in, const Boxed<ControlCommand>& cmd) {
     command = in.channel + " seq " + std::to_string(in.seq) + ": ";
     std::visit([&](const auto& c) { control(in.utime, c); }, *cmd);
