@@ -6,12 +6,9 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <condition_variable>
 #include <cstring>
 #include <filesystem>
-#include <mutex>
 #include <stdexcept>
-#include <thread>
 
 namespace lcmloc::logger {
 namespace {
@@ -40,63 +37,6 @@ void encodeEventHeader(uint8_t* out, int64_t eventnum, int64_t utime, uint32_t c
   put64(out + 12, static_cast<uint64_t>(utime));
   put32(out + 20, channel_len);
   put32(out + 24, data_len);
-}
-
-/// The buffer being written in the background and the thread that writes it. The thread touches
-/// the file (and file_bytes_, events_written_) only between start() and the end of its write;
-/// the caller only outside.
-struct EventFile::Writer {
-  std::vector<uint8_t> buf;
-  std::size_t used = 0;
-  std::vector<std::size_t> ends;
-  std::mutex mutex;
-  std::condition_variable cv;
-  bool busy = false, stop = false;
-  int err = 0;
-  std::thread thread;
-
-  explicit Writer(EventFile& f) : thread([this, &f] { run(f); }) {}
-  ~Writer() {
-    {
-      std::lock_guard<std::mutex> lock(mutex);
-      stop = true;
-    }
-    cv.notify_all();
-    thread.join();
-  }
-  void run(EventFile& f) {
-    std::unique_lock<std::mutex> lock(mutex);
-    while (true) {
-      cv.wait(lock, [this] { return busy || stop; });
-      if (!busy) return;  // (stop, nothing handed over)
-      lock.unlock();
-      const int e = f.writeEvents(buf.data(), used, ends);
-      lock.lock();
-      err = e;
-      busy = false;
-      cv.notify_all();
-    }
-  }
-  /// Waits for the write handed over; its errno (once).
-  int wait() {
-    std::unique_lock<std::mutex> lock(mutex);
-    cv.wait(lock, [this] { return !busy; });
-    const int e = err;
-    err = 0;
-    return e;
-  }
-  void start() {
-    {
-      std::lock_guard<std::mutex> lock(mutex);
-      busy = true;
-    }
-    cv.notify_all();
-  }
-};
-
-EventFile::EventFile(const std::string& path, std::size_t buffer_bytes, bool background)
-    : EventFile(path, buffer_bytes) {
-  if (background) writer_ = std::make_unique<Writer>(*this);
 }
 
 EventFile::EventFile(const std::string& path, std::size_t buffer_bytes)
@@ -130,21 +70,8 @@ int EventFile::append(int64_t utime, const std::string& channel, const void* dat
   ends_.push_back(used_);
   ++events_;
   if (used_ < buffer_bytes_) return 0;
-  if (!writer_) return writeOut();
-  // Background: the buffer to the writer (once it is done with the one before), appending goes
-  // on into the other one.
-  if (const int err = waitWriter()) return dropBuffered(err);
-  std::swap(buf_, writer_->buf);
-  std::swap(ends_, writer_->ends);
-  writer_->used = used_;
-  if (buf_.size() < writer_->buf.size()) buf_.resize(writer_->buf.size());
-  used_ = 0;
-  ends_.clear();
-  writer_->start();
-  return 0;
+  return writeOut();
 }
-
-int EventFile::waitWriter() { return writer_ ? writer_->wait() : 0; }
 
 int EventFile::dropBuffered(int err) {
   used_ = 0;
@@ -194,7 +121,6 @@ int EventFile::writeEvents(const uint8_t* data, std::size_t used, const std::vec
 
 int EventFile::flush(bool sync) {
   if (fd_ < 0) return EBADF;
-  if (const int err = waitWriter()) return dropBuffered(err);
   if (const int err = used_ == 0 ? 0 : writeOut()) return err;
   if (sync && ::fsync(fd_) != 0) return errno;
   return 0;
@@ -203,7 +129,6 @@ int EventFile::flush(bool sync) {
 int EventFile::close(bool sync) {
   if (fd_ < 0) return 0;
   int err = flush(sync);
-  writer_.reset();  // (idle after flush)
   if (::close(fd_) != 0 && err == 0) err = errno;
   fd_ = -1;
   return err;

@@ -10,16 +10,18 @@ namespace lcmloc::replay {
 
 /// The output log: the standard LCM log format (events numbered 0, 1, ... as lcm::LogFile numbers
 /// them), written through a 256 kB user-space buffer (one write(2) per 256 kB, not several stdio
-/// calls per event), on a thread of its own (EventFile's background writing: the replay's
-/// applying thread, the busier one, does not wait for the kernel to take each buffer). Not more:
-/// each page of the two buffers (the one filled, the one written) is a page fault when first
-/// touched, microseconds on a virtual machine, while 256 kB makes a write(2) of a few hundred
-/// microseconds, many times what the call itself costs.
+/// calls per event) by the thread that publishes (the replay's applying thread). Not on a thread
+/// of its own: with the replay's two, a third takes turns with them on the two CPUs of the
+/// machines this runs on, each of its writes stopping the reading or the applying side as long
+/// (on the bench's hour, the aim's ratio had medians of 0.43 and 0.40 with a writing thread, 0.51
+/// and 0.44 without, in two rounds of alternating runs). Not a larger buffer: each page of it
+/// is a page fault when first touched, microseconds on a virtual machine, while 256 kB makes a
+/// write(2) of a few hundred microseconds, many times what the call itself costs.
 class LogWriter {
  public:
   explicit LogWriter(const std::string& path) {
     try {
-      file = std::make_unique<logger::EventFile>(path, std::size_t{1} << 18, true);
+      file = std::make_unique<logger::EventFile>(path, std::size_t{1} << 18);
     } catch (const std::exception& e) {
       throw std::runtime_error("cannot create output log '" + path + "': " + e.what());
     }

@@ -7,7 +7,6 @@
 // (ENOSPC, EFBIG under RLIMIT_FSIZE, EIO) the file is truncated back to the end of the last
 // complete event, so what was written before stays a readable log.
 #include <cstdint>
-#include <memory>
 #include <string>
 #include <vector>
 
@@ -19,13 +18,6 @@ class EventFile {
   /// file there with no other hard link is replaced by a new file (unlinked, then created); a
   /// symlink, a file with other links, or one that cannot be unlinked is truncated in place.
   explicit EventFile(const std::string& path, std::size_t buffer_bytes = 1 << 20);
-  /// Writes given to a thread of its own (background = true): a full buffer is handed to it and
-  /// appending goes on into a second one, so that the caller does not wait for the kernel to take
-  /// the bytes (the offline replay: its applying thread is the busier one, its reading thread's
-  /// core often idle). A write that fails is reported by the append() or flush() after it (a
-  /// buffer later): the events buffered since are dropped with it. events(), eventsWritten(),
-  /// size() and fileBytes() are exact after flush().
-  EventFile(const std::string& path, std::size_t buffer_bytes, bool background);
   ~EventFile();
   EventFile(const EventFile&) = delete;
   EventFile& operator=(const EventFile&) = delete;
@@ -55,9 +47,6 @@ class EventFile {
   /// After a failed write: what is buffered is dropped, numbering goes on after the last event
   /// in the file.
   int dropBuffered(int err);
-  struct Writer;  ///< the thread of background writing
-  /// Background: waits until the buffer handed over is written; its errno.
-  int waitWriter();
 
   std::string path_;
   int fd_ = -1;
@@ -66,7 +55,6 @@ class EventFile {
   std::size_t used_ = 0;
   std::vector<std::size_t> ends_;  ///< end of each buffered event within buf_
   int64_t file_bytes_ = 0, events_ = 0, events_written_ = 0;
-  std::unique_ptr<Writer> writer_;  ///< background writing (null: writes in the caller)
 };
 
 /// The 28-byte header of one event (exposed for tests).
