@@ -282,6 +282,8 @@ TEST_F(ReplayTest, DamagedLogIsReplayedUpToTheDamageAndSaysWhere) {
   EXPECT_EQ(r.issues[1].event_index, r.events_read);
   EXPECT_NE(r.issues[1].what.find("truncated"), std::string::npos) << r.issues[1].what;
   EXPECT_EQ(r.gaps, lost);  // the lost events show as sequence gaps (bad is an odometry event)
+  // The bytes not read: the damaged stretch up to where reading resumed, and the truncated tail.
+  EXPECT_EQ(r.bytes_unreadable, (offset[bad + 1] - d.byte_offset) + 20);
 
   // The executable says the same, exits 3 and still writes the output.
   Child exe(LCMLOC_REPLAY, {damaged, "-o", path("exe.lcmlog"), "--config", LCMLOC_PAPER_YAML, "--no-shadow"},
