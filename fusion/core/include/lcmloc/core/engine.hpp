@@ -28,10 +28,10 @@ using ControlCommand = std::variant<SwitchFilter, ResetFilter, SetPose>;
 /// ControlCommand carries a whole FilterConfig, an IMU sample three vectors and a name) does not
 /// make every EngineInput large. EngineInputs are created, handed from the replay's reading
 /// thread to its applying one, moved through the reorder window and destroyed once per message:
-/// at 72 bytes (an odometry increment inline, everything else boxed) instead of 152, about one
-/// cache line per message crosses from one core to the other instead of two and a half, and
-/// half as much memory is touched; a boxed input costs an allocation (tens of nanoseconds, for
-/// inputs that come at 100 Hz or less and take microseconds in the filters).
+/// at 72 bytes (an odometry increment inline, everything else boxed) instead of 152, the replay's
+/// item of a message spans under one and a half cache lines instead of two and a half, and half
+/// as much memory is touched; a boxed input costs an allocation (tens of nanoseconds, for inputs
+/// that take microseconds in the filters).
 template <typename T>
 class Boxed {
  public:
