@@ -10,33 +10,16 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "lcmloc/wire.hpp"
+
 namespace lcmloc::logger {
-namespace {
-// Big-endian stores (a byte swap and one store on a little-endian machine).
-void put32(uint8_t* p, uint32_t v) {
-#if __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-  v = __builtin_bswap32(v);
-  std::memcpy(p, &v, sizeof v);
-#else
-  for (int i = 3; i >= 0; --i, v >>= 8) p[i] = static_cast<uint8_t>(v & 0xff);
-#endif
-}
-void put64(uint8_t* p, uint64_t v) {
-#if __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-  v = __builtin_bswap64(v);
-  std::memcpy(p, &v, sizeof v);
-#else
-  for (int i = 7; i >= 0; --i, v >>= 8) p[i] = static_cast<uint8_t>(v & 0xff);
-#endif
-}
-}  // namespace
 
 void encodeEventHeader(uint8_t* out, int64_t eventnum, int64_t utime, uint32_t channel_len, uint32_t data_len) {
-  put32(out, 0xEDA1DA01u);
-  put64(out + 4, static_cast<uint64_t>(eventnum));
-  put64(out + 12, static_cast<uint64_t>(utime));
-  put32(out + 20, channel_len);
-  put32(out + 24, data_len);
+  wire::storeBig32(out, 0xEDA1DA01u);
+  wire::storeBig64(out + 4, static_cast<uint64_t>(eventnum));
+  wire::storeBig64(out + 12, static_cast<uint64_t>(utime));
+  wire::storeBig32(out + 20, channel_len);
+  wire::storeBig32(out + 24, data_len);
 }
 
 EventFile::EventFile(const std::string& path, std::size_t buffer_bytes)

@@ -19,6 +19,7 @@
 #include "lcmloc/pose_t.hpp"
 #include "lcmloc/landmark_obs_t.hpp"
 #include "lcmloc/beacon_range_t.hpp"
+#include "lcmloc/wire.hpp"
 
 namespace lcmloc::logger {
 namespace {
@@ -131,9 +132,7 @@ const std::vector<TypeInfo>& knownTypes() {
 
 bool readFingerprint(const uint8_t* data, std::size_t size, int64_t* hash) {
   if (size < 8) return false;
-  uint64_t v = 0;
-  for (int i = 0; i < 8; ++i) v = (v << 8) | data[i];
-  *hash = static_cast<int64_t>(v);
+  *hash = static_cast<int64_t>(wire::loadBig64(data));
   return true;
 }
 
@@ -147,9 +146,7 @@ const TypeInfo* findType(const uint8_t* data, std::size_t size) {
 
 bool readSeq(const uint8_t* data, std::size_t size, int64_t* seq) {
   if (size < 24) return false;
-  uint64_t v = 0;
-  for (int i = 16; i < 24; ++i) v = (v << 8) | data[i];
-  *seq = static_cast<int64_t>(v);
+  *seq = static_cast<int64_t>(wire::loadBig64(data + 16));
   return true;
 }
 

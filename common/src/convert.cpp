@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <cstring>
 
+#include "lcmloc/wire.hpp"
+
 namespace lcmloc::common {
 
 namespace {
@@ -192,13 +194,11 @@ namespace {
 struct WireWriter {
   uint8_t* p;
   void u64(uint64_t v) {
-    v = __builtin_bswap64(v);
-    std::memcpy(p, &v, 8);
+    wire::storeBig64(p, v);
     p += 8;
   }
   void u32(uint32_t v) {
-    v = __builtin_bswap32(v);
-    std::memcpy(p, &v, 4);
+    wire::storeBig32(p, v);
     p += 4;
   }
   void f64(double d) {

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -14,6 +15,7 @@
 #include <sstream>
 
 #include <lcm/lcm-cpp.hpp>
+#include <lcm/lcm_coretypes.h>
 
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/process.hpp"
@@ -25,6 +27,7 @@
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
+#include "lcmloc/wire.hpp"
 
 namespace fs = std::filesystem;
 
@@ -180,6 +183,23 @@ std::vector<std::string> row(const std::string& out, const std::string& ch) {
 }
 
 }  // namespace
+
+// The big-endian helpers write what LCM's own encoder writes (lcm_coretypes.h) and read it back.
+TEST(Wire, StoresAndLoadsIntegersAsLcmEncodesThem) {
+  const int64_t i64 = -0x0123456789abcdefLL;
+  const int32_t i32 = -0x12345678;
+  uint8_t lcm64[8], lcm32[4], ours64[8], ours32[4];
+  ASSERT_EQ(__int64_t_encode_array(lcm64, 0, 8, &i64, 1), 8);
+  ASSERT_EQ(__int32_t_encode_array(lcm32, 0, 4, &i32, 1), 4);
+  lcmloc::wire::storeBig64(ours64, static_cast<uint64_t>(i64));
+  lcmloc::wire::storeBig32(ours32, static_cast<uint32_t>(i32));
+  EXPECT_EQ(0, std::memcmp(lcm64, ours64, 8));
+  EXPECT_EQ(0, std::memcmp(lcm32, ours32, 4));
+  EXPECT_EQ(static_cast<int64_t>(lcmloc::wire::loadBig64(lcm64)), i64);
+  EXPECT_EQ(static_cast<int64_t>(lcmloc::wire::loadBig(lcm64, 8)), i64);
+  EXPECT_EQ(static_cast<int32_t>(lcmloc::wire::loadBig(lcm32, 4)), i32);
+  EXPECT_EQ(lcmloc::wire::loadBig(lcm64 + 6, 2), static_cast<uint64_t>(lcm64[6]) << 8 | lcm64[7]);
+}
 
 TEST_F(LogTools, InfoListsChannelsTypesCountsRatesGapsAndUndecodable) {
   const std::string log = path("ref.lcmlog");

@@ -19,6 +19,7 @@
 #include "lcmloc/common/process.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
+#include "lcmloc/wire.hpp"
 
 namespace lcmloc::eval {
 namespace {
@@ -161,12 +162,6 @@ int64_t findSync(FILE* f, int64_t from) {
   }
 }
 
-uint64_t bigEndian(const unsigned char* p, int n) {
-  uint64_t v = 0;
-  for (int i = 0; i < n; ++i) v = (v << 8) | p[i];
-  return v;
-}
-
 }  // namespace
 
 struct LogScanner::Impl {
@@ -208,9 +203,9 @@ bool LogScanner::readEventAt(int64_t pos) {
   if (impl_->file_pos != pos && fseeko(f, pos, SEEK_SET) != 0) return false;
   impl_->file_pos = -1;  // unknown until the event is read whole
   unsigned char h[kEventHeaderBytes];
-  if (readBytes(h, sizeof h, f) != sizeof h || bigEndian(h, 4) != 0xEDA1DA01u) return false;
-  const auto channel_len = static_cast<int64_t>(bigEndian(h + 20, 4));
-  const auto data_len = static_cast<int64_t>(bigEndian(h + 24, 4));
+  if (readBytes(h, sizeof h, f) != sizeof h || wire::loadBig(h, 4) != 0xEDA1DA01u) return false;
+  const auto channel_len = static_cast<int64_t>(wire::loadBig(h + 20, 4));
+  const auto data_len = static_cast<int64_t>(wire::loadBig(h + 24, 4));
   if (channel_len <= 0 || channel_len >= 1000 || data_len >= (int64_t{1} << 31) ||
       pos + kEventHeaderBytes + channel_len + data_len > file_size_)
     return false;
@@ -220,8 +215,8 @@ bool LogScanner::readEventAt(int64_t pos) {
   if (readBytes(ev.channel.data(), ev.channel.size(), f) != ev.channel.size() ||
       (data_len > 0 && readBytes(impl_->data.data(), impl_->data.size(), f) != impl_->data.size()))
     return false;
-  ev.eventnum = static_cast<int64_t>(bigEndian(h + 4, 8));
-  ev.timestamp = static_cast<int64_t>(bigEndian(h + 12, 8));
+  ev.eventnum = static_cast<int64_t>(wire::loadBig(h + 4, 8));
+  ev.timestamp = static_cast<int64_t>(wire::loadBig(h + 12, 8));
   ev.datalen = static_cast<int32_t>(data_len);
   ev.data = impl_->data.data();
   impl_->file_pos = pos + kEventHeaderBytes + channel_len + data_len;

@@ -5,6 +5,7 @@
 
 #include "lcmloc/core/text.hpp"
 #include "lcmloc/logger/event_file.hpp"
+#include "lcmloc/wire.hpp"
 
 namespace lcmloc::replay {
 
@@ -31,10 +32,7 @@ class LogWriter {
 
 int64_t messageUtime(const void* data, std::size_t size, int64_t fallback) {
   if (size < 16) return fallback;
-  const auto* p = static_cast<const uint8_t*>(data) + 8;
-  uint64_t v = 0;
-  for (int i = 0; i < 8; ++i) v = (v << 8) | p[i];
-  return static_cast<int64_t>(v);
+  return static_cast<int64_t>(wire::loadBig64(static_cast<const uint8_t*>(data) + 8));
 }
 
 LogBus::LogBus(const std::string& output) {
