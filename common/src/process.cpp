@@ -68,13 +68,16 @@ extern "C" void onSignal(int sig) {
 }
 }  // namespace
 
-std::string defaultConfigPath() {
-#ifdef LCMLOC_DEFAULT_CONFIG
-  return LCMLOC_DEFAULT_CONFIG;
-#else
-  return "config/paper.yaml";
-#endif
+std::string configDir() {
+  if (const char* env = std::getenv("LCMLOC_CONFIG_DIR"); env && *env) return env;
+  std::error_code ec;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec) return "config";
+  // <prefix>/bin/<program> -> <prefix>/share/lcmloc/config (build/share/lcmloc/config in the build tree)
+  return (exe.parent_path().parent_path() / "share" / "lcmloc" / "config").string();
 }
+
+std::string defaultConfigPath() { return configDir() + "/paper.yaml"; }
 
 void addCommonOptions(CLI::App& app, CommonOptions& opts) {
   if (opts.config.empty()) opts.config = defaultConfigPath();

@@ -12,7 +12,7 @@ using namespace lcmloc;
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-gps-experiment: GPS +-5 m, filter starts at (0, 0), truth at (150, 50) (seeds/002 §3)"};
   common::CommonOptions opts;
-  opts.config = std::string(LCMLOC_CONFIG_DIR) + "/gps_paper.yaml";
+  opts.config = common::configDir() + "/gps_paper.yaml";
   common::addCommonOptions(app, opts);
   std::string out = "out/gps_experiment";
   std::vector<std::string> types{"tvekf", "ukf_gps", "dead_reckoning"};

@@ -18,7 +18,7 @@ using namespace lcmloc;
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-ins-experiment: odometry/INS scale calibration vs traditional integration (seeds/004 §II)"};
   common::CommonOptions opts;
-  opts.config = std::string(LCMLOC_CONFIG_DIR) + "/ins_paper.yaml";
+  opts.config = common::configDir() + "/ins_paper.yaml";
   common::addCommonOptions(app, opts);
   std::string out = "out/ins", log;
   std::vector<std::string> starts{"hard", "gentle"};

@@ -86,7 +86,7 @@ int main(int argc, char** argv) {
       "not taken from the config's `landmarks` map. Exit: 0 ok, 1 error, 2 bad arguments or config, 3 --log "
       "damaged (its intact events solved; each damaged place reported)"};
   common::CommonOptions opts;
-  opts.config = std::string(LCMLOC_CONFIG_DIR) + "/landmark_paper.yaml";
+  opts.config = common::configDir() + "/landmark_paper.yaml";
   common::addCommonOptions(app, opts);
   landmark_experiment::Options eo;
   std::string out = "out/landmark_experiment";

@@ -411,7 +411,7 @@ int main(int argc, char** argv) {
   app.get_option("--lcm-url")
       ->description("LCM provider URL for the launcher and every child (default: $LCM_DEFAULT_URL or udpm); a "
                     "udpm:// URL without recv_buf_size gets the system file's recv_buf_size");
-  std::string system = std::string(LCMLOC_CONFIG_DIR) + "/system.yaml";
+  std::string system = common::configDir() + "/system.yaml";
   app.add_option("--system", system, "system file: processes to run")->capture_default_str();
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-launcher", [&] {

@@ -16,7 +16,7 @@ int main(int argc, char** argv) {
       "through the fusion daemon's code once per filter and scores each fused track at the held-out fixes "
       "(RMSE, median, p95, max); writes report.json, drive.png and error.png."};
   common::CommonOptions opts;
-  opts.config = std::string(LCMLOC_CONFIG_DIR) + "/victoria_park.yaml";
+  opts.config = common::configDir() + "/victoria_park.yaml";
   common::addCommonOptions(app, opts);
   vp::ImportOptions io;
   vp::ExperimentOptions eo;

@@ -16,7 +16,7 @@ int main(int argc, char** argv) {
       "encoder offset correction, steering, delta_theta by eq. 2), GPS (lat/lon about the config's datum) and "
       "every k-th fix on GPS_HELDOUT (not used by the filters). Refused rows are listed with their line numbers."};
   common::CommonOptions opts;
-  opts.config = std::string(LCMLOC_CONFIG_DIR) + "/victoria_park.yaml";
+  opts.config = common::configDir() + "/victoria_park.yaml";
   common::addCommonOptions(app, opts);
   vp::ImportOptions io;
   std::string dir;

@@ -30,7 +30,12 @@ struct CommonOptions {
   std::string log_level = "info";
 };
 
-/// The repository's default scenario file (config/paper.yaml).
+/// The directory of the shipped configuration files: $LCMLOC_CONFIG_DIR when set, else
+/// <prefix>/share/lcmloc/config, <prefix> being the directory above the running program's
+/// (an installed P/bin/lcmloc-fusion reads P/share/lcmloc/config; in the build tree
+/// build/share/lcmloc/config links to the source's config/). No source path is compiled in.
+std::string configDir();
+/// The default scenario file: configDir()/paper.yaml.
 std::string defaultConfigPath();
 
 /// Adds --config, --lcm-url, --log-level to app, with defaults filled into opts.
