@@ -6,11 +6,11 @@
 
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/common/convert.hpp"
+#include "lcmloc/bus/convert.hpp"
 #include "lcmloc/core/text.hpp"
-#include "lcmloc/common/csv.hpp"
+#include "lcmloc/app/csv.hpp"
 #include "lcmloc/fusion_status_t.hpp"
-#include "lcmloc/models/world.hpp"
+#include "lcmloc/sim/world.hpp"
 
 namespace lcmloc::fusion {
 

@@ -10,8 +10,8 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/process.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/app/process.hpp"
 #include "lcmloc/core/text.hpp"
 #include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/trajectory.hpp"

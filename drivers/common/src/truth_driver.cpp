@@ -1,4 +1,4 @@
-#include "lcmloc/common/truth_driver.hpp"
+#include "lcmloc/drivers/truth_driver.hpp"
 
 #include <cmath>
 

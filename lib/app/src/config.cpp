@@ -1,6 +1,6 @@
 // YAML -> config structs. Every map is read through a KeyReader that remembers which keys were
 // asked for, so a key nobody asked for is reported as unknown (with the list of valid keys).
-#include "lcmloc/common/config.hpp"
+#include "lcmloc/app/config.hpp"
 
 #include <algorithm>
 #include <cerrno>
@@ -14,8 +14,8 @@
 
 #include <fmt/format.h>
 
-#include "lcmloc/common/process.hpp"
-#include "lcmloc/common/yaml_reader.hpp"
+#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/yaml_reader.hpp"
 #include "config_ins.hpp"
 #include "lcmloc/core/filter.hpp"
 
@@ -296,6 +296,7 @@ void parseFusion(KeyReader& root, FusionConfig& f) {
   r.get("max_odometry_gap", f.max_odometry_gap, 0.0, 3600.0, "0 = off");
   r.get("odometry_gap_accel", f.odometry_gap_accel, 0.0, 100.0);
   r.get("odometry_gap_yaw_rate", f.odometry_gap_yaw_rate, 0.0, 10.0);
+  r.get("odometry_period", f.odometry_period, 0.0, 10.0, "0 = not known");
   ins_config::parseLandmarks(r, f.landmarks);
   {
     KeyReader x(r.child("landmark_fix"), root.file(), "fusion.landmark_fix");
@@ -515,7 +516,7 @@ core::EngineConfig engineConfig(const SystemConfig& cfg) {
   ec.fix_gate = cfg.fusion.fix_gate;
   ec.max_time_jump_us = us(cfg.fusion.max_time_jump);
   ec.odometry_gap = {us(cfg.fusion.max_odometry_gap), cfg.fusion.odometry_gap_accel, cfg.fusion.odometry_gap_yaw_rate,
-                     cfg.scenario.odometry.rate_hz > 0 ? us(1.0 / cfg.scenario.odometry.rate_hz) : 0};
+                     us(cfg.fusion.odometry_period)};
   return ec;
 }
 

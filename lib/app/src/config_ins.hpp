@@ -1,12 +1,12 @@
 #pragma once
 // Config sections of the odometry/INS/vision method (seeds/004): `ins_sim`, `fusion.filter.ins`
-// and `fusion.landmarks`. Internal to common/src (called from config.cpp).
+// and `fusion.landmarks`. Internal to lib/app/src (called from config.cpp).
 #include <map>
 
-#include "lcmloc/common/yaml_reader.hpp"
+#include "lcmloc/app/yaml_reader.hpp"
 #include "lcmloc/core/filter.hpp"
-#include "lcmloc/models/ins_sim.hpp"
-#include "lcmloc/models/vision_sensor.hpp"
+#include "lcmloc/sim/ins_sim.hpp"
+#include "lcmloc/sim/vision_sensor.hpp"
 
 namespace lcmloc::common::ins_config {
 

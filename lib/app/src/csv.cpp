@@ -1,4 +1,4 @@
-#include "lcmloc/common/csv.hpp"
+#include "lcmloc/app/csv.hpp"
 
 #include <cerrno>
 #include <cmath>
@@ -10,7 +10,7 @@
 
 #include <fmt/format.h>
 
-#include "lcmloc/common/process.hpp"
+#include "lcmloc/app/process.hpp"
 
 namespace lcmloc::common::csv {
 

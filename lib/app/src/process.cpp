@@ -1,4 +1,4 @@
-#include "lcmloc/common/process.hpp"
+#include "lcmloc/app/process.hpp"
 
 #include <unistd.h>
 
@@ -17,7 +17,7 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/common/config.hpp"
+#include "lcmloc/app/config.hpp"
 #include "lcmloc/core/text.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 

@@ -1,4 +1,4 @@
-#include "lcmloc/common/geodesy.hpp"
+#include "lcmloc/bus/geodesy.hpp"
 
 #include <GeographicLib/LocalCartesian.hpp>
 

@@ -1,4 +1,4 @@
-#include "lcmloc/common/transport.hpp"
+#include "lcmloc/bus/transport.hpp"
 
 #include <chrono>
 #include <cstdio>

@@ -1,4 +1,4 @@
-#include "lcmloc/logger/event_file.hpp"
+#include "lcmloc/logio/event_file.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>

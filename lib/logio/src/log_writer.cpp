@@ -1,4 +1,4 @@
-#include "lcmloc/logger/log_writer.hpp"
+#include "lcmloc/logio/log_writer.hpp"
 
 #include <algorithm>
 #include <cerrno>

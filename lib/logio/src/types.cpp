@@ -1,4 +1,4 @@
-#include "lcmloc/logger/types.hpp"
+#include "lcmloc/logio/types.hpp"
 
 #include <cstdio>
 #include <new>

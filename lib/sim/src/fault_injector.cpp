@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <stdexcept>
 
-#include "lcmloc/models/world.hpp"
+#include "lcmloc/sim/world.hpp"
 
 namespace lcmloc::models {
 

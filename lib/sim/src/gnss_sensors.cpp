@@ -1,14 +1,14 @@
 // Simulated IMU (noise, constant + drifting biases, declination, magnetic disturbance,
 // saturation) and GPS receiver (uniform or Gaussian error, outages, jumps).
-#include "lcmloc/models/gnss_sensors.hpp"
+#include "lcmloc/sim/gnss_sensors.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 #include "lcmloc/core/gnss_model.hpp"
-#include "lcmloc/models/world.hpp"
-#include "lcmloc/models/schedule.hpp"
+#include "lcmloc/sim/world.hpp"
+#include "lcmloc/sim/schedule.hpp"
 
 namespace lcmloc::models {
 namespace {

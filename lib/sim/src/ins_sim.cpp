@@ -1,10 +1,10 @@
-#include "lcmloc/models/ins_sim.hpp"
+#include "lcmloc/sim/ins_sim.hpp"
 
 #include <cmath>
 #include <stdexcept>
 
 #include "lcmloc/core/angles.hpp"
-#include "lcmloc/models/scenario_config.hpp"
+#include "lcmloc/sim/scenario_config.hpp"
 
 namespace lcmloc::models {
 namespace {

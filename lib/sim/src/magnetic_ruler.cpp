@@ -6,8 +6,8 @@
 #include <stdexcept>
 #include <unordered_map>
 
-#include "lcmloc/models/world.hpp"
-#include "lcmloc/models/schedule.hpp"
+#include "lcmloc/sim/world.hpp"
+#include "lcmloc/sim/schedule.hpp"
 
 namespace lcmloc::models {
 namespace {

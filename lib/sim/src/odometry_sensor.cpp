@@ -4,8 +4,8 @@
 #include <stdexcept>
 
 #include "lcmloc/core/vehicle_model.hpp"
-#include "lcmloc/models/world.hpp"
-#include "lcmloc/models/schedule.hpp"
+#include "lcmloc/sim/world.hpp"
+#include "lcmloc/sim/schedule.hpp"
 
 namespace lcmloc::models {
 

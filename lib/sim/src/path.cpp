@@ -4,7 +4,7 @@
 #include <stdexcept>
 
 #include "lcmloc/core/angles.hpp"
-#include "lcmloc/models/world.hpp"
+#include "lcmloc/sim/world.hpp"
 
 namespace lcmloc::models {
 namespace {

@@ -1,4 +1,4 @@
-#include "lcmloc/models/scenario_config.hpp"
+#include "lcmloc/sim/scenario_config.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 // In-process scenario: world + sensors stepped in the driver processes' order, feeding one
 // FusionEngine per filter config, then metrics against ground truth.
-#include "lcmloc/models/scenario_runner.hpp"
+#include "lcmloc/sim/scenario_runner.hpp"
 
 #include <Eigen/Cholesky>
 #include <cmath>

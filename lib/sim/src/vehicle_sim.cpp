@@ -5,7 +5,7 @@
 
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/vehicle_model.hpp"
-#include "lcmloc/models/world.hpp"
+#include "lcmloc/sim/world.hpp"
 
 namespace lcmloc::models {
 namespace {

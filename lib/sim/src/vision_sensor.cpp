@@ -1,5 +1,5 @@
 // Simulated electro-optical bearings to known landmarks (seeds/004 §III).
-#include "lcmloc/models/vision_sensor.hpp"
+#include "lcmloc/sim/vision_sensor.hpp"
 
 #include <cmath>
 #include <set>
@@ -7,8 +7,8 @@
 #include <string>
 
 #include "lcmloc/core/angles.hpp"
-#include "lcmloc/models/world.hpp"
-#include "lcmloc/models/schedule.hpp"
+#include "lcmloc/sim/world.hpp"
+#include "lcmloc/sim/schedule.hpp"
 
 namespace lcmloc::models {
 

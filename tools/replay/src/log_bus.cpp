@@ -4,7 +4,7 @@
 #include <stdexcept>
 
 #include "lcmloc/core/text.hpp"
-#include "lcmloc/logger/event_file.hpp"
+#include "lcmloc/logio/event_file.hpp"
 #include "lcmloc/wire.hpp"
 
 namespace lcmloc::replay {

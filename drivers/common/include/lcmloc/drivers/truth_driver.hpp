@@ -15,8 +15,8 @@
 #include <functional>
 #include <string>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/process.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/app/process.hpp"
 #include "lcmloc/core/time_guard.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 

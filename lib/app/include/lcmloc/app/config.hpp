@@ -9,11 +9,11 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "lcmloc/common/geodesy.hpp"
+#include "lcmloc/bus/geodesy.hpp"
 #include "lcmloc/core/engine.hpp"
 #include "lcmloc/core/filter.hpp"
-#include "lcmloc/models/ins_sim.hpp"
-#include "lcmloc/models/scenario_config.hpp"
+#include "lcmloc/sim/ins_sim.hpp"
+#include "lcmloc/sim/scenario_config.hpp"
 
 namespace lcmloc::common {
 
@@ -91,6 +91,10 @@ struct FusionConfig {
   double max_odometry_gap = 0.1;
   double odometry_gap_accel = 0.5;     ///< speed change rate the bridge allows, 1 sigma [m/s^2]
   double odometry_gap_yaw_rate = 0.05; ///< yaw-rate change the bridge allows, 1 sigma [rad/s]
+  /// [s] The odometry sender's period (core::OdometryGapConfig::resume_period_us): a daemon
+  /// started again from its checkpoint bridges the motion it did not see at the speed of its
+  /// first increment over this period; 0 = not known (bridged at speed 0, covariance grown).
+  double odometry_period = 0.01;
 };
 
 struct LoggerConfig {
@@ -134,8 +138,7 @@ SystemConfig parseSystemConfig(const std::string& yaml_text, const std::string& 
 
 /// Filter parameters from a YAML map (used for `fusion.filter` and for FUSION_CONTROL's
 /// parameters string), applied on top of base. Throws ConfigError.
-/// The fusion engine's configuration from a system config (fusion.*, and the odometry rate for
-/// a resume gap): one conversion for the daemon (and so the replay) and lcmloc-eval.
+/// The fusion engine's configuration from a system config (fusion.*): one conversion for the daemon (and so the replay) and lcmloc-eval.
 core::EngineConfig engineConfig(const SystemConfig& cfg);
 
 core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterConfig& base,

@@ -14,7 +14,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "lcmloc/common/transport.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "lcmloc/core/text.hpp"
 
 namespace lcmloc::common {

@@ -11,7 +11,7 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "lcmloc/common/config.hpp"
+#include "lcmloc/app/config.hpp"
 
 namespace lcmloc::common {
 

@@ -5,15 +5,11 @@
 #include <string>
 #include <vector>
 
-#include "lcmloc/common/geodesy.hpp"
+#include "lcmloc/bus/geodesy.hpp"
 #include "lcmloc/core/types.hpp"
-#include "lcmloc/models/gnss_sensors.hpp"
-#include "lcmloc/models/vision_sensor.hpp"
-#include "lcmloc/models/world.hpp"
 #include "lcmloc/fault_event_t.hpp"
 #include "lcmloc/gate_decision_t.hpp"
 #include "lcmloc/gps_fix_t.hpp"
-#include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/imu_t.hpp"
 #include "lcmloc/landmark_obs_t.hpp"
 #include "lcmloc/beacon_range_t.hpp"
@@ -32,7 +28,6 @@ bool toCore(const lcmloc::odometry_t& m, core::OdometryInput& out, std::string* 
 /// Only detections (detected == true) convert; a non-detection returns nullopt with why = "".
 std::optional<core::RulerDetection> toCore(const lcmloc::magruler_t& m, const std::string& channel,
                                            std::string* why = nullptr);
-models::TruthState toCore(const lcmloc::ground_truth_t& m);
 /// IMU sample; nullopt (why set) when a field is NaN/Inf or utime is negative.
 std::optional<core::ImuInput> toCore(const lcmloc::imu_t& m, const std::string& channel,
                                      std::string* why = nullptr);
@@ -41,12 +36,6 @@ std::optional<core::ImuInput> toCore(const lcmloc::imu_t& m, const std::string& 
 std::optional<core::GpsInput> toCore(const lcmloc::gps_fix_t& m, const std::string& channel,
                                      const LocalFrame& frame, std::string* why = nullptr);
 
-lcmloc::ground_truth_t toLcm(const models::TruthState& s, int64_t seq);
-lcmloc::odometry_t toLcm(const models::OdometrySample& s, int64_t seq);
-lcmloc::magruler_t toLcm(const models::RulerReading& r, int64_t seq);
-lcmloc::imu_t toLcm(const models::ImuSample& s, int64_t seq);
-/// Local fix -> gps_fix_t (lat/lon about the frame's datum, altitude = datum altitude).
-lcmloc::gps_fix_t toLcm(const models::GpsFixSample& f, const LocalFrame& frame, int64_t seq);
 lcmloc::pose_t toLcm(const core::FilterState& s, const std::string& filter, int64_t seq);
 lcmloc::gate_decision_t toLcm(const core::GateDecision& d, const std::string& filter, int64_t seq);
 /// The bytes pose_t::encode gives for toLcm(s, filter, seq) (hash first; the tests compare the
@@ -68,7 +57,5 @@ std::optional<core::BeaconRange> toCore(const lcmloc::beacon_range_t& m, const s
 /// match the arrays or a bearing is NaN/Inf. Unknown ids are the engine's to refuse.
 std::optional<core::BearingsInput> toCore(const lcmloc::landmark_bearings_t& m, const std::string& channel,
                                           std::string* why = nullptr);
-/// Bearings to landmarks -> landmark_bearings_t (channel VISION).
-lcmloc::landmark_bearings_t toLcm(const models::VisionSample& s, int64_t seq);
 
 }  // namespace lcmloc::common

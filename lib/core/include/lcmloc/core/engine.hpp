@@ -110,7 +110,7 @@ struct OdometryGapConfig {
   int64_t max_gap_us = 100000;  ///< 0 = off
   double accel_std = 0.5;       ///< OdometryGap::accel_std [m/s^2]
   double yaw_rate_std = 0.05;   ///< OdometryGap::yaw_rate_std [rad/s]
-  /// [us] The odometry sender's period (the daemon: 1 / odometry.rate_hz), for a resume gap: the
+  /// [us] The odometry sender's period (the daemon: fusion.odometry_period), for a resume gap: the
   /// first odometry input after initialize() more than max_gap_us after the state's time (a
   /// daemon started again from its checkpoint after a crash) is a gap too, bridged at the speed
   /// of that first increment over this period (its sender's previous message was not seen);

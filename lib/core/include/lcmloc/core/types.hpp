@@ -1,6 +1,6 @@
 #pragma once
 // Plain data types of the fusion core. No middleware: these are what the LCM adapter
-// converts lcmtypes to and from (common/include/lcmloc/common/convert.hpp).
+// converts lcmtypes to and from (lib/bus/include/lcmloc/bus/convert.hpp).
 #include <Eigen/Core>
 #include <cstdint>
 #include <string>

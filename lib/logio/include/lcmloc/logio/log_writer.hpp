@@ -21,7 +21,7 @@
 #include <thread>
 #include <vector>
 
-#include "lcmloc/logger/event_file.hpp"
+#include "lcmloc/logio/event_file.hpp"
 
 namespace lcmloc::logger {
 

@@ -13,8 +13,8 @@
 
 #include "lcmloc/core/ins.hpp"
 #include "lcmloc/core/types.hpp"
-#include "lcmloc/models/gnss_sensors.hpp"
-#include "lcmloc/models/world.hpp"
+#include "lcmloc/sim/gnss_sensors.hpp"
+#include "lcmloc/sim/world.hpp"
 
 namespace lcmloc::models {
 

@@ -6,8 +6,8 @@
 #include <vector>
 
 #include "lcmloc/core/types.hpp"
-#include "lcmloc/models/gnss_sensors.hpp"
-#include "lcmloc/models/vision_sensor.hpp"
+#include "lcmloc/sim/gnss_sensors.hpp"
+#include "lcmloc/sim/vision_sensor.hpp"
 
 namespace lcmloc::models {
 

@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "lcmloc/core/engine.hpp"
-#include "lcmloc/models/gnss_sensors.hpp"
-#include "lcmloc/models/world.hpp"
+#include "lcmloc/sim/gnss_sensors.hpp"
+#include "lcmloc/sim/world.hpp"
 
 namespace lcmloc::models {
 

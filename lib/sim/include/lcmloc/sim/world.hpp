@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "lcmloc/core/types.hpp"
-#include "lcmloc/models/scenario_config.hpp"
+#include "lcmloc/sim/scenario_config.hpp"
 
 namespace lcmloc::models {
 
