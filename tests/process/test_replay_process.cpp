@@ -15,6 +15,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "process_fixture.hpp"
+#include "lcmloc/drivers/scenario_map.hpp"
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/bus/transport.hpp"
 #include "lcmloc/fusion_control_t.hpp"
@@ -121,8 +122,9 @@ class ReplayProcessTest : public ProcessFixture {
                                             std::to_string(s.curvature) + "}");
     const std::string config = writeFile(
         "oval.yaml", "path: {segments: [" + segs + "]}\nmarkers: {count: " + std::to_string(cfg.scenario.markers.count) +
-                         ", spacing: 2.0, first_at: 2.0}\nfusion: {shadow: []}\n");
+                         ", spacing: 2.0, first_at: 2.0}\nfusion: {shadow: [], map_file: oval_map.csv}\n");
     const auto loaded = lcmloc::common::loadSystemConfig(config);
+    lcmloc::common::writeScenarioMap(loaded, loaded.fusion.map_file);  // the daemon's map: the oval's markers
     const std::string log = path("full.lcmlog");
     lcmloc::replay::writeSyntheticLog(loaded.scenario, seconds, log, loaded.channels);
     return {config, log};
