@@ -47,7 +47,7 @@ std::pair<int, std::string> runIn(const fs::path& dir, const std::string& script
   std::ofstream(file) << "set -o pipefail\nexport PATH=" << quote(LCMLOC_BIN_DIR) << ":\"$PATH\"\n"
                       << "export LCM_DEFAULT_URL=memq://\ncd " << quote(dir.string()) << " || exit 99\n"
                       << script << "\n";
-  const int st = std::system(("timeout 300 bash " + quote(file.string()) + " > " + quote(out.string()) + " 2>&1").c_str());
+  const int st = std::system(("timeout 120 bash " + quote(file.string()) + " > " + quote(out.string()) + " 2>&1").c_str());
   return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, readFile(out)};
 }
 
@@ -87,6 +87,14 @@ class Checker {
       if (sc.size() > 1 && !sc[1].empty() && std::islower(static_cast<unsigned char>(sc[1][0])) &&
           sc[1].find_first_not_of("abcdefghijklmnopqrstuvwxyz-") == std::string::npos)
         help += helpOf(exe.string(), sc[1]);  // a subcommand's own options
+    } else if (prog.rfind("build/", 0) == 0) {  // another program of the build (a benchmark)
+      const fs::path exe = fs::path(LCMLOC_BUILD_DIR) / prog.substr(6);
+      if (!fs::is_regular_file(exe) || ::access(exe.c_str(), X_OK) != 0) {
+        ADD_FAILURE() << at << "`" << prog << "`: no program " << exe << " in the build";
+        return;
+      }
+      help = helpOf(exe.string(), "");
+      if (help.empty()) ADD_FAILURE() << at << prog << " --help did not exit 0";
     } else if (prog.find('/') != std::string::npos) {
       const fs::path script = fs::path(LCMLOC_SOURCE_DIR) / prog;
       if (!fs::is_regular_file(script) || ::access(script.c_str(), X_OK) != 0) {
@@ -125,9 +133,15 @@ class Checker {
   static inline std::map<std::string, std::string> cache_;
 };
 
+/// A line of a block that is not a shell block reads as a command: it starts with a program of
+/// ours and holds nothing but ASCII outside its comment (a diagram's arrows or an output's units
+/// are not commands).
 bool looksLikeACommand(const std::string& line) {
   const auto ws = words(line);
   if (ws.empty()) return false;
+  for (const auto& w : ws)
+    for (char c : w)
+      if (static_cast<unsigned char>(c) >= 0x80) return false;
   const std::string& w = ws[0];
   return w.rfind("build/bin/", 0) == 0 || w.rfind("lcmloc-", 0) == 0 || w.rfind("tools/", 0) == 0;
 }
@@ -172,6 +186,15 @@ TEST(DocCommandParser, SplitsOperatorsDropsAssignmentsRedirectionsAndHereDocumen
   ASSERT_EQ(cmds.size(), 2u);
   EXPECT_EQ(simpleCommands(words(cmds[0].text)), (std::vector<std::vector<std::string>>{{"cat"}}));
   EXPECT_EQ(cmds[1].line, 5);
+}
+
+TEST(DocCommandParser, TellsACommandLineFromADiagramOrAnOutput) {
+  EXPECT_TRUE(looksLikeACommand("build/bin/lcmloc-log info run.lcmlog"));
+  EXPECT_TRUE(looksLikeACommand("lcmloc-replay run.lcmlog -o out.lcmlog   # \u00a7 2"));
+  EXPECT_TRUE(looksLikeACommand("tools/spy.sh"));
+  EXPECT_FALSE(looksLikeACommand(" lcmloc-sim \u2500\u2500GROUND_TRUTH\u2500\u2500\u252c\u2500> lcmloc-odometry"));
+  EXPECT_FALSE(looksLikeACommand("log:        ref.lcmlog (13657 bytes)"));
+  EXPECT_FALSE(looksLikeACommand("$ lcmloc-fusion --config bad.yaml"));
 }
 
 TEST(DocCommandParser, OptionsAndTheirMentionInAHelpText) {
