@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "lcmloc/core/angles.hpp"
+#include "lcmloc/core/scoring.hpp"
 
 namespace lcmloc::eval {
 namespace {
@@ -43,25 +44,23 @@ TrackPoint score(const std::vector<TruthSample>& truth, int64_t utime, double x,
 /// Fills the error metrics from the track and the decision counts from the decisions.
 void computeMetrics(FilterRun& run, const std::vector<FaultRecord>& faults) {
   Metrics& m = run.metrics;
-  double sum_sq = 0;
-  for (const auto& p : run.track) {
-    if (!p.scored) continue;
-    ++m.samples;
-    sum_sq += p.err * p.err;
-    m.max_error_m = std::max(m.max_error_m, p.err);
-    m.final_error_m = p.err;
-  }
-  m.rmse_m = m.samples ? std::sqrt(sum_sq / static_cast<double>(m.samples)) : 0.0;
+  std::vector<double> errors;
+  for (const auto& p : run.track)
+    if (p.scored) errors.push_back(p.err);
+  const auto e = core::errorStats(errors);
+  m.samples = e.n;
+  m.rmse_m = e.rmse;
+  m.max_error_m = e.max;
+  if (!errors.empty()) m.final_error_m = errors.back();
   m.faults_total = static_cast<int>(faults.size());
-  for (const auto& d : run.decisions) {
-    const bool ignored = d.decision.reason == "dead_reckoning";
-    if (ignored) ++m.ignored;
-    else if (d.decision.accepted) ++m.accepted;
-    else ++m.rejected;
-    if (ignored) continue;
-    if (d.is_fault) (d.decision.accepted ? m.faults_accepted : m.faults_rejected)++;
-    else if (!d.decision.accepted) ++m.valid_rejected;
-  }
+  core::FaultCounts c;
+  for (const auto& d : run.decisions) core::countDecision(c, d.decision.accepted, d.decision.reason, d.is_fault);
+  m.accepted = c.accepted;
+  m.rejected = c.rejected;
+  m.ignored = c.ignored;
+  m.faults_accepted = c.faults_accepted;
+  m.faults_rejected = c.faults_rejected;
+  m.valid_rejected = c.valid_rejected;
 }
 
 FilterRun replay(const LogData& data, const EvalSetup& setup, const std::string& type,
