@@ -628,3 +628,64 @@ TEST_F(EvalTest, CommandLineFailsWhenNothingIsUsable) {
 }
 
 }  // namespace
+
+namespace {
+
+/// The report's gate group of a filter ("by_filter").
+nlohmann::json gateOf(const nlohmann::json& j, const std::string& filter) {
+  for (const auto& g : j["gate"]["by_filter"])
+    if (g["filter"] == filter) return g;
+  return nullptr;
+}
+
+nlohmann::json trackOf(const nlohmann::json& j, const std::string& channel) {
+  for (const auto& t : j["tracks"])
+    if (t["channel"] == channel) return t;
+  return nullptr;
+}
+
+}  // namespace
+
+// lcmloc-evaluate --filters replays the log through the fusion daemon's own code (the one way
+// into the engine) and scores each replay beside the recorded estimates: the numbers lcmloc-eval
+// gives for the same log.
+TEST_F(EvalTest, EvaluateReplaysEachFilterThroughTheDaemonAndScoresIt) {
+  writeRun(file("run.lcmlog"), true);
+  const std::string out = file("out");
+  ASSERT_EQ(shell(std::string(LCMLOC_EVALUATE_BIN) + " " + file("run.lcmlog") + " --config " LCMLOC_TEST_DATA_DIR
+                  "/eval_straight.yaml --filters dead_reckoning,ukf,ukf_gated --no-plots --out " + out + " > " +
+                  file("stdout.txt") + " 2>&1"), 0) << slurp(file("stdout.txt"));
+  std::ifstream f(out + "/report.json");
+  const auto j = nlohmann::json::parse(f);
+  const auto live = trackOf(j, "POSE");
+  ASSERT_FALSE(live.is_null());
+  EXPECT_NEAR(live["position_error_m"]["rmse"].get<double>(), kLiveOffsetX, 1e-9);
+  const auto dr = trackOf(j, "replay:dead_reckoning");
+  ASSERT_FALSE(dr.is_null()) << j["tracks"].dump();
+  EXPECT_GE(dr["scored"].get<int>(), kSteps / 2);
+  EXPECT_LT(dr["position_error_m"]["rmse"].get<double>(), 1e-9);  // exact odometry on a straight line
+  const auto gated = trackOf(j, "replay:ukf_gated"), ukf = trackOf(j, "replay:ukf");
+  ASSERT_FALSE(gated.is_null());
+  ASSERT_FALSE(ukf.is_null());
+  EXPECT_LT(gated["position_error_m"]["max"].get<double>(), 0.02);
+  EXPECT_GT(ukf["position_error_m"]["max"].get<double>(), 3 * gated["position_error_m"]["max"].get<double>());
+  // The gate decisions of each replay, apart from the recorded ones.
+  const auto g_gated = gateOf(j, "replay:ukf_gated"), g_ukf = gateOf(j, "replay:ukf");
+  const auto g_dr = gateOf(j, "replay:dead_reckoning"), g_live = gateOf(j, "ukf_gated");
+  ASSERT_FALSE(g_gated.is_null() || g_ukf.is_null() || g_dr.is_null() || g_live.is_null()) << j["gate"].dump();
+  EXPECT_EQ(g_gated["accepted"], 4);
+  EXPECT_EQ(g_gated["rejected"], 2);
+  EXPECT_EQ(g_ukf["accepted"], 5);
+  EXPECT_EQ(g_ukf["rejected"], 1);
+  EXPECT_EQ(g_dr["ignored"], 6);
+  EXPECT_EQ(g_live["decisions"], 6);  // the recorded GATE messages
+  EXPECT_FALSE(fs::exists(out + "/replay_ukf.lcmlog"));  // the replays' logs are not left behind
+}
+
+TEST_F(EvalTest, EvaluateRefusesAnUnknownFilterToReplay) {
+  writeRun(file("run.lcmlog"), true);
+  EXPECT_EQ(shell(std::string(LCMLOC_EVALUATE_BIN) + " " + file("run.lcmlog") +
+                  " --filters ukf_gated,nope --no-plots --out " + file("out") + " > /dev/null 2>&1"), 2);
+  EXPECT_EQ(shell(std::string(LCMLOC_EVALUATE_BIN) + " " + file("run.lcmlog") +
+                  " --filters ukf,ukf --no-plots --out " + file("out") + " > /dev/null 2>&1"), 2);
+}

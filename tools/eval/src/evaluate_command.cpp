@@ -12,6 +12,7 @@
 #include "lcmloc/common/process.hpp"
 #include "lcmloc/core/text.hpp"
 #include "lcmloc/eval/gnuplot.hpp"
+#include "lcmloc/eval/replay_filters.hpp"
 
 namespace lcmloc::eval {
 namespace {
@@ -69,6 +70,11 @@ void addEvaluateOptions(CLI::App& app, EvaluateCommand& c) {
   app.add_option("--ellipse-sigma", c.po.ellipse_sigma, "ellipse size in standard deviations")
       ->capture_default_str()->check(common::positive());
   app.add_flag("--no-plots", c.no_plots, "do not draw figures");
+  app.add_option("--filters", c.filters,
+                 "also replay the log's sensor channels through the fusion daemon's code with each of these filters "
+                 "(the config's fusion.filter with that type) and score them as replay:<TYPE>, with the replay's "
+                 "gate decisions")
+      ->delimiter(',');
 }
 
 int runEvaluate(EvaluateCommand c) {
@@ -87,9 +93,10 @@ int runEvaluate(EvaluateCommand c) {
     spdlog::error("--datum needs LAT,LON or LAT,LON,ALT (got one number)");
     return kExitBadConfig;
   }
+  common::SystemConfig cfg;  // built-in defaults without --config
   try {
     if (!config_path.empty()) {
-      const auto cfg = common::loadSystemConfig(config_path);
+      cfg = common::loadSystemConfig(config_path);
       if (!o_pose->count()) lo.pose_channel = cfg.channels.pose;
       if (!o_truth->count()) lo.truth_channel = cfg.channels.ground_truth;
       if (!o_gate->count()) lo.gate_channel = cfg.channels.gate;
@@ -157,6 +164,21 @@ int runEvaluate(EvaluateCommand c) {
     spdlog::warn("{}: damaged log: {} of {} bytes unreadable; evaluating the {} intact events", log_path,
                  log.bytes_unreadable, log.file_size, log.events_read);
   if (log.interrupted) spdlog::warn("interrupted: evaluating the {} events read so far", log.events_read);
+
+  if (!c.filters.empty()) {
+    try {
+      addReplayedFilters(log, log_path, cfg, c.filters, out_dir, &common::stopFlag());
+    } catch (const common::ConfigError& e) {
+      spdlog::error("{}", e.what());
+      return kExitBadConfig;
+    } catch (const std::invalid_argument& e) {
+      spdlog::error("{}", e.what());
+      return kExitBadConfig;
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
+      return kExitNothingUsable;
+    }
+  }
 
   // Tracks with estimates; the pose channel first.
   std::vector<EstimateTrack> tracks;

@@ -3,7 +3,8 @@
 // Scores the estimates recorded in any log (POSE, optionally every POSE_*) against the ground
 // truth recorded with them: position / heading / drift errors, NEES against its chi-square
 // bounds, gate statistics from GATE; writes report.json, PNG figures and, on request, TUM
-// trajectory files for the evo tools.
+// trajectory files for the evo tools. With --filters, also replays the log's sensor channels
+// through the fusion daemon's code once per filter and scores those estimates too.
 #include <string>
 #include <vector>
 
@@ -22,6 +23,9 @@ struct EvaluateCommand {
   TrajectoryPlotOptions po;
   std::vector<double> datum;
   bool no_plots = false, export_only = false;
+  /// Filter types to replay from the log's sensor channels and score beside the recorded
+  /// estimates (replay_filters.hpp); empty: nothing is replayed.
+  std::vector<std::string> filters;
   /// The options whose default the config replaces unless they were given.
   CLI::Option* o_pose = nullptr;
   CLI::Option* o_truth = nullptr;
