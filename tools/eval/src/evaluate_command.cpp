@@ -4,6 +4,7 @@
 #include <chrono>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include <spdlog/spdlog.h>
@@ -100,6 +101,7 @@ int runEvaluate(EvaluateCommand c) {
       if (!o_pose->count()) lo.pose_channel = cfg.channels.pose;
       if (!o_truth->count()) lo.truth_channel = cfg.channels.ground_truth;
       if (!o_gate->count()) lo.gate_channel = cfg.channels.gate;
+      lo.fault_channel = cfg.channels.fault_events;
       lo.datum = cfg.datum;
     }
     if (!datum.empty()) {
@@ -165,9 +167,15 @@ int runEvaluate(EvaluateCommand c) {
                  log.bytes_unreadable, log.file_size, log.events_read);
   if (log.interrupted) spdlog::warn("interrupted: evaluating the {} events read so far", log.events_read);
 
+  std::optional<ReplayComparison> live_vs_replay;
   if (!c.filters.empty()) {
     try {
       addReplayedFilters(log, log_path, cfg, c.filters, out_dir, &common::stopFlag());
+      // The recorded estimates against the replay of their filter: equal where the run was deterministic.
+      const auto& recorded = log.tracks.front();
+      for (const auto& t : log.tracks)
+        if (!recorded.filters.empty() && t.channel == replayedName(recorded.filters.back()))
+          live_vs_replay = compareTracks(recorded, t);
     } catch (const common::ConfigError& e) {
       spdlog::error("{}", e.what());
       return kExitBadConfig;
@@ -259,12 +267,12 @@ int runEvaluate(EvaluateCommand c) {
     return kExitNothingUsable;
   }
   try {
-    writeJson(makeTrajectoryReport(log, scores, gates, {lo, eo}), out_dir + "/report.json");
+    writeJson(makeTrajectoryReport(log, scores, gates, {lo, eo, live_vs_replay}), out_dir + "/report.json");
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return kExitNothingUsable;
   }
-  printTrajectorySummary(std::cout, log, scores, gates);
+  printTrajectorySummary(std::cout, log, scores, gates, live_vs_replay);
   std::cout << "report: " << out_dir << "/report.json\n";
   if (!no_plots) {
     const auto plots = writeTrajectoryPlots(log, scores, po, out_dir);

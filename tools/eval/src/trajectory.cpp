@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <set>
 #include <stdexcept>
 
@@ -138,6 +139,35 @@ TrackScore scoreTrack(const EstimateTrack& track, const std::vector<TruthPose>& 
   sc.nees3 = consistency(nees3, dof3, opt.confidence);
   sc.nees2 = consistency(nees2, dof2, opt.confidence);
   return sc;
+}
+
+std::vector<FaultGroup> faultStatistics(const std::vector<GateRecord>& gates,
+                                        const std::vector<AnnouncedFault>& faults) {
+  std::set<std::pair<std::string, int64_t>> keys;
+  for (const auto& f : faults) keys.emplace(f.channel, f.measurement_seq);
+  std::map<std::string, core::FaultCounts> by_filter;
+  for (const auto& g : gates)
+    core::countDecision(by_filter[g.filter], g.accepted, g.reason, keys.count({g.sensor, g.measurement_seq}) > 0);
+  std::vector<FaultGroup> out;
+  for (const auto& [filter, counts] : by_filter) out.push_back({filter, counts});
+  return out;
+}
+
+ReplayComparison compareTracks(const EstimateTrack& recorded, const EstimateTrack& replayed) {
+  ReplayComparison c;
+  if (!recorded.filters.empty()) c.filter = recorded.filters.back();
+  std::map<int64_t, const Estimate*> by_time, rec_by_time;
+  for (const auto& e : replayed.poses) by_time[e.utime] = &e;
+  for (const auto& e : recorded.poses) rec_by_time[e.utime] = &e;
+  double worst = 0;
+  for (const auto& [t, e] : rec_by_time) {
+    const auto r = by_time.find(t);
+    if (r == by_time.end()) continue;
+    ++c.matched;
+    worst = std::max(worst, std::hypot(e->x - r->second->x, e->y - r->second->y));
+  }
+  if (c.matched) c.max_diff_m = worst;
+  return c;
 }
 
 }  // namespace lcmloc::eval

@@ -135,7 +135,7 @@ SystemConfig parseSystemConfig(const std::string& yaml_text, const std::string& 
 /// Filter parameters from a YAML map (used for `fusion.filter` and for FUSION_CONTROL's
 /// parameters string), applied on top of base. Throws ConfigError.
 /// The fusion engine's configuration from a system config (fusion.*, and the odometry rate for
-/// a resume gap): one conversion for the daemon (and so the replay) and lcmloc-eval.
+/// a resume gap): one conversion for the daemon (and so the replay and lcmloc-evaluate).
 core::EngineConfig engineConfig(const SystemConfig& cfg);
 
 core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterConfig& base,

@@ -96,6 +96,7 @@ struct GateRecord {
   int dim = 0;                           ///< innovation dimension (the NIS's degrees of freedom)
   double nis = 0;                        ///< v' S^-1 v
   bool accepted = false;
+  int64_t measurement_seq = -1;          ///< seq of the measurement on its sensor channel
 };
 
 struct GateGroup {

@@ -53,8 +53,16 @@ struct TrajectoryLogOptions {
   bool all_pose_channels = false;    ///< also every other channel named POSE_*
   std::string truth_channel = "GROUND_TRUTH";
   std::string gate_channel = "GATE";
+  std::string fault_channel = "FAULT_EVENTS";  ///< fault_event_t: measurements known to be faults
   /// Needed only when the truth channel holds gps_fix_t (lat/lon -> local x east, y north).
   std::optional<common::Datum> datum;
+};
+
+/// One fault_event_t: the measurement (channel, measurement_seq) is a known fault.
+struct AnnouncedFault {
+  int64_t utime = 0;
+  std::string kind, channel;
+  int64_t measurement_seq = -1;
 };
 
 struct TrajectoryLog {
@@ -67,6 +75,7 @@ struct TrajectoryLog {
   std::vector<TruthPose> truth;      ///< sorted by utime, one sample per utime
   std::string truth_type;            ///< "ground_truth_t", "gps_fix_t" or "" (none decoded)
   std::vector<GateRecord> gates;     ///< in log order
+  std::vector<AnnouncedFault> faults;  ///< in log order
   std::vector<LogIssue> issues;      ///< damage and undecodable/invalid messages, in file order
   int64_t bad_utime = 0;             ///< messages skipped for |utime| >= kUtimeLimit (also in issues)
 };
@@ -141,6 +150,28 @@ struct TrackScore {
 /// Scores one track; truth must be sorted by utime.
 TrackScore scoreTrack(const EstimateTrack& track, const std::vector<TruthPose>& truth,
                       const EvaluateOptions& opt);
+
+/// The decisions of one filter on measurements some of which are announced faults.
+struct FaultGroup {
+  std::string filter;
+  core::FaultCounts counts;
+};
+
+/// Per filter (sorted by name), its gate decisions counted against the announced faults: a
+/// decision is on a fault when its (sensor, measurement_seq) is a fault's (channel,
+/// measurement_seq).
+std::vector<FaultGroup> faultStatistics(const std::vector<GateRecord>& gates,
+                                        const std::vector<AnnouncedFault>& faults);
+
+/// The recorded estimates against the replay of the same filter (lcmloc-evaluate --filters).
+struct ReplayComparison {
+  std::string filter;                ///< the filter the recorded poses name (the last one)
+  int64_t matched = 0;               ///< recorded estimates with a replayed one at the same utime
+  double max_diff_m = -1;            ///< largest position difference among them (-1: none matched)
+};
+
+/// Compares recorded with replayed at equal utime (the last estimate at each utime of each).
+ReplayComparison compareTracks(const EstimateTrack& recorded, const EstimateTrack& replayed);
 
 using core::GateGroup;
 using core::GateStats;

@@ -1,6 +1,7 @@
 #pragma once
 // Outputs of lcmloc-evaluate: report.json (keys in docs/evaluate.md), a summary table, PNG
 // figures through gnuplot and the TUM trajectory export.
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -15,14 +16,16 @@ namespace lcmloc::eval {
 struct TrajectoryReportMeta {
   TrajectoryLogOptions log;
   EvaluateOptions eval;
+  std::optional<ReplayComparison> live_vs_replay;  ///< --filters replayed the recorded estimates' filter
 };
 
 nlohmann::json makeTrajectoryReport(const TrajectoryLog& log, const std::vector<TrackScore>& scores,
                                     const GateStats& gates, const TrajectoryReportMeta& meta);
 
-/// One line per track, the NEES verdicts, the gate groups and the log's health.
+/// One line per track, the NEES verdicts, the gate groups, the decisions on announced faults,
+/// the recorded estimates against their replay and the log's health.
 void printTrajectorySummary(std::ostream& os, const TrajectoryLog& log, const std::vector<TrackScore>& scores,
-                            const GateStats& gates);
+                            const GateStats& gates, const std::optional<ReplayComparison>& live_vs_replay = {});
 
 struct TrajectoryPlotOptions {
   int ellipse_every = 0;             ///< covariance ellipse at every k-th scored estimate (0: ~40 per track)
