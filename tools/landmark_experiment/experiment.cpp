@@ -69,18 +69,19 @@ double boxProbability(const Eigen::Matrix2d& C, double a) {
 void finish(MethodStats& s, double paper_position) {
   const auto n = static_cast<double>(s.pos_errors.size());
   if (n == 0) return;
-  std::vector<double> norms, habs;
+  std::vector<double> norms, habs, east, north;
   int within = 0;
   for (const auto& e : s.pos_errors) {
     norms.push_back(e.norm());
+    east.push_back(e.x());
+    north.push_back(e.y());
     s.axis_mean += e / n;
-    s.axis_rms += e.cwiseAbs2() / n;
     s.pos_mean += e.norm() / n;
     s.pos_max = std::max(s.pos_max, e.norm());
     within += std::abs(e.x()) < paper_position && std::abs(e.y()) < paper_position;
     s.axis_within_paper += Vec2(std::abs(e.x()) < paper_position, std::abs(e.y()) < paper_position) / n;
   }
-  s.axis_rms = s.axis_rms.cwiseSqrt();
+  s.axis_rms = Vec2(core::rms(east), core::rms(north));
   s.pos_rms = core::rms(norms);
   s.pos_p95 = core::percentileNearestRank(norms, 0.95);
   s.within_paper = within / n;
