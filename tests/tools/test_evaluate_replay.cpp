@@ -583,6 +583,17 @@ TEST_F(EvaluateReplayTest, CommandLineFailsWhenNothingIsUsable) {
   EXPECT_NE(text.find("--log-level: loud not in"), std::string::npos) << text;
 }
 
+// A log of sensor channels has no estimate of its own: the error says how to score it (what
+// lcmloc-eval did with it), and without the warning that the recorded POSE is empty.
+TEST_F(EvaluateReplayTest, ASensorLogWithoutFiltersPointsToThem) {
+  writeRun(file("run.lcmlog"), false);
+  EXPECT_EQ(evaluate(file("run.lcmlog"), "--no-plots --out " + file("out")), 1);
+  EXPECT_NE(slurp(file("stdout.txt")).find("replayed and scored with --filters"), std::string::npos)
+      << slurp(file("stdout.txt"));
+  replayAndScore(file("run.lcmlog"), "ukf_gated");
+  EXPECT_EQ(slurp(file("stdout.txt")).find("no estimates on POSE"), std::string::npos) << slurp(file("stdout.txt"));
+}
+
 TEST_F(EvaluateReplayTest, TheReplaysLogsAreNotLeftBehind) {
   writeRun(file("run.lcmlog"), false);
   replayAndScore(file("run.lcmlog"), kAllFilters);

@@ -193,12 +193,13 @@ int runEvaluate(EvaluateCommand c) {
   for (const auto& t : log.tracks)
     if (!t.poses.empty()) tracks.push_back(t);
   if (tracks.empty()) {
-    spdlog::error("{}: no estimates (pose_t) on channel {}{} in {} events; channels in the log: {}", log_path,
+    spdlog::error("{}: no estimates (pose_t) on channel {}{} in {} events; channels in the log: {}{}", log_path,
                   lo.pose_channel, lo.all_pose_channels ? " or POSE_*" : "", log.events_read,
-                  channelList(log.channel_counts));
+                  channelList(log.channel_counts),
+                  c.filters.empty() ? ". A log of sensor channels is replayed and scored with --filters TYPE,..." : "");
     return kExitNothingUsable;
   }
-  if (log.tracks.front().poses.empty())
+  if (log.tracks.front().poses.empty() && c.filters.empty())  // (a sensor log to replay has none)
     spdlog::warn("{}: no estimates on {}; scoring {}", log_path, lo.pose_channel, withoutControlCharacters(tracks.front().channel));
 
   if (!tum_dir.empty()) {
