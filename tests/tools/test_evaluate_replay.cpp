@@ -73,7 +73,7 @@ lcmloc::magruler_t ruler(int64_t utime, int64_t seq, double offset) {
 /// What writeRun may change (for the tests of hostile logs).
 struct RunOptions {
   std::string fault_kind;                      ///< kind of every fault (empty: the detection's own)
-  std::string live_filter = "ukf_gated";       ///< filter named by the live POSE messages
+  std::string live_filter = "ukf_gated";       ///< filter named by the live POSE and GATE messages
   int64_t truth_shift_us = 0;                  ///< ground truth's utimes moved by this
   std::function<void(LogWriter&)> first;       ///< writes events before the run
   std::function<bool(int)> odometry_lost;      ///< true: the odometry of this step is not recorded
@@ -108,7 +108,7 @@ LogLayout writeRun(const std::string& path, bool with_live, const RunOptions& o 
       }
       if (with_live) {
         lcmloc::gate_decision_t g{};
-        g.utime = t; g.seq = gate_seq++; g.filter = "ukf_gated"; g.sensor = d.channel;
+        g.utime = t; g.seq = gate_seq++; g.filter = o.live_filter; g.sensor = d.channel;
         g.measurement_seq = d.seq; g.dim = 2; g.innovation = {0.0, 0.0};
         g.mahalanobis = d.fault ? 50.0 : 1.0; g.gate = 9.21; g.accepted = d.fault == nullptr;
         g.marker_id = -1; g.reason = d.fault ? "gate" : "accepted";
@@ -514,8 +514,8 @@ TEST_F(EvaluateReplayTest, NoEstimateInsideTheTruthIsAnErrorNotAZeroError) {
 
 TEST_F(EvaluateReplayTest, StringsFromTheLogRunNoCommandInGnuplot) {
   if (shell("command -v gnuplot > /dev/null") != 0) GTEST_SKIP() << "gnuplot not installed";
-  // A live filter name that ends the script's string and starts a command: on a new line, and in
-  // backquotes (command substitution outside quotes).
+  // A live filter name (of POSE and GATE) that ends the script's string and starts a command: on a
+  // new line, and in backquotes (command substitution outside quotes).
   const std::string live_nl = file("PWNED_live_nl"), live_bq = file("PWNED_live_bq");
   const std::vector<std::string> names{"y'\nsystem 'touch " + live_nl + "'\n'", "y'`touch " + live_bq + "`'"};
   for (size_t v = 0; v < names.size(); ++v) {
@@ -525,7 +525,8 @@ TEST_F(EvaluateReplayTest, StringsFromTheLogRunNoCommandInGnuplot) {
     const auto j = replayAndScore(file("run.lcmlog"), "ukf_gated", 0, "");
     // The script ran through without an error (every figure drawn) and ran nothing else.
     EXPECT_NE(slurp(file("stdout.txt")).find("figures: "), std::string::npos) << slurp(file("out") + "/gnuplot.log");
-    for (const char* png : {"trajectory_POSE.png", "trajectory_replay_ukf_gated.png", "errors_replay_ukf_gated.png"})
+    for (const char* png : {"trajectory_POSE.png", "trajectory_replay_ukf_gated.png", "errors_replay_ukf_gated.png",
+                            "gate_replay_ukf_gated.png"})
       EXPECT_TRUE(fs::exists(file("out") + "/" + png)) << png;
   }
   for (const auto& x : {live_nl, live_bq}) EXPECT_FALSE(fs::exists(x)) << x;
@@ -546,7 +547,7 @@ TEST_F(EvaluateReplayTest, CommandLineWritesReportAndFigures) {
   EXPECT_TRUE(trackOf(j, "replay:ukf_gated")["nees_xytheta"]["samples"].get<int>() > 0);
   if (shell("command -v gnuplot > /dev/null") == 0) {
     for (const char* png : {"trajectory_replay_ukf_gated.png", "errors_replay_ukf.png", "nees_replay_ukf_gated.png",
-                            "trajectory_POSE.png"})
+                            "trajectory_POSE.png", "gate_replay_ukf_gated.png", "gate_replay_ukf.png", "gate_ukf_gated.png"})
       EXPECT_GT(fs::file_size(file("out") + "/" + png), 1000u) << png;
   }
   const std::string text = slurp(file("stdout.txt"));

@@ -159,7 +159,7 @@ class TrajectoryDecoder {
     lcmloc::gate_decision_t m{};
     if (!decode(ev, m) || !usable(ev, m.utime)) return;
     out_.gates.push_back({m.utime, m.filter, m.sensor, m.reason, m.dim, m.mahalanobis, m.accepted != 0,
-                          m.measurement_seq});
+                          m.measurement_seq, m.gate});
   }
 
   void fault(const lcm::LogEvent& ev) {

@@ -349,6 +349,7 @@ PlotResult writeTrajectoryPlots(const TrajectoryLog& log, const std::vector<Trac
     res.figures.insert(res.figures.end() - (s.nees2.samples ? 1 : 0),
                        {"trajectory_" + st + ".png", "errors_" + st + ".png"});
   }
+  writeGatePlots(gp, log, t0, dir, res.figures);
   gp << "set output\n";
   gp.close();
   if (res.figures.empty()) {

@@ -97,6 +97,7 @@ struct GateRecord {
   double nis = 0;                        ///< v' S^-1 v
   bool accepted = false;
   int64_t measurement_seq = -1;          ///< seq of the measurement on its sensor channel
+  double gate = 0;                       ///< the threshold nis was compared with (inf: no gate)
 };
 
 struct GateGroup {

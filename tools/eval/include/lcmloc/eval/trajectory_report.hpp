@@ -38,6 +38,12 @@ struct TrajectoryPlotOptions {
 PlotResult writeTrajectoryPlots(const TrajectoryLog& log, const std::vector<TrackScore>& scores,
                                 const TrajectoryPlotOptions& opt, const std::string& dir);
 
+/// Per filter with gate decisions of a positive, finite NIS: gate_<FILTER>.png, the NIS of each
+/// decision over time (accepted, rejected, on an announced fault) with the gate it was compared
+/// with. Its commands go to the script gp, its data files into dir; the figures are appended.
+void writeGatePlots(std::ostream& gp, const TrajectoryLog& log, int64_t t0, const std::string& dir,
+                    std::vector<std::string>& figures);
+
 /// One TUM line: "timestamp tx ty tz qx qy qz qw" with the timestamp in seconds (exact, six
 /// decimals from the utime), z = 0 and the quaternion of a rotation by yaw about z.
 std::string tumLine(int64_t utime, double x, double y, double yaw);
