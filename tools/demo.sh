@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Runs the default scenario (the magnetic-ruler paper's experiment) live: every process is a
 # real executable talking over udpm:// on loopback, started by lcmloc-launcher from
-# config/system.yaml; the logger records out/demo/run.lcmlog. Then lcmloc-eval replays that log
-# through dead reckoning, the UKF and the gated UKF and writes out/demo/report.json, PNG figures
-# and a summary; lcmloc-evaluate scores the recorded POSE into out/demo/evaluate/ (report.json,
-# figures) and exports TUM files to out/demo/tum/. Same set-up as tools/test.sh (packages,
+# config/system.yaml; the logger records out/demo/run.lcmlog. Then lcmloc-evaluate scores the
+# recorded POSE and, replaying the log through the fusion daemon's code, dead reckoning, the UKF
+# and the gated UKF into out/demo/evaluate/ (report.json, figures, a summary) and exports TUM
+# files to out/demo/tum/. Same set-up as tools/test.sh (packages,
 # multicast route, build).
 set -euo pipefail
 
@@ -86,8 +86,6 @@ start=$SECONDS
 "$bin/lcmloc-launcher" --system "$LCMLOC_ROOT/config/system.yaml" --config "$scenario"
 lcmloc_log "live run done in $((SECONDS - start)) s: $log ($(stat -c %s "$log") bytes)"
 
-lcmloc_log "evaluating the log offline"
-"$bin/lcmloc-eval" "$log" --config "$scenario" --out "$out"
-
-lcmloc_log "scoring the recorded POSE against GROUND_TRUTH (docs/evaluate.md)"
-"$bin/lcmloc-evaluate" "$log" --out "$out/evaluate" --tum-dir "$out/tum" --segment-lengths 5,10,20
+lcmloc_log "scoring the recorded POSE and the replayed filters against GROUND_TRUTH (docs/evaluate.md)"
+"$bin/lcmloc-evaluate" "$log" --config "$scenario" --filters dead_reckoning,ukf,ukf_gated --out "$out/evaluate" \
+  --tum-dir "$out/tum" --segment-lengths 5,10,20

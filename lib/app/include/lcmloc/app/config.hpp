@@ -139,7 +139,8 @@ SystemConfig parseSystemConfig(const std::string& yaml_text, const std::string& 
 
 /// Filter parameters from a YAML map (used for `fusion.filter` and for FUSION_CONTROL's
 /// parameters string), applied on top of base. Throws ConfigError.
-/// The fusion engine's configuration from a system config (fusion.*): one conversion for the daemon (and so the replay) and lcmloc-eval.
+/// The fusion engine's configuration from a system config (fusion.*): one conversion for the
+/// daemon (and so the replay and lcmloc-evaluate).
 core::EngineConfig engineConfig(const SystemConfig& cfg);
 
 core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterConfig& base,
