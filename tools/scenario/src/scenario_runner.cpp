@@ -1,10 +1,6 @@
 // In-process scenario: world + sensors stepped in the driver processes' order, feeding one
 // FusionEngine per filter config, then metrics against ground truth.
-<<<<<<<< HEAD:lib/sim/src/scenario_runner.cpp
-#include "lcmloc/sim/scenario_runner.hpp"
-========
 #include "lcmloc/scenario/scenario_runner.hpp"
->>>>>>>> scoring:tools/scenario/src/scenario_runner.cpp
 
 #include <cmath>
 #include <memory>
