@@ -10,12 +10,12 @@ set -euo pipefail
 
 usage() {
   cat << 'USAGE'
-usage: tools/demo.sh [--fast] [--factor X] [--out DIR] [--no-build]
+usage: tools/demo.sh [--fast] [--factor X] [-o DIR] [--no-build]
   --fast        run the simulation 10x faster than real time (default: 1.0, live pace)
   --factor X    real-time factor X (1.0 = live, 10 = ten times faster; X > 1 also
                 scales fusion.reorder_window and fusion.max_time_jump by X, both
                 spans of message time)
-  --out DIR     output directory (default: out/demo)
+  -o, --output DIR  output directory (default: out/demo; its earlier results are replaced)
   --no-build    skip package installation and build (use what is in build/)
 Environment: LCMLOC_BUILD_DIR (default build/), LCM_DEFAULT_URL (default
 udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304).
@@ -29,7 +29,7 @@ while (($# > 0)); do
   case "$1" in
     --fast) factor=10 ;;
     --factor) factor="${2:?--factor needs a value}"; shift ;;
-    --out) out="${2:?--out needs a directory}"; shift ;;
+    -o | --output) out="${2:?--output needs a directory}"; shift ;;
     --no-build) build=0 ;;
     -h | --help) usage; exit 0 ;;
     *) echo "unknown argument: $1" >&2; usage >&2; exit 2 ;;
@@ -86,7 +86,7 @@ start=$SECONDS
 lcmloc_log "live run done in $((SECONDS - start)) s: $log ($(stat -c %s "$log") bytes)"
 
 lcmloc_log "evaluating the log offline"
-"$bin/lcmloc-eval" "$log" --config "$scenario" --out "$out"
+"$bin/lcmloc-eval" "$log" --config "$scenario" -o "$out" --overwrite
 
 lcmloc_log "scoring the recorded POSE against GROUND_TRUTH (docs/evaluate.md)"
-"$bin/lcmloc-evaluate" "$log" --out "$out/evaluate" --tum-dir "$out/tum" --segment-lengths 5,10,20
+"$bin/lcmloc-evaluate" "$log" -o "$out/evaluate" --tum-dir "$out/tum" --overwrite --segment-lengths 5,10,20

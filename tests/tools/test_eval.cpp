@@ -493,7 +493,7 @@ TEST_F(EvalTest, MessagesWithAbsurdUtimesAreSkippedCountedAndReported) {
 
   const std::string out = file("out");
   ASSERT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") + " --config " LCMLOC_TEST_DATA_DIR
-                  "/eval_straight.yaml --out " + out + " > " + file("stdout.txt") + " 2>&1"), 0);
+                  "/eval_straight.yaml -o " + out + " > " + file("stdout.txt") + " 2>&1"), 0);
   const std::string text = slurp(file("stdout.txt"));
   EXPECT_NE(text.find("warning: 4 message(s) skipped for |utime| >= 2^62 us"), std::string::npos) << text;
   std::ifstream f(out + "/report.json");
@@ -510,7 +510,7 @@ TEST_F(EvalTest, FilterWithoutAScoredEstimateHasNoErrorRatherThanZero) {
   writeRun(file("run.lcmlog"), true, o);
   const std::string out = file("out");
   ASSERT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") + " --config " LCMLOC_TEST_DATA_DIR
-                  "/eval_straight.yaml --no-plots --out " + out + " > " + file("stdout.txt") + " 2>&1"), 0);
+                  "/eval_straight.yaml --no-plots -o " + out + " > " + file("stdout.txt") + " 2>&1"), 0);
   const std::string text = slurp(file("stdout.txt"));
   for (const std::string name : {"dead_reckoning", "ukf", "ukf_gated", "live:ukf_gated"}) {
     const auto row = text.find("\n" + name + " ");
@@ -545,7 +545,7 @@ TEST_F(EvalTest, StringsFromTheLogRunNoCommandInGnuplot) {
     writeRun(file("run.lcmlog"), true, o);
     const std::string out = file("out" + std::to_string(v));
     ASSERT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") + " --config " LCMLOC_TEST_DATA_DIR
-                    "/eval_straight.yaml --out " + out + " > " + file("stdout.txt") + " 2>&1"), 0);
+                    "/eval_straight.yaml -o " + out + " > " + file("stdout.txt") + " 2>&1"), 0);
     // The script ran through without an error (every figure drawn) and ran nothing else.
     EXPECT_NE(slurp(file("stdout.txt")).find("figures: "), std::string::npos) << slurp(out + "/gnuplot.log");
     for (const char* png : {"trajectories.png", "trajectories_faults.png", "innovation.png", "error_x.png"})
@@ -558,7 +558,7 @@ TEST_F(EvalTest, CommandLineWritesReportAndFigures) {
   writeRun(file("run.lcmlog"), true);
   const std::string out = file("out");
   const int rc = shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") +
-                     " --config " LCMLOC_TEST_DATA_DIR "/eval_straight.yaml --out " + out +
+                     " --config " LCMLOC_TEST_DATA_DIR "/eval_straight.yaml -o " + out +
                      " > " + file("stdout.txt") + " 2>&1");
   ASSERT_EQ(rc, 0);
   std::ifstream f(out + "/report.json");
@@ -590,7 +590,7 @@ TEST_F(EvalTest, CommandLineOnADamagedLogWritesTheReportAndExits3) {
   fs::resize_file(file("run.lcmlog"), static_cast<uintmax_t>(size - 5));  // cut the last event
   const std::string out = file("out");
   const int rc = shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") + " --config " LCMLOC_TEST_DATA_DIR
-                       "/eval_straight.yaml --no-plots --out " + out + " > " + file("stdout.txt") + " 2>&1");
+                       "/eval_straight.yaml --no-plots -o " + out + " > " + file("stdout.txt") + " 2>&1");
   const std::string text = slurp(file("stdout.txt"));
   ASSERT_EQ(rc, 3) << text;
   EXPECT_NE(text.find("at byte " + std::to_string(w.starts.back())), std::string::npos) << text;
@@ -601,26 +601,26 @@ TEST_F(EvalTest, CommandLineOnADamagedLogWritesTheReportAndExits3) {
 }
 
 TEST_F(EvalTest, CommandLineFailsWhenNothingIsUsable) {
-  EXPECT_NE(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("missing.lcmlog") + " --no-plots --out " +
+  EXPECT_NE(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("missing.lcmlog") + " --no-plots -o " +
                 file("out") + " > /dev/null 2>&1"), 0);
   fs::create_directories(file("adir"));
-  EXPECT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("adir") + " --no-plots --out " + file("out") + " > " +
-                  file("dir.txt") + " 2>&1"), 1);
+  EXPECT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("adir") + " --no-plots -o " + file("out") + " > " +
+                  file("dir.txt") + " 2>&1"), 2);  // a usage error
   std::ifstream dir_out(file("dir.txt"));
   const std::string dir_text((std::istreambuf_iterator<char>(dir_out)), std::istreambuf_iterator<char>());
   EXPECT_NE(dir_text.find("is a directory"), std::string::npos) << dir_text;
   { std::ofstream empty(file("empty.lcmlog")); }
-  EXPECT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("empty.lcmlog") + " --no-plots --out " +
+  EXPECT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("empty.lcmlog") + " --no-plots -o " +
                 file("out") + " > /dev/null 2>&1"), 1);
   writeRun(file("run.lcmlog"), false);
   EXPECT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") +
-                " --filters nope --no-plots --out " + file("out") + " > /dev/null 2>&1"), 2);
+                " --filters nope --no-plots -o " + file("out") + " > /dev/null 2>&1"), 2);
   EXPECT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") + " --config " +
-                file("missing.yaml") + " --no-plots --out " + file("out") + " > /dev/null 2>&1"), 2);
+                file("missing.yaml") + " --no-plots -o " + file("out") + " > /dev/null 2>&1"), 2);
   EXPECT_EQ(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") +
-                " --filters ukf_gated,tvekf --no-plots --out " + file("out") + " > /dev/null 2>&1"), 2);
+                " --filters ukf_gated,tvekf --no-plots -o " + file("out") + " > /dev/null 2>&1"), 2);
   // A misspelt log level is refused (it used to switch logging off silently).
-  EXPECT_NE(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") + " --log-level loud --no-plots --out " +
+  EXPECT_NE(shell(std::string(LCMLOC_EVAL_BIN) + " " + file("run.lcmlog") + " --log-level loud --no-plots -o " +
                 file("out") + " > " + file("level.txt") + " 2>&1"), 0);
   std::ifstream level(file("level.txt"));
   const std::string text((std::istreambuf_iterator<char>(level)), std::istreambuf_iterator<char>());

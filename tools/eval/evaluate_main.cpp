@@ -71,7 +71,8 @@ int main(int argc, char** argv) {
       ->delimiter(',')
       ->expected(1, 3)  // 2 or 3, checked below (a minimum above 1 would print "x 2" in --help)
       ->type_name("LAT,LON[,ALT]");
-  app.add_option("-o,--out", out_dir, "output directory for report.json and figures")->capture_default_str();
+  bool overwrite = false;
+  common::addOutputOption(app, out_dir, "output directory for report.json and figures")->capture_default_str();
   app.add_option("--tum-dir", tum_dir, "write estimate.tum (estimate_<CHANNEL>.tum for POSE_*) and truth.tum here");
   app.add_flag("--export-only", export_only, "only export TUM files (--tum-dir): no truth needed, no scoring");
   app.add_option("--segment-lengths", eo.segment_lengths, "drift segment lengths [m]")
@@ -86,10 +87,14 @@ int main(int argc, char** argv) {
   app.add_option("--ellipse-sigma", po.ellipse_sigma, "ellipse size in standard deviations")
       ->capture_default_str()->check(lcmloc::common::positive());
   app.add_flag("--no-plots", no_plots, "do not draw figures");
+  common::addOverwriteFlag(app, overwrite);
   common::addOfflineOptions(app, opts,
                             "system config (YAML): its channels.pose, channels.ground_truth, channels.gate and "
                             "datum are the defaults of --pose-channel, --truth-channel, --gate-channel and --datum");
   return common::runProcess(app, argc, argv, opts, "lcmloc-evaluate", [&] {
+    common::requireInputFile(log_path, "input log");
+    common::refuseExistingOutput(tum_dir, overwrite, "--tum-dir");
+    if (!export_only) common::refuseExistingOutput(out_dir, overwrite);
     if (export_only && tum_dir.empty()) {
       spdlog::error("--export-only needs --tum-dir DIR");
       return kExitBadConfig;

@@ -34,7 +34,9 @@ int main(int argc, char** argv) {
   std::vector<std::string> filters{"dead_reckoning", "ukf", "ukf_gated"};
   bool no_plots = false;
   app.add_option("log", log_path, "LCM log file to evaluate")->required();
-  app.add_option("-o,--out", out_dir, "output directory for report.json and figures")->capture_default_str();
+  bool overwrite = false;
+  lcmloc::common::addOutputOption(app, out_dir, "output directory for report.json and figures")->capture_default_str();
+  lcmloc::common::addOverwriteFlag(app, overwrite);
   app.add_option("--filters", filters,
                  "filters to replay: dead_reckoning, ukf, ukf_gated, ukf_calib (odometry and ruler detections "
                  "are replayed; for the IMU, GPS and landmark filters use lcmloc-replay + lcmloc-evaluate)")
@@ -44,6 +46,8 @@ int main(int argc, char** argv) {
                                     "system config (YAML) giving filter parameters, marker map and channels; "
                                     "built-in defaults (the paper's experiment) when omitted");
   return lcmloc::common::runProcess(app, argc, argv, opts, "lcmloc-eval", [&] {
+    lcmloc::common::requireInputFile(log_path, "input log");
+    lcmloc::common::refuseExistingOutput(out_dir, overwrite);
     lcmloc::common::SystemConfig cfg;
     try {
       if (!config_path.empty()) cfg = lcmloc::common::loadSystemConfig(config_path);

@@ -206,10 +206,13 @@ int main(int argc, char** argv) {
       ->delimiter(',')
       ->check(lcmloc::common::nonNegative());
   app.add_option("--filters", o.filters, "comma-separated filter types")->capture_default_str();
-  app.add_option("--out", o.out, "JSON report path")->capture_default_str();
+  lcmloc::common::addOutputOption(app, o.out, "JSON report file")->capture_default_str();
+  bool overwrite = false;
+  lcmloc::common::addOverwriteFlag(app, overwrite);
   return lcmloc::common::runProcess(app, argc, argv, common, "lcmloc-montecarlo", [&] {
     o.config = common.config;
-    lcmloc::common::prepareOutputDir(std::filesystem::path(o.out).parent_path().string());
+    lcmloc::common::refuseExistingOutput(o.out, overwrite);
+    lcmloc::common::prepareOutputDir(std::filesystem::path(o.out).parent_path().string(), true);
     return run(o);
   });
 }
