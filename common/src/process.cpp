@@ -160,13 +160,14 @@ void refuseExistingOutput(const std::string& path, bool overwrite, const std::st
   namespace fs = std::filesystem;
   if (overwrite || path.empty()) return;
   std::error_code ec;
-  const auto st = fs::symlink_status(path, ec);
+  const auto st = fs::status(path, ec);  // (a link: what it points to)
   if (ec || !fs::exists(st)) return;
-  if (fs::is_directory(fs::status(path, ec))) {
+  if (fs::is_directory(st)) {
     if (fs::directory_iterator(path, ec) == fs::directory_iterator() && !ec) return;  // empty: nothing to replace
     throw UsageError(flag + " '" + path + "' is a directory that is not empty: give --overwrite to replace the "
                      "files in it, or another " + flag);
   }
+  if (!fs::is_regular_file(st)) return;  // a device or a FIFO (/dev/null, /dev/stdout): written to, not replaced
   throw UsageError(flag + " '" + path + "' exists: give --overwrite to replace it, or another " + flag);
 }
 

@@ -87,7 +87,7 @@ class ReplayProcessTest : public ProcessFixture {
  protected:
   /// Runs lcmloc-replay and returns its output log's events.
   std::vector<Event> replay(const std::string& log, const std::string& config, const std::string& name) {
-    Child r(LCMLOC_REPLAY, {log, "-o", path(name), "--config", config}, path(name + ".out"));
+    Child r(LCMLOC_REPLAY, {log, "-o", path(name), "--overwrite", "--config", config}, path(name + ".out"));
     const auto rc = r.wait(60s);
     EXPECT_TRUE(rc.has_value());
     EXPECT_EQ(rc.value_or(-1), 0) << r.output();

@@ -571,11 +571,11 @@ TEST_F(EvaluateTest, BadInputsGiveClearErrors) {
     }
   }
   EXPECT_EQ(evaluate(file("run.lcmlog") + out), 0) << output_;
-  EXPECT_EQ(evaluate(file("run.lcmlog") + out + " --gate-channel TRUTH_COPY"), 2);
+  EXPECT_EQ(evaluate(file("run.lcmlog") + out + " --gate-channel TRUTH_COPY --overwrite"), 2);
   EXPECT_NE(output_.find("--gate-channel TRUTH_COPY: none of its 30 messages is of the type that option reads "
                          "(gate_decision_t): is it the right channel?"), std::string::npos) << output_;
   EXPECT_EQ(output_.find("undecodable"), std::string::npos) << output_;
-  EXPECT_EQ(evaluate(file("run.lcmlog") + out + " --pose-channel TRUTH_COPY"), 2);
+  EXPECT_EQ(evaluate(file("run.lcmlog") + out + " --pose-channel TRUTH_COPY --overwrite"), 2);
   EXPECT_NE(output_.find("--pose-channel TRUTH_COPY: none of its 30 messages"), std::string::npos) << output_;
 }
 

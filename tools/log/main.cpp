@@ -55,7 +55,10 @@ int main(int argc, char** argv) {
     if (const std::string problem = common::fileProblem(log_path); !problem.empty())
       throw common::ConfigError(log_path, "", problem == common::kNoSuchFile ? "no such log file" : problem + ": not a log file");
     if (info_cmd->parsed()) return logtool::info(log_path);
-    if (output != "-") common::refuseExistingOutput(output, overwrite);
+    if (!output.empty() && output != "-") {
+      common::refuseOutputOverInputs("--output", output, {log_path}, "input log");  // (the more useful message)
+      common::refuseExistingOutput(output, overwrite);
+    }
     if (csv_cmd->parsed()) return logtool::toCsv(log_path, channels, output);
     return logtool::cut(log_path, output, cut_opts);
   });

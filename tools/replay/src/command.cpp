@@ -46,6 +46,7 @@ int runCommand(const common::SystemConfig& cfg, const CommandOptions& o) {
   if (o.bench) return runBench(cfg, o.bench_options);
   if (o.input.empty() || o.output.empty()) throw common::UsageError("give an input log and --output FILE (or --bench)");
   common::requireInputFile(o.input, "input log");
+  common::refuseOutputOverInputs("--output", o.output, {o.input}, "input log");  // (the more useful message)
   common::refuseExistingOutput(o.output, o.overwrite);
   ReplayOptions ro;
   ro.input = o.input;

@@ -101,8 +101,9 @@ void requireInputFile(const std::string& path, const std::string& what);
 CLI::Option* addOutputOption(CLI::App& app, std::string& path, const std::string& help);
 /// --overwrite: replace an existing output (without it, refuseExistingOutput refuses it).
 CLI::Option* addOverwriteFlag(CLI::App& app, bool& overwrite);
-/// Throws UsageError (exit 2) when path exists (a file, or a directory that is not empty) and
-/// overwrite is false, naming flag: no program replaces an output without --overwrite.
+/// Throws UsageError (exit 2) when path exists (a regular file, or a directory that is not
+/// empty) and overwrite is false, naming flag: no program replaces an output without
+/// --overwrite. A device or a FIFO (/dev/null) is written to, not replaced: accepted.
 void refuseExistingOutput(const std::string& path, bool overwrite, const std::string& flag = "--output");
 
 /// Creates the output directory dir (and its parents) and checks that a file can be written in
