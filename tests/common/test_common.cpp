@@ -287,6 +287,7 @@ TEST(Process, AnExistingOutputIsRefusedWithoutOverwrite) {
   EXPECT_NO_THROW(common::refuseExistingOutput((base / "new.lcmlog").string(), false));
   EXPECT_NO_THROW(common::refuseExistingOutput((base / "empty").string(), false));
   EXPECT_NO_THROW(common::refuseExistingOutput("", false));
+  EXPECT_NO_THROW(common::refuseExistingOutput("/dev/null", false));  // a device is written to, not replaced
   try {
     common::refuseExistingOutput((base / "file.lcmlog").string(), false, "--log");
     ADD_FAILURE() << "an existing file was accepted";
