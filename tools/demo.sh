@@ -15,8 +15,7 @@ usage: tools/demo.sh [--fast] [--factor X] [-o|--output DIR] [--no-build]
   --factor X    real-time factor X (1.0 = live, 10 = ten times faster; X > 1 also
                 scales fusion.reorder_window and fusion.max_time_jump by X, both
                 spans of message time)
-  -o, --output DIR
-                output directory (default: out/demo)
+  -o, --output DIR  output directory (default: out/demo; its earlier results are replaced)
   --no-build    skip package installation and build (use what is in build/)
 Environment: LCMLOC_BUILD_DIR (default build/), LCM_DEFAULT_URL (default
 udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304).
@@ -87,5 +86,5 @@ start=$SECONDS
 lcmloc_log "live run done in $((SECONDS - start)) s: $log ($(stat -c %s "$log") bytes)"
 
 lcmloc_log "scoring the recorded POSE and the replayed filters against GROUND_TRUTH (docs/evaluate.md)"
-"$bin/lcmloc-evaluate" "$log" --config "$scenario" --filters dead_reckoning,ukf,ukf_gated --out "$out/evaluate" \
+"$bin/lcmloc-evaluate" "$log" --config "$scenario" --filters dead_reckoning,ukf,ukf_gated -o "$out/evaluate" --overwrite \
   --tum-dir "$out/tum" --segment-lengths 5,10,20

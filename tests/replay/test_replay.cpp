@@ -304,7 +304,7 @@ TEST_F(ReplayTest, DamagedLogIsReplayedUpToTheDamageAndSaysWhere) {
 
   Child missing(LCMLOC_REPLAY, {path("nope.lcmlog"), "-o", path("x.lcmlog"), "--config", LCMLOC_PAPER_YAML},
                 path("missing.out"));
-  EXPECT_EQ(missing.wait(30s).value_or(-1), 1) << missing.output();
+  EXPECT_EQ(missing.wait(30s).value_or(-1), 2) << missing.output();  // a usage error
   EXPECT_NE(missing.output().find("no such file"), std::string::npos) << missing.output();
 }
 

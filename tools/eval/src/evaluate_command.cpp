@@ -56,7 +56,8 @@ void addEvaluateOptions(CLI::App& app, EvaluateCommand& c) {
       ->delimiter(',')
       ->expected(1, 3)  // 2 or 3, checked below (a minimum above 1 would print "x 2" in --help)
       ->type_name("LAT,LON[,ALT]");
-  app.add_option("-o,--out", c.out_dir, "output directory for report.json and figures")->capture_default_str();
+  common::addOutputOption(app, c.out_dir, "output directory for report.json and figures")->capture_default_str();
+  common::addOverwriteFlag(app, c.overwrite);
   app.add_option("--tum-dir", c.tum_dir, "write estimate.tum (estimate_<CHANNEL>.tum for POSE_*) and truth.tum here");
   app.add_flag("--export-only", c.export_only, "only export TUM files (--tum-dir): no truth needed, no scoring");
   app.add_option("--segment-lengths", c.eo.segment_lengths, "drift segment lengths [m]")
@@ -86,6 +87,9 @@ int runEvaluate(EvaluateCommand c) {
   const EvaluateOptions& eo = c.eo;
   const TrajectoryPlotOptions& po = c.po;
   const CLI::Option *o_pose = c.o_pose, *o_truth = c.o_truth, *o_gate = c.o_gate;
+  common::requireInputFile(log_path, "input log");
+  common::refuseExistingOutput(tum_dir, c.overwrite, "--tum-dir");
+  if (!export_only) common::refuseExistingOutput(out_dir, c.overwrite);
   if (export_only && tum_dir.empty()) {
     spdlog::error("--export-only needs --tum-dir DIR");
     return kExitBadConfig;

@@ -95,10 +95,12 @@ void addOptions(CLI::App& app, Options& o) {
       ->delimiter(',')
       ->check(common::nonNegative());
   app.add_option("--filters", o.filters, "comma-separated filter types")->capture_default_str();
-  app.add_option("--out", o.out, "JSON report path")->capture_default_str();
+  common::addOutputOption(app, o.out, "JSON report file")->capture_default_str();
+  common::addOverwriteFlag(app, o.overwrite);
 }
 
 int run(const Options& o) {
+  common::refuseExistingOutput(o.out, o.overwrite);
   models::ScenarioConfig sc;
   core::FilterConfig base_filter;
   if (!o.config.empty()) {

@@ -23,6 +23,7 @@ struct EvaluateCommand {
   TrajectoryPlotOptions po;
   std::vector<double> datum;
   bool no_plots = false, export_only = false;
+  bool overwrite = false;  ///< --overwrite: replace an existing report directory / TUM files
   /// Filter types to replay from the log's sensor channels and score beside the recorded
   /// estimates (replay_filters.hpp); empty: nothing is replayed.
   std::vector<std::string> filters;

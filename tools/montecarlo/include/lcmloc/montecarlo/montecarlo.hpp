@@ -23,6 +23,7 @@ struct Options {
   std::vector<double> pw_diag;  ///< 3 values: replaces fusion.filter.pw_diag
   std::string filters = "ukf_gated,ukf_calib";
   std::string out = "out/montecarlo/report.json";
+  bool overwrite = false;  ///< --overwrite: replace an existing report
 };
 
 /// The command-line options of lcmloc-montecarlo (all but the common ones) into o.

@@ -1,5 +1,5 @@
-// lcmloc-replay --bench: offline replay throughput on a long synthetic log.
-#include "bench.hpp"
+// lcmloc-replay --bench (bench.hpp): offline replay throughput on a long synthetic log.
+#include "lcmloc/replay/bench.hpp"
 
 #include <algorithm>
 #include <chrono>
