@@ -162,7 +162,7 @@ class EvaluateReplayTest : public ::testing::Test {
   /// lcmloc-evaluate --config kConfig --filters `filters` into file("out"); report.json parsed.
   nlohmann::json replayAndScore(const std::string& log, const std::string& filters, int expected_rc = 0,
                                 const std::string& more = "--no-plots") {
-    const int rc = evaluate(log, "--config " + kConfig + " --filters " + filters + " " + more + " --out " + file("out"));
+    const int rc = evaluate(log, "--config " + kConfig + " --filters " + filters + " " + more + " --overwrite -o " + file("out"));
     EXPECT_EQ(rc, expected_rc) << slurp(file("stdout.txt"));
     std::ifstream f(file("out") + "/report.json");
     if (!f.good()) return nullptr;
@@ -260,8 +260,11 @@ TEST_F(EvaluateReplayTest, TheEngineConfigurationIsTheDaemons) {
     {
       std::ofstream f(yaml);
       f << slurp(kConfig) << "  max_odometry_gap: " << max_gap << "\n";  // under fusion:
+      // (its map file beside it: a relative map_file is read from the config's directory)
+      fs::copy_file(LCMLOC_TEST_DATA_DIR "/eval_straight_map.csv", file("eval_straight_map.csv"),
+                    fs::copy_options::overwrite_existing);
     }
-    EXPECT_EQ(evaluate(file("run.lcmlog"), "--config " + yaml + " --filters dead_reckoning --no-plots --out " +
+    EXPECT_EQ(evaluate(file("run.lcmlog"), "--config " + yaml + " --filters dead_reckoning --no-plots --overwrite -o " +
                                               file("out")), 0) << slurp(file("stdout.txt"));
     std::ifstream f(file("out") + "/report.json");
     const auto j = nlohmann::json::parse(f);
@@ -567,7 +570,7 @@ TEST_F(EvaluateReplayTest, CommandLineOnADamagedLogWritesTheReportAndExits3) {
 }
 
 TEST_F(EvaluateReplayTest, CommandLineFailsWhenNothingIsUsable) {
-  const std::string opts = " --filters " + kAllFilters + " --no-plots --out " + file("out");
+  const std::string opts = " --filters " + kAllFilters + " --no-plots --overwrite -o " + file("out");
   EXPECT_NE(evaluate(file("missing.lcmlog"), opts), 0);
   fs::create_directories(file("adir"));
   EXPECT_EQ(evaluate(file("adir"), opts), 1);
@@ -575,8 +578,8 @@ TEST_F(EvaluateReplayTest, CommandLineFailsWhenNothingIsUsable) {
   { std::ofstream empty(file("empty.lcmlog")); }
   EXPECT_EQ(evaluate(file("empty.lcmlog"), opts), 1);
   writeRun(file("run.lcmlog"), false);
-  EXPECT_EQ(evaluate(file("run.lcmlog"), "--filters nope --no-plots --out " + file("out")), 2);
-  EXPECT_EQ(evaluate(file("run.lcmlog"), "--filters ukf,ukf --no-plots --out " + file("out")), 2);
+  EXPECT_EQ(evaluate(file("run.lcmlog"), "--filters nope --no-plots --overwrite -o " + file("out")), 2);
+  EXPECT_EQ(evaluate(file("run.lcmlog"), "--filters ukf,ukf --no-plots --overwrite -o " + file("out")), 2);
   EXPECT_EQ(evaluate(file("run.lcmlog"), "--config " + file("missing.yaml") + opts), 2);
   // A misspelt log level is refused (it used to switch logging off silently).
   EXPECT_NE(evaluate(file("run.lcmlog"), "--log-level loud" + opts), 0);
@@ -588,7 +591,7 @@ TEST_F(EvaluateReplayTest, CommandLineFailsWhenNothingIsUsable) {
 // lcmloc-eval did with it), and without the warning that the recorded POSE is empty.
 TEST_F(EvaluateReplayTest, ASensorLogWithoutFiltersPointsToThem) {
   writeRun(file("run.lcmlog"), false);
-  EXPECT_EQ(evaluate(file("run.lcmlog"), "--no-plots --out " + file("out")), 1);
+  EXPECT_EQ(evaluate(file("run.lcmlog"), "--no-plots --overwrite -o " + file("out")), 1);
   EXPECT_NE(slurp(file("stdout.txt")).find("replayed and scored with --filters"), std::string::npos)
       << slurp(file("stdout.txt"));
   replayAndScore(file("run.lcmlog"), "ukf_gated");
