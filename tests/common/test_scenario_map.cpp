@@ -43,11 +43,12 @@ TEST(ScenarioMap, AMapWrittenAndReadBackIsTheSameBitForBit) {
 
 TEST(ScenarioMap, EveryShippedConfigWithMarkersNamesTheMapOfItsWorld) {
   int checked = 0;
-  for (const std::string dir : {LCMLOC_SOURCE_DIR "/config", LCMLOC_SOURCE_DIR "/tests/data", LCMLOC_SOURCE_DIR "/tests/data/golden"})
+  for (const std::string dir : {LCMLOC_SOURCE_DIR "/config", LCMLOC_SOURCE_DIR "/tests/data", LCMLOC_SOURCE_DIR "/tests/data/golden"}) {
   for (const auto& entry : fs::directory_iterator(dir)) {
     const std::string file = entry.path().filename().string();
     // (the launcher's system files list processes: no world of their own)
-    if (entry.path().extension() != ".yaml" || file.size() >= 11 && file.substr(file.size() - 11) == "system.yaml") continue;
+    if (entry.path().extension() != ".yaml" || (file.size() >= 11 && file.substr(file.size() - 11) == "system.yaml"))
+      continue;
     const common::SystemConfig cfg = common::loadSystemConfig(entry.path().string());
     const core::MarkerMap world = common::scenarioMap(cfg);
     if (world.empty()) continue;
@@ -55,6 +56,7 @@ TEST(ScenarioMap, EveryShippedConfigWithMarkersNamesTheMapOfItsWorld) {
     ASSERT_FALSE(cfg.fusion.map_file.empty()) << name << ": markers in the world, no fusion.map_file";
     expectSameMap(common::csv::loadMap(cfg.fusion.map_file), world, name + ": " + cfg.fusion.map_file);
     ++checked;
+  }
   }
   EXPECT_GE(checked, 4);  // paper.yaml, oval.yaml, the evaluation's straight world and the ruler golden at least
 }
