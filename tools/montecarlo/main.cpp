@@ -17,7 +17,7 @@ int main(int argc, char** argv) {
   lcmloc::montecarlo::addOptions(app, o);
   return lcmloc::common::runProcess(app, argc, argv, common, "lcmloc-montecarlo", [&] {
     o.config = common.config;
-    lcmloc::common::prepareOutputDir(std::filesystem::path(o.out).parent_path().string());
+    lcmloc::common::prepareOutputDir(std::filesystem::path(o.out).parent_path().string(), true);  // (the report file itself: --overwrite)
     return lcmloc::montecarlo::run(o);
   });
 }
