@@ -50,8 +50,9 @@ template <typename T>
 }
 
 /// Typed publish/subscribe over any raw message transport: LCM (Bus) live, a log file for the
-/// offline replay (lcmloc::replay::LogBus), memory in unit tests (MemoryBus, memory_bus.hpp). Code written against MessageBus (the fusion daemon)
-/// therefore publishes byte-identical messages whichever transport carries them.
+/// offline replay (lcmloc::replay::LogBus), memory in unit tests (MemoryBus, memory_bus.hpp).
+/// Code written against MessageBus (the fusion daemon) therefore publishes byte-identical
+/// messages whichever transport carries them.
 class MessageBus {
  public:
   /// Raw handler: (channel, payload, size, recv_utime).
