@@ -256,7 +256,7 @@ int runProcess(CLI::App& app, int argc, char** argv, const CommonOptions& opts,
 
 // ---------------------------------------------------------------------------------------------
 
-Heartbeat::Heartbeat(Bus& bus, std::string channel, std::string process,
+Heartbeat::Heartbeat(MessageBus& bus, std::string channel, std::string process,
                      std::function<Counters()> counters)
     : bus_(bus), channel_(std::move(channel)), process_(std::move(process)),
       counters_(std::move(counters)) {}

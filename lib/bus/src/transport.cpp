@@ -106,7 +106,7 @@ void Bus::subscribeRaw(const std::string& channel, RawHandler handler) {
 
 int Bus::handle(int timeout_ms) { return lcm_->handleTimeout(timeout_ms); }
 
-bool Bus::drain(int max_ms) {
+bool MessageBus::drain(int max_ms) {
   const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(max_ms);
   while (handle(0) > 0)
     if (std::chrono::steady_clock::now() >= until) return false;

@@ -125,14 +125,14 @@ class Heartbeat {
   using Counters = std::vector<std::pair<std::string, int64_t>>;
   /// [s] between two heartbeats (lcmloc-launcher's heartbeat_timeout is at least twice this).
   static constexpr double kPeriodSeconds = 1.0;
-  Heartbeat(Bus& bus, std::string channel, std::string process,
+  Heartbeat(MessageBus& bus, std::string channel, std::string process,
             std::function<Counters()> counters = nullptr);
   /// Publishes if a second of wall time has passed since the last heartbeat (or none was sent).
   void tick();
   /// Publishes now with the given state ("starting", "running", "stopping").
   void publish(const std::string& state);
  private:
-  Bus& bus_;
+  MessageBus& bus_;
   std::string channel_, process_;
   std::function<Counters()> counters_;
   int64_t seq_ = 0;

@@ -50,8 +50,9 @@ template <typename T>
 }
 
 /// Typed publish/subscribe over any raw message transport: LCM (Bus) live, a log file for the
-/// offline replay (lcmloc::replay::LogBus). Code written against MessageBus (the fusion daemon)
-/// therefore publishes byte-identical messages whichever transport carries them.
+/// offline replay (lcmloc::replay::LogBus), memory in unit tests (MemoryBus, memory_bus.hpp).
+/// Code written against MessageBus (the fusion daemon) therefore publishes byte-identical
+/// messages whichever transport carries them.
 class MessageBus {
  public:
   /// Raw handler: (channel, payload, size, recv_utime).
@@ -104,6 +105,18 @@ class MessageBus {
   }
   virtual void subscribeRaw(const std::string& channel, RawHandler handler) = 0;
 
+  /// Waits up to timeout_ms for messages and dispatches them (Drake's HandleSubscriptions). >0
+  /// handled, 0 timeout, <0 error (e.g. interrupted by a signal). A transport fed from outside
+  /// (the replay's LogBus, whose reader dispatches) has nothing to wait for: 0.
+  virtual int handle(int timeout_ms) {
+    (void)timeout_ms;
+    return 0;
+  }
+  /// Handles what has already arrived, for at most max_ms of wall time (a sender flooding the
+  /// bus must not keep a stopping process from stopping). Returns false when it stopped at that
+  /// limit with messages still coming in.
+  bool drain(int max_ms = 1000);
+
   int64_t decodeErrors() const;
   int64_t decodeErrors(const std::string& channel) const;
   int64_t publishErrors() const { return publish_errors_; }
@@ -131,13 +144,7 @@ class Bus : public MessageBus {
   bool publishRaw(const std::string& channel, const void* data, std::size_t size) override;
   void subscribeRaw(const std::string& channel, RawHandler handler) override;
 
-  /// Waits up to timeout_ms for messages and dispatches them. >0 handled, 0 timeout, <0 error
-  /// (e.g. interrupted by a signal).
-  int handle(int timeout_ms);
-  /// Handles what has already arrived, for at most max_ms of wall time (a sender flooding the
-  /// bus must not keep a stopping process from stopping). Returns false when it stopped at that
-  /// limit with messages still coming in.
-  bool drain(int max_ms = 1000);
+  int handle(int timeout_ms) override;
 
   lcm::LCM& lcm() { return *lcm_; }
 

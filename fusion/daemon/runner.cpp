@@ -1,0 +1,164 @@
+#include "runner.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include "lcmloc/bus/convert.hpp"
+#include "lcmloc/fusion_status_t.hpp"
+#include "lcmloc/pose_t.hpp"
+
+namespace lcmloc::fusion {
+
+void addRunnerOptions(CLI::App& app, RunnerOptions& o) {
+  app.add_option("--filter", o.filter, "override fusion.filter.type (" + lcmloc::core::filterTypeList() + ")");
+  app.add_option("--init-from-bus", o.init_from_bus,
+                 "hand-over from a running daemon: wait up to SECONDS for its POSE, until it reports stopped, "
+                 "and start from its last POSE (inputs are queued meanwhile); 0 = off")
+      ->check(common::wallSeconds());
+  app.add_option("--checkpoint", o.checkpoint,
+                 "checkpoint FILE: start from it if it exists (after --init-from-bus found nothing), write the "
+                 "active filter's state to it periodically and at exit");
+  app.add_option("--checkpoint-period", o.checkpoint_period, "[s, wall] between checkpoint writes")
+      ->check(common::positive())
+      ->check(common::wallSeconds());
+}
+
+DaemonRunner::DaemonRunner(const std::string& config_path, RunnerOptions opts)
+    : DaemonRunner(common::loadSystemConfig(config_path), std::move(opts)) {}
+
+DaemonRunner::DaemonRunner(common::SystemConfig cfg, RunnerOptions opts) : cfg_(std::move(cfg)), opts_(std::move(opts)) {
+  if (!opts_.filter.empty()) {
+    YAML::Node n;
+    n["type"] = opts_.filter;
+    cfg_.fusion.filter = common::parseFilterConfig(n, cfg_.fusion.filter, "--filter", "fusion.filter");
+  }
+  if (!opts_.checkpoint.empty()) {
+    saved_ = readCheckpoint(opts_.checkpoint);  // a corrupt file is an error now
+    if (const std::string why = checkpointUnwritable(opts_.checkpoint); !why.empty())
+      throw common::ConfigError(opts_.checkpoint, "--checkpoint", why);
+  }
+}
+
+DaemonRunner::~DaemonRunner() = default;
+
+std::optional<core::FilterState> DaemonRunner::lastPoseOnBus(std::string* filter) {
+  // Listens for the running daemon's POSE until it reports "stopped" on the status channel or the
+  // timeout passes. (The bus cannot drop a subscription: the handlers keep their state on the
+  // heap and ignore what comes afterwards.)
+  struct Watch {
+    std::optional<core::FilterState> last;
+    std::string filter;
+    bool waiting = true, stopped = false, warned = false;
+  };
+  auto w = std::make_shared<Watch>();
+  const std::string pose_channel = cfg_.channels.pose;
+  bus_->subscribe<lcmloc::pose_t>(pose_channel, [w, pose_channel](const std::string&, const lcmloc::pose_t& m, int64_t) {
+    if (!w->waiting || m.dim < 3 || static_cast<int>(m.state.size()) < 3) return;
+    core::FilterState s = common::toCore(m);
+    if (const std::string why = core::unusableState(s); !why.empty()) {
+      if (!w->warned) spdlog::warn("a {} on the bus no filter can start from, not taken: {}", pose_channel, why);
+      w->warned = true;
+      return;
+    }
+    w->last = std::move(s);
+    w->filter = m.filter;
+  });
+  bus_->subscribe<lcmloc::fusion_status_t>(
+      cfg_.channels.status, [w](const std::string&, const lcmloc::fusion_status_t& m, int64_t) {
+        if (w->waiting && m.event == "stopped") w->stopped = true;
+      });
+  const double timeout_s = opts_.init_from_bus;
+  spdlog::info("waiting up to {:.1f} s for the running daemon's last {} (until it reports stopped on {})", timeout_s,
+               cfg_.channels.pose, cfg_.channels.status);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (!common::stopRequested() && !w->stopped && std::chrono::steady_clock::now() < deadline) {
+    hb_->tick();
+    bus_->handle(50);
+  }
+  bus_->drain();  // (a flood is taken by the daemon's loop then)
+  w->waiting = false;
+  if (w->last && !w->stopped)
+    spdlog::warn("the daemon that published {} did not report stopped within {:.1f} s: it may still be running",
+                 cfg_.channels.pose, timeout_s);
+  *filter = w->filter;
+  return w->last;
+}
+
+void DaemonRunner::start(common::MessageBus& bus) {
+  bus_ = &bus;
+  const bool hold = opts_.init_from_bus > 0 || !opts_.checkpoint.empty();
+  daemon_ = std::make_unique<FusionDaemon>(cfg_, bus, FusionDaemon::Options{hold, true});
+  hb_ = std::make_unique<common::Heartbeat>(bus, cfg_.channels.heartbeat, "lcmloc-fusion",
+                                            [this] { return daemon_->counters(); });
+  if (hold) {
+    std::optional<core::FilterState> init;
+    std::string source, from_filter;
+    bool from_bus = false;
+    if (opts_.init_from_bus > 0) {
+      init = lastPoseOnBus(&from_filter);
+      if (init) source = "the last " + cfg_.channels.pose + " on the bus (filter " + from_filter + ")";
+      from_bus = init.has_value();
+    }
+    if (!init && saved_) {
+      init = saved_->state;
+      source = "checkpoint " + opts_.checkpoint + " (filter " + saved_->filter + ")";
+    }
+    if (!init) source = opts_.init_from_bus > 0 ? "no POSE on the bus and no checkpoint" : "no checkpoint yet";
+    daemon_->release(init, source, from_bus);  // the daemon handed over from saw what was queued
+    if (!init && opts_.init_from_bus > 0)
+      daemon_->warn("no_handover",
+                    fmt::format("no {} on the bus within {:.1f} s{}: the filters start from the configured initial "
+                                "state, which is wrong if the vehicle is elsewhere (a daemon started again after a "
+                                "crash finds no POSE: run it with --checkpoint). Give the pose with lcmloc-ctl "
+                                "set-pose X Y THETA",
+                                cfg_.channels.pose, opts_.init_from_bus, opts_.checkpoint.empty() ? "" : " and no checkpoint"));
+  }
+  // Its own POSE comes back (loopback); one it did not publish is another daemon's.
+  FusionDaemon* d = daemon_.get();
+  bus.subscribe<lcmloc::pose_t>(cfg_.channels.pose,
+                                [d](const std::string&, const lcmloc::pose_t& m, int64_t) { d->checkEcho(m); });
+  last_checkpoint_ = std::chrono::steady_clock::now();
+}
+
+void DaemonRunner::saveCheckpoint() {
+  if (opts_.checkpoint.empty() || daemon_->processed() == 0) return;
+  try {
+    writeCheckpoint(opts_.checkpoint, daemon_->activeState(), daemon_->activeFilter());
+    if (checkpoint_failing_) spdlog::info("checkpoint {} written again", opts_.checkpoint);
+    checkpoint_failing_ = false;
+    checkpoint_written_ = true;
+  } catch (const std::exception& e) {
+    if (!checkpoint_failing_) spdlog::error("{} (retried every {} s)", e.what(), opts_.checkpoint_period);
+    checkpoint_failing_ = true;
+  }
+}
+
+void DaemonRunner::step(int timeout_ms) {
+  hb_->tick();
+  bus_->handle(timeout_ms);
+  if (!opts_.checkpoint.empty() &&
+      std::chrono::steady_clock::now() - last_checkpoint_ >= std::chrono::duration<double>(opts_.checkpoint_period)) {
+    saveCheckpoint();
+    last_checkpoint_ = std::chrono::steady_clock::now();
+  }
+}
+
+int DaemonRunner::finish() {
+  // What already arrived is processed too, for at most a second: a sender flooding the bus must
+  // not keep the daemon from stopping.
+  if (!bus_->drain()) spdlog::warn("inputs still arriving after 1 s of stopping: the rest are not processed");
+  daemon_->shutdown();
+  saveCheckpoint();
+  hb_->publish("stopping");
+  if (opts_.checkpoint.empty()) return common::kExitOk;
+  if (checkpoint_failing_) {
+    spdlog::error("the checkpoint {} could not be written at exit", opts_.checkpoint);
+    return common::kExitRuntimeError;
+  }
+  if (checkpoint_written_)
+    spdlog::info("checkpoint written to {}", opts_.checkpoint);
+  else
+    spdlog::info("no input processed: checkpoint {} left as it was", opts_.checkpoint);
+  return common::kExitOk;
+}
+
+}  // namespace lcmloc::fusion
