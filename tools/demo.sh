@@ -79,6 +79,8 @@ if [[ $(grep -c -e "^  realtime_factor: $factor " -e "^  output: $log " -e "^  r
   lcmloc_log "could not set realtime_factor, reorder_window, max_time_jump and logger output in $scenario"
   exit 1
 fi
+# The fusion's map (fusion.map_file, beside the scenario): the simulated world's markers.
+"$bin/lcmloc-sim" --config "$scenario" --write-map "$out/paper_map.csv" --log-level warn
 
 lcmloc_log "running the paper scenario live (real-time factor $factor) on $LCM_DEFAULT_URL"
 start=$SECONDS

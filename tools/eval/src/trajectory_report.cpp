@@ -1,4 +1,5 @@
 // report.json, summary, figures and TUM export of lcmloc-evaluate.
+#include <algorithm>
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
@@ -209,11 +210,15 @@ void printTrajectorySummary(std::ostream& os, const TrajectoryLog& log, const st
            << d.mean_pct << "%, max " << d.max_pct << "% (" << d.segments << " segments)\n";
   }
   if (!gates.by_filter_sensor.empty()) {
-    os << std::left << std::setw(18) << "gate filter" << std::setw(18) << "sensor" << std::right << std::setw(9)
+    // (the filter column as wide as its longest name: replay:dead_reckoning is 21 characters)
+    int fw = 18;
+    for (const auto& g : gates.by_filter_sensor)
+      fw = std::max(fw, static_cast<int>(withoutControlCharacters(g.filter).size()) + 1);
+    os << std::left << std::setw(fw) << "gate filter" << std::setw(18) << "sensor" << std::right << std::setw(9)
        << "accepted" << std::setw(9) << "rejected" << std::setw(10) << "NIS mean" << std::setw(6) << "dof"
        << "  reasons\n";
     for (const auto& g : gates.by_filter_sensor) {
-      os << std::left << std::setw(18) << withoutControlCharacters(g.filter) << std::setw(18) << withoutControlCharacters(g.sensor) << std::right << std::setw(9)
+      os << std::left << std::setw(fw) << withoutControlCharacters(g.filter) << std::setw(18) << withoutControlCharacters(g.sensor) << std::right << std::setw(9)
          << g.accepted << std::setw(9) << g.rejected << std::setprecision(2);
       if (g.nis.samples) os << std::setw(10) << g.nis.mean << std::setw(6) << g.mean_dof << "  ";
       else os << std::setw(10) << "-" << std::setw(6) << "-" << "  ";
