@@ -12,7 +12,7 @@
 
 #include "process_fixture.hpp"
 #include "lcmloc/bus/transport.hpp"
-#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/logger_status_t.hpp"
 #include "lcmloc/odometry_t.hpp"
@@ -24,14 +24,14 @@ using lcmloc::common::Bus;
 namespace {
 
 struct ReadBack {
-  lcmloc::eval::ScanSummary scan;
+  lcmloc::logio::ScanSummary scan;
   std::vector<int64_t> seqs;       // ODOMETRY seq, in file order
   std::vector<int64_t> eventnums;
 };
 
 ReadBack readBack(const std::string& file) {
   ReadBack r;
-  r.scan = lcmloc::eval::scanLog(file, [&](const lcmloc::eval::RawEvent& ev) {
+  r.scan = lcmloc::logio::scanLog(file, [&](const lcmloc::logio::RawEvent& ev) {
     r.eventnums.push_back(ev.eventnum);
     lcmloc::odometry_t o;
     if (*ev.channel == "ODOMETRY" && o.decode(ev.data, 0, ev.size) >= 0) r.seqs.push_back(o.seq);
@@ -196,7 +196,7 @@ TEST_F(LoggerTest, ChannelRegexesMatchWholeChannelNames) {
   logger->signal(SIGTERM);
   ASSERT_EQ(logger->wait(10s), std::optional<int>(0)) << logger->output();
   std::vector<std::string> channels;
-  lcmloc::eval::scanLog(path("c.lcmlog"), [&](const lcmloc::eval::RawEvent& ev) {
+  lcmloc::logio::scanLog(path("c.lcmlog"), [&](const lcmloc::logio::RawEvent& ev) {
     if (*ev.channel != "LOGGER_STATUS" && *ev.channel != "HEARTBEAT") channels.push_back(*ev.channel);
   });
   EXPECT_EQ(channels, (std::vector<std::string>{"ODOMETRY", "GATE"}));
@@ -215,7 +215,7 @@ TEST_F(LoggerTest, TheLogEndsWithTheLoggersOwnFinalStatusWhenItRecordsThatChanne
     logger->signal(SIGTERM);
     ASSERT_EQ(logger->wait(10s), std::optional<int>(0)) << logger->output();
     std::string last_state;
-    lcmloc::eval::scanLog(log, [&](const lcmloc::eval::RawEvent& ev) {
+    lcmloc::logio::scanLog(log, [&](const lcmloc::logio::RawEvent& ev) {
       lcmloc::logger_status_t m;
       if (*ev.channel == "LOGGER_STATUS" && m.decode(ev.data, 0, ev.size) >= 0) last_state = m.state;
     });
@@ -281,7 +281,7 @@ TEST_F(LoggerTest, ControlCharactersOfChannelAndProcessNamesNeverReachTheTermina
   EXPECT_NE(out.find("HEARTBEAT[p?[2J?]0;pwned?]: 6 message(s) missing before seq 7"), std::string::npos) << out;
   EXPECT_NE(out.find("X?[2J?[31mEVIL?                 2 messages, 3 sequence gaps"), std::string::npos) << out;
   int events = 0;  // recorded as they came
-  lcmloc::eval::scanLog(path("ctl.lcmlog"), [&](const lcmloc::eval::RawEvent& ev) { events += *ev.channel == evil; });
+  lcmloc::logio::scanLog(path("ctl.lcmlog"), [&](const lcmloc::logio::RawEvent& ev) { events += *ev.channel == evil; });
   EXPECT_EQ(events, 2);
 }
 
@@ -331,7 +331,7 @@ TEST_F(LoggerTest, ThousandsOfChannelsAreAllRecordedButCountedOneByOneOnlyUpToAL
   logger->signal(SIGTERM);
   ASSERT_EQ(logger->wait(10s), std::optional<int>(0)) << logger->output();
   int events = 0;
-  lcmloc::eval::scanLog(path("many.lcmlog"), [&](const lcmloc::eval::RawEvent& ev) { events += (*ev.channel)[0] == 'C'; });
+  lcmloc::logio::scanLog(path("many.lcmlog"), [&](const lcmloc::logio::RawEvent& ev) { events += (*ev.channel)[0] == 'C'; });
   EXPECT_EQ(events, kChannels);
   const std::string out = logger->output();
   int lines = 0;

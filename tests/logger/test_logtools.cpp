@@ -19,7 +19,7 @@
 
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/app/process.hpp"
-#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/logio/event_file.hpp"
 #include "lcmloc/logio/log_writer.hpp"
@@ -525,7 +525,7 @@ TEST_F(LogTools, CutBoundsBeyondTheLogOrNotANumber) {
     const ToolRun r = tool("cut " + log + " -o " + path("cut.lcmlog") + " " + args);
     EXPECT_EQ(r.rc, 0) << args << "\n" << r.err;
     if (r.rc != 0) return -1;
-    return lcmloc::eval::scanLog(path("cut.lcmlog"), [](const lcmloc::eval::RawEvent&) {}).events_read;
+    return lcmloc::logio::scanLog(path("cut.lcmlog"), [](const lcmloc::logio::RawEvent&) {}).events_read;
   };
   // 1e13 s and 1e14 s are beyond int64 microseconds: they used to overflow (keep all / none).
   EXPECT_EQ(kept("--from 1e13"), 0);
@@ -576,10 +576,10 @@ TEST_F(LogTools, LogTimesBeforeTheEpochAndEmptyPayloadsAreShownAsTheyAre) {
   // Relative bounds count from the first event (-1 us), absolute ones may be negative too.
   r = tool("cut " + log + " -o " + path("rel.lcmlog") + " --from 0.000006");
   ASSERT_EQ(r.rc, 0) << r.err;
-  EXPECT_EQ(lcmloc::eval::scanLog(path("rel.lcmlog"), [](const lcmloc::eval::RawEvent&) {}).events_read, 2);
+  EXPECT_EQ(lcmloc::logio::scanLog(path("rel.lcmlog"), [](const lcmloc::logio::RawEvent&) {}).events_read, 2);
   r = tool("cut " + log + " -o " + path("abs.lcmlog") + " --to-utime -1");
   ASSERT_EQ(r.rc, 0) << r.err;
-  EXPECT_EQ(lcmloc::eval::scanLog(path("abs.lcmlog"), [](const lcmloc::eval::RawEvent&) {}).events_read, 1);
+  EXPECT_EQ(lcmloc::logio::scanLog(path("abs.lcmlog"), [](const lcmloc::logio::RawEvent&) {}).events_read, 1);
 }
 
 TEST_F(LogTools, EveryToolReadsATruncatedLogUpToTheDamageAndSaysWhere) {
@@ -613,7 +613,7 @@ TEST_F(LogTools, EveryToolReadsATruncatedLogUpToTheDamageAndSaysWhere) {
   r = tool("cut " + log + " -o " + path("cut.lcmlog"));
   ASSERT_EQ(r.rc, 3) << r.err;
   EXPECT_NE(r.err.find(where), std::string::npos) << r.err;
-  const auto s = lcmloc::eval::scanLog(path("cut.lcmlog"), [](const lcmloc::eval::RawEvent&) {});
+  const auto s = lcmloc::logio::scanLog(path("cut.lcmlog"), [](const lcmloc::logio::RawEvent&) {});
   EXPECT_FALSE(s.damaged);
   EXPECT_EQ(s.events_read, index);  // every intact event before the damage
 }
@@ -640,7 +640,7 @@ TEST_F(LogTools, ControlCharactersOfChannelNamesDoNotReachTheTerminal) {
   // nothing and cut dropped the event.
   const ToolRun cut = tool("cut " + log + " -o " + path("cut.lcmlog"));
   ASSERT_EQ(cut.rc, 0) << cut.err;
-  EXPECT_EQ(lcmloc::eval::scanLog(path("cut.lcmlog"), [](const lcmloc::eval::RawEvent&) {}).events_read, 1);
+  EXPECT_EQ(lcmloc::logio::scanLog(path("cut.lcmlog"), [](const lcmloc::logio::RawEvent&) {}).events_read, 1);
 }
 
 TEST_F(LogTools, InfoResynchronisesAfterACorruptEventInTheMiddle) {
@@ -839,7 +839,7 @@ TEST(LogWriter, AFullQueueDropsAreCountedPerChannelAndEverythingElseIsWritten) {
   ASSERT_EQ(w.files().size(), 2u);
   int64_t total = 0;
   for (const auto& f : w.files()) {
-    const auto r = lcmloc::eval::scanLog(f, [](const lcmloc::eval::RawEvent& ev) { EXPECT_EQ(*ev.channel, "SMALL"); });
+    const auto r = lcmloc::logio::scanLog(f, [](const lcmloc::logio::RawEvent& ev) { EXPECT_EQ(*ev.channel, "SMALL"); });
     EXPECT_FALSE(r.damaged);
     total += r.events_read;
   }

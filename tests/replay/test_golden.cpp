@@ -16,7 +16,7 @@
 #include <fmt/format.h>
 #include <lcm/lcm-cpp.hpp>
 
-#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/gate_decision_t.hpp"
 #include "lcmloc/pose_t.hpp"
 #include "lcmloc/replay/replay.hpp"
@@ -46,7 +46,7 @@ uint64_t digest(const std::string& path) {
 std::string summarize(const std::string& name, const std::string& out) {
   std::map<std::string, int64_t> counts, reasons;
   std::map<std::string, lcmloc::pose_t> last;
-  eval::LogScanner scanner(out, nullptr);
+  logio::LogScanner scanner(out, nullptr);
   while (const lcm::LogEvent* ev = scanner.next()) {
     ++counts[ev->channel];
     if (ev->channel == "GATE") {

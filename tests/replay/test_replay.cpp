@@ -324,8 +324,8 @@ TEST_F(ReplayTest, AnOutputThatCannotBeWrittenIsAnErrorNotASuccess) {
                 path("limited.out"));
   EXPECT_EQ(limited.wait(30s).value_or(-1), 1) << limited.output();
   EXPECT_NE(limited.output().find("could not be written (File too large)"), std::string::npos) << limited.output();
-  std::vector<eval::LogIssue> issues;
-  eval::LogScanner scanner(out, &issues);
+  std::vector<logio::LogIssue> issues;
+  logio::LogScanner scanner(out, &issues);
   while (scanner.next()) {}
   EXPECT_FALSE(scanner.damaged()) << (issues.empty() ? "" : issues[0].what);
   EXPECT_GT(scanner.eventsRead(), 0);

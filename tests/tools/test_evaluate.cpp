@@ -159,10 +159,10 @@ TEST_F(EvaluateTest, ALogOfTwoRunsSaysSoAsAWholeLogIssue) {
   const std::string d = log.issues[0].describe();
   EXPECT_EQ(d.rfind("whole log: truth channel GROUND_TRUTH: 100 samples with a duplicate utime", 0), 0u) << d;
   EXPECT_NE(d.find("lcmloc-log cut"), std::string::npos) << d;
-  EXPECT_EQ((eval::LogIssue{7, 1234, "x"}.describe()), "event 7 at byte 1234: x");
+  EXPECT_EQ((logio::LogIssue{7, 1234, "x"}.describe()), "event 7 at byte 1234: x");
   std::ostringstream os;
-  std::vector<eval::LogIssue> many(12, eval::LogIssue{1, 2, "bad"});
-  eval::printIssues(os, many);
+  std::vector<logio::LogIssue> many(12, logio::LogIssue{1, 2, "bad"});
+  logio::printIssues(os, many);
   EXPECT_EQ(os.str().find("  event 1 at byte 2: bad\n"), 0u) << os.str();
   EXPECT_NE(os.str().find("  ... and 2 more (see report.json)\n"), std::string::npos) << os.str();
 }
@@ -658,7 +658,7 @@ TEST_F(EvaluateTest, AbsurdUtimesAreSkippedCountedAndReported) {
     w.add("GROUND_TRUTH", truthMsg(kMin, 100.0, 0.0, 0.0), kT0);
     w.add("POSE", poseMsg(kMax, 0.0, 0.0, 0.0, Eigen::Matrix3d::Identity()), kT0);
     gate_decision_t g = gateMsg("ukf_gated", "MAGRULER", 2, 1.0, true, "accepted");
-    g.utime = -eval::kUtimeLimit;  // the first negative utime refused
+    g.utime = -logio::kUtimeLimit;  // the first negative utime refused
     w.add("GATE", g, kT0);
     for (int i = 0; i <= 200; ++i) {
       const int64_t t = kT0 + i * 10000;

@@ -23,7 +23,7 @@
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/report.hpp"
-#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/eval/trajectory.hpp"
 #include "lcmloc/fault_event_t.hpp"
 #include "lcmloc/gate_decision_t.hpp"
@@ -385,7 +385,7 @@ TEST_F(EvaluateReplayTest, ADirectoryIsNotALog) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("is a directory"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(eval::scanLog(dir_.string(), [](const eval::RawEvent&) {}), std::runtime_error);
+  EXPECT_THROW(logio::scanLog(dir_.string(), [](const logio::RawEvent&) {}), std::runtime_error);
 }
 
 TEST(InterpolateTruthReplay, InterpolatesInsideAcrossPiAndRefusesOutside) {
@@ -453,11 +453,11 @@ TEST(GnuplotQuote, GnuplotPrintsTheTextAndRunsNothing) {
 
 TEST(UniqueStems, SafeDistinctFileNames) {
   // A name that is a stem already keeps it, even when an earlier name would map onto it.
-  EXPECT_EQ(eval::uniqueStems({"POSE_A.B", "POSE_A_B", "POSE_A:B"}),
+  EXPECT_EQ(logio::uniqueStems({"POSE_A.B", "POSE_A_B", "POSE_A:B"}),
             (std::vector<std::string>{"POSE_A_B_2", "POSE_A_B", "POSE_A_B_3"}));
-  EXPECT_EQ(eval::uniqueStems({"replay:ukf_gated", "ukf", "ukf"}),
+  EXPECT_EQ(logio::uniqueStems({"replay:ukf_gated", "ukf", "ukf"}),
             (std::vector<std::string>{"replay_ukf_gated", "ukf", "ukf_2"}));
-  EXPECT_EQ(eval::uniqueStems({"../x'\n`y`", ""}), (std::vector<std::string>{"___x___y_", "_"}));
+  EXPECT_EQ(logio::uniqueStems({"../x'\n`y`", ""}), (std::vector<std::string>{"___x___y_", "_"}));
 }
 
 TEST_F(EvaluateReplayTest, MessagesWithAbsurdUtimesAreSkippedCountedAndReported) {
@@ -477,7 +477,7 @@ TEST_F(EvaluateReplayTest, MessagesWithAbsurdUtimesAreSkippedCountedAndReported)
     p.covariance.assign(3, std::vector<double>(3, 0.0));
     w.add("POSE", p, kT0);
     lcmloc::fault_event_t f{};
-    f.utime = eval::kUtimeLimit;  // the first utime refused
+    f.utime = logio::kUtimeLimit;  // the first utime refused
     f.kind = "phantom_marker";
     f.channel = "MAGRULER";
     f.measurement_seq = 99;

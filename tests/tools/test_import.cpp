@@ -18,7 +18,7 @@
 #include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/app/csv.hpp"
-#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/import/checks.hpp"
 #include "lcmloc/import/import.hpp"
 #include "lcmloc/import/magnet_grid.hpp"
@@ -44,7 +44,7 @@ void write(const fs::path& p, const std::string& text) { std::ofstream(p) << tex
 
 std::map<std::string, int64_t> channelCounts(const std::string& log) {
   std::map<std::string, int64_t> n;
-  eval::scanLog(log, [&](const eval::RawEvent& e) { ++n[*e.channel]; });
+  logio::scanLog(log, [&](const logio::RawEvent& e) { ++n[*e.channel]; });
   return n;
 }
 
@@ -196,7 +196,7 @@ TEST(Import, OverlappingFilesOfOneStreamAreRefusedLandmarksMayComeFromSeveral) {
   EXPECT_TRUE(r.refusals.empty());
   EXPECT_EQ(file(r, "landmarks_rear.csv")->written, 2);
   std::map<std::string, std::vector<std::pair<int64_t, int64_t>>> seq;  // (utime, seq) per channel, in log order
-  eval::scanLog(r.log_path, [&](const eval::RawEvent& e) {
+  logio::scanLog(r.log_path, [&](const logio::RawEvent& e) {
     lcmloc::landmark_obs_t l;
     lcmloc::odometry_t m;
     lcmloc::gps_fix_t g;
@@ -294,7 +294,7 @@ TEST(Import, GoodFilesOfEveryKindBecomeALogMapAndConfig) {
   EXPECT_EQ(n.at("GROUND_TRUTH"), 21);
   // speed,yaw_rate: the row's speed and rate hold until the next row (0.5 m, 0.05 rad)
   std::vector<lcmloc::odometry_t> odo;
-  eval::scanLog(r.log_path, [&](const eval::RawEvent& e) {
+  logio::scanLog(r.log_path, [&](const logio::RawEvent& e) {
     lcmloc::odometry_t m;
     if (*e.channel == "ODOMETRY" && m.decode(e.data, 0, e.size) == e.size && m.utime >= 200000000) odo.push_back(m);
   });
@@ -307,7 +307,7 @@ TEST(Import, GoodFilesOfEveryKindBecomeALogMapAndConfig) {
   // local GPS x,y go out as lat/lon about the datum and come back as x,y in the fusion
   const common::LocalFrame frame(o.datum);
   std::vector<core::GpsInput> fixes;
-  eval::scanLog(r.log_path, [&](const eval::RawEvent& e) {
+  logio::scanLog(r.log_path, [&](const logio::RawEvent& e) {
     lcmloc::gps_fix_t m;
     if (*e.channel == "GPS" && m.decode(e.data, 0, e.size) == e.size)
       if (auto in = common::toCore(m, "GPS", frame)) fixes.push_back(*in);
@@ -485,7 +485,7 @@ TEST(Import, ImportedLandmarkRunReplaysToTheTruth) {
   ro.output = (d / "out" / "est.lcmlog").string();
   replay::replayLog(cfg, ro);
   lcmloc::pose_t last;
-  eval::scanLog(ro.output, [&](const eval::RawEvent& e) {
+  logio::scanLog(ro.output, [&](const logio::RawEvent& e) {
     if (*e.channel == "POSE") last.decode(e.data, 0, e.size);
   });
   // truth after 200 steps of 0.05 m on the 2 m circle
@@ -723,7 +723,7 @@ TEST(Import, TheDocumentedExampleDirectoryImportsAndScores) {
   lcmloc::ground_truth_t truth_msg;
   int64_t landmarks = 0, landmarks_ok = 0, beacons = 0, beacons_ok = 0;
   double nis_landmarks = 0, nis_beacons = 0;
-  eval::scanLog(ro.output, [&](const eval::RawEvent& e) {
+  logio::scanLog(ro.output, [&](const logio::RawEvent& e) {
     if (*e.channel == "GROUND_TRUTH") {
       // (decoded into a message that lives outside the lambda: LCM 1.3.1's generated decode
       // writes doubles through int64_t pointers, and a value-initialised local let the compiler

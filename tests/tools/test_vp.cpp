@@ -11,7 +11,7 @@
 
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/bus/convert.hpp"
-#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/vp/vp.hpp"
 #include "run_command.hpp"
 
@@ -100,7 +100,7 @@ TEST(VpImport, BadRowsAreRefusedWithLineNumbersAndTheRestConverted) {
   std::vector<lcmloc::odometry_t> odo;
   std::vector<std::pair<std::string, lcmloc::gps_fix_t>> gps;
   int64_t last = 0;
-  eval::scanLog(o.output, [&](const eval::RawEvent& e) {
+  logio::scanLog(o.output, [&](const logio::RawEvent& e) {
     EXPECT_GE(e.utime, last);
     last = e.utime;
     if (*e.channel == "ODOMETRY") {

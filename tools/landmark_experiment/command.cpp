@@ -11,7 +11,7 @@
 #include <spdlog/spdlog.h>
 
 #include "lcmloc/app/process.hpp"
-#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/landmark_bearings_t.hpp"
 
@@ -26,17 +26,17 @@ std::vector<Observation> readObservations(const std::string& path, const common:
   std::map<int64_t, lcmloc::ground_truth_t> truth;
   std::vector<lcmloc::landmark_bearings_t> vision;
   int64_t bad = 0;
-  const auto scan = eval::scanLog(path, [&](const eval::RawEvent& ev) {
+  const auto scan = logio::scanLog(path, [&](const logio::RawEvent& ev) {
     if (*ev.channel == ch.ground_truth) {
       lcmloc::ground_truth_t m{};
-      if (!eval::decodeEvent(ev, m) || !std::isfinite(m.x) || !std::isfinite(m.y) || !std::isfinite(m.heading)) {
+      if (!logio::decodeEvent(ev, m) || !std::isfinite(m.x) || !std::isfinite(m.y) || !std::isfinite(m.heading)) {
         ++bad;
         return;
       }
       truth[m.utime] = m;
     } else if (*ev.channel == ch.vision) {
       lcmloc::landmark_bearings_t m;
-      if (!eval::decodeEvent(ev, m)) {
+      if (!logio::decodeEvent(ev, m)) {
         ++bad;
         return;
       }

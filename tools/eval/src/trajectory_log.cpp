@@ -181,7 +181,7 @@ TrajectoryLog readTrajectoryLog(const std::string& path, const TrajectoryLogOpti
                                 const std::atomic<bool>* stop, const std::function<void(int64_t, int64_t)>& progress) {
   TrajectoryLog out;
   out.path = path;
-  LogScanner scanner(path, &out.issues);
+  logio::LogScanner scanner(path, &out.issues);
   out.file_size = scanner.fileSize();
   TrajectoryDecoder decoder(opt, out);
   while (!(stop && stop->load())) {

@@ -19,7 +19,7 @@
 #include "lcmloc/app/csv.hpp"
 #include "lcmloc/core/vehicle_model.hpp"
 #include "lcmloc/eval/gnuplot.hpp"
-#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/eval/trajectory.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/gate_decision_t.hpp"
@@ -302,10 +302,10 @@ MagnetGridReport runMagnetGrid(const MagnetGridOptions& opt, MagnetGridImport* i
   int64_t decisions = 0;  // of the reed-row position, from the last pose before a decision
   bool have_last = false;
   const double t0 = imp.first_utime * 1e-6;
-  eval::scanLog(ro.output, [&](const eval::RawEvent& e) {
+  logio::scanLog(ro.output, [&](const logio::RawEvent& e) {
     if (*e.channel == cfg.channels.pose) {
       lcmloc::pose_t p;
-      if (eval::decodeEvent(e, p) && p.dim >= 3) {
+      if (logio::decodeEvent(e, p) && p.dim >= 3) {
         track.push_back({p.utime * 1e-6 - t0, p.state[0], p.state[1], p.state[2]});
         last = p;
         have_last = true;
@@ -314,10 +314,10 @@ MagnetGridReport runMagnetGrid(const MagnetGridOptions& opt, MagnetGridImport* i
       }
     } else if (*e.channel == dr_channel) {
       lcmloc::pose_t p;
-      if (eval::decodeEvent(e, p) && p.dim >= 3) dr.push_back({p.utime * 1e-6 - t0, p.state[0], p.state[1], p.state[2]});
+      if (logio::decodeEvent(e, p) && p.dim >= 3) dr.push_back({p.utime * 1e-6 - t0, p.state[0], p.state[1], p.state[2]});
     } else if (*e.channel == cfg.channels.gate) {
       lcmloc::gate_decision_t g;
-      if (!eval::decodeEvent(e, g) || g.filter != active) return;
+      if (!logio::decodeEvent(e, g) || g.filter != active) return;
       rep.gate = g.gate;
       if (decisions++ > 0)  // the first pass is the grid's anchor: associated by construction
         rep.max_prior_sigma = std::max(rep.max_prior_sigma, prior_sigma);
@@ -335,7 +335,7 @@ MagnetGridReport runMagnetGrid(const MagnetGridOptions& opt, MagnetGridImport* i
       }
     } else if (*e.channel == cfg.channels.status) {
       lcmloc::fusion_status_t st;
-      if (eval::decodeEvent(e, st) && st.event == "lockout") ++rep.lockouts;
+      if (logio::decodeEvent(e, st) && st.event == "lockout") ++rep.lockouts;
     }
   });
   rep.with_candidate = static_cast<int64_t>(nis.size());

@@ -23,7 +23,7 @@
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/app/process.hpp"
 #include "lcmloc/core/text.hpp"
-#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/logio/event_file.hpp"
 #include "lcmloc/logio/types.hpp"
 
@@ -33,10 +33,10 @@ namespace fs = std::filesystem;
 namespace {
 
 /// Scans the log, stopping early on SIGINT/SIGTERM and logging progress on big files.
-eval::ScanSummary scan(const std::string& path, const std::function<void(const eval::RawEvent&)>& fn) {
+logio::ScanSummary scan(const std::string& path, const std::function<void(const logio::RawEvent&)>& fn) {
   std::atomic<bool> stop{false};
   auto last = std::chrono::steady_clock::now();
-  auto s = eval::scanLog(path, [&](const eval::RawEvent& ev) {
+  auto s = logio::scanLog(path, [&](const logio::RawEvent& ev) {
     fn(ev);
     if ((ev.index & 0xffff) == 0) {
       if (common::stopRequested()) stop = true;
@@ -51,7 +51,7 @@ eval::ScanSummary scan(const std::string& path, const std::function<void(const e
   return s;
 }
 
-void reportDamage(const eval::ScanSummary& s, const std::string& path, std::ostream* os) {
+void reportDamage(const logio::ScanSummary& s, const std::string& path, std::ostream* os) {
   for (const auto& i : s.issues) {
     const std::string line = fmt::format("DAMAGE in {} at byte {} (event {}): {}", path, i.byte_offset,
                                          i.event_index, i.what);
@@ -85,7 +85,7 @@ std::string utimeText(int64_t us) {
 double spanSeconds(int64_t from, int64_t to) { return (static_cast<double>(to) - static_cast<double>(from)) * 1e-6; }
 
 /// A payload too short to hold an LCM fingerprint (an empty event, say): no type can decode it.
-bool noFingerprint(const eval::RawEvent& ev) {
+bool noFingerprint(const logio::RawEvent& ev) {
   int64_t h = 0;
   return !logger::readFingerprint(ev.data, static_cast<std::size_t>(ev.size), &h);
 }
@@ -124,7 +124,7 @@ int info(const std::string& path) {
   common::SeqTracker seqs;
   int64_t first = 0, last = 0, n = 0, undecodable = 0;
   std::vector<std::string> bad;  // first few undecodable events, with position
-  const auto s = scan(path, [&](const eval::RawEvent& ev) {
+  const auto s = scan(path, [&](const logio::RawEvent& ev) {
     auto& c = channels[*ev.channel];
     if (c.count == 0) c.first = ev.utime;
     c.last = ev.utime;
@@ -240,7 +240,7 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
   std::map<std::string, Columns> columns;
   std::map<std::string, int64_t> undecodable, unknown;
   // Pass 1: which channels, which columns.
-  const auto s = scan(path, [&](const eval::RawEvent& ev) {
+  const auto s = scan(path, [&](const logio::RawEvent& ev) {
     if (!selected(*ev.channel)) return;
     const auto* type = logger::findType(ev.data, static_cast<std::size_t>(ev.size));
     if (!type) { ++(noFingerprint(ev) ? undecodable : unknown)[*ev.channel]; return; }
@@ -276,7 +276,7 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
   if (to_dir) {
     std::vector<std::string> channels;
     for (const auto& kv : columns) channels.push_back(kv.first);
-    const auto stems = eval::uniqueStems(channels);  // ../x -> ___x, ./ODOMETRY next to ODOMETRY -> __ODOMETRY
+    const auto stems = logio::uniqueStems(channels);  // ../x -> ___x, ./ODOMETRY next to ODOMETRY -> __ODOMETRY
     for (std::size_t i = 0; i < channels.size(); ++i) paths[channels[i]] = (fs::path(output) / (stems[i] + ".csv")).string();
     for (const auto& kv : paths) common::refuseOutputOverInputs("--output", kv.second, {path}, "input log");
     fs::create_directories(output);
@@ -305,7 +305,7 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
   // Pass 2: rows.
   std::map<std::string, int64_t> rows;
   std::vector<std::string> cells;
-  scan(path, [&](const eval::RawEvent& ev) {
+  scan(path, [&](const logio::RawEvent& ev) {
     auto it = columns.find(*ev.channel);
     if (it == columns.end()) return;
     const auto* type = logger::findType(ev.data, static_cast<std::size_t>(ev.size));
@@ -370,7 +370,7 @@ int cut(const std::string& path, const std::string& output, const CutOptions& o)
   logger::EventFile out(output);
   std::optional<int64_t> t0;
   int64_t kept = 0, err = 0;
-  const auto s = scan(path, [&](const eval::RawEvent& ev) {
+  const auto s = scan(path, [&](const logio::RawEvent& ev) {
     if (!t0) t0 = ev.utime;
     if (err) return;
     const int64_t rel = saturatingSub(ev.utime, *t0);  // [us]

@@ -20,7 +20,7 @@
 
 #include "lcmloc/app/process.hpp"
 #include "lcmloc/bus/transport.hpp"
-#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/replay/replay.hpp"
@@ -49,7 +49,7 @@ volatile double decoded_sum = 0;
 /// daemon uses (common::decodeMessage); returns events read. Every decoded field goes into a sum
 /// that is kept: the compiler cannot skip the decoding.
 int64_t readAndDecode(const std::string& path, const common::ChannelConfig& ch, int64_t* decoded) {
-  eval::LogScanner scanner(path, nullptr);
+  logio::LogScanner scanner(path, nullptr);
   const std::set<std::string> rulers(ch.magruler.begin(), ch.magruler.end());
   lcmloc::odometry_t odo;
   lcmloc::magruler_t mr;
@@ -80,8 +80,8 @@ int64_t readAndDecode(const std::string& path, const common::ChannelConfig& ch, 
 /// Why a kept synthetic log does not fit this run ("" when it does): damaged, not the
 /// configured channels, or another length of message time than duration_s.
 std::string keptLogProblem(const std::string& path, const common::SystemConfig& cfg, double duration_s) {
-  std::vector<eval::LogIssue> issues;
-  eval::LogScanner scanner(path, &issues);
+  std::vector<logio::LogIssue> issues;
+  logio::LogScanner scanner(path, &issues);
   int64_t first = -1, last = -1, odometry = 0;
   while (const lcm::LogEvent* ev = scanner.next()) {
     if (ev->channel != cfg.channels.odometry) continue;

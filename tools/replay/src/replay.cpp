@@ -58,7 +58,7 @@ struct alignas(common::kLinePair) Block {
   static constexpr std::size_t kRecords = 1024, kBytes = std::size_t{1} << 18;
 
   std::vector<Record> records;
-  std::vector<eval::LogIssue> issues;
+  std::vector<logio::LogIssue> issues;
   std::vector<Copy> copies;
   std::vector<uint8_t> bytes;
   /// The intake's items, items_used of them this time (the rest kept for their storage: the
@@ -176,8 +176,8 @@ class Reader {
     b.records.back().copy = true;
   }
 
-  std::vector<eval::LogIssue> issues_;  ///< the scanner's, until taken into a block
-  eval::LogScanner scanner_;
+  std::vector<logio::LogIssue> issues_;  ///< the scanner's, until taken into a block
+  logio::LogScanner scanner_;
   const common::SystemConfig& cfg_;
   const ReplayOptions& opts_;
   LogBus* bus_ = nullptr;
@@ -211,7 +211,7 @@ class Applier {
         if (opts_.progress_period_s > 0 && (r_.events_read & 1023) == 0) progress();
       }
       for (const std::size_t n = issue + rec.issues; issue < n; ++issue) {
-        const eval::LogIssue& is = b.issues[issue];
+        const logio::LogIssue& is = b.issues[issue];
         spdlog::warn("input log damaged: event {} at byte {}: {}", is.event_index, is.byte_offset, is.what);
         r_.issues.push_back(is);
       }

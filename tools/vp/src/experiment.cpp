@@ -12,7 +12,7 @@
 
 #include "lcmloc/core/scoring.hpp"
 #include "lcmloc/eval/gnuplot.hpp"
-#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/eval/trajectory.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/gate_decision_t.hpp"
@@ -111,10 +111,10 @@ ExperimentResult runExperiment(const common::SystemConfig& cfg0, ImportOptions i
                  rr.rejected, rr.written, rr.seconds);
     Score s;
     s.filter = type;
-    eval::scanLog(ro.output, [&](const eval::RawEvent& e) {
+    logio::scanLog(ro.output, [&](const logio::RawEvent& e) {
       if (*e.channel == cfg.channels.pose) {
         lcmloc::pose_t p;
-        if (eval::decodeEvent(e, p) && p.dim >= 2) {
+        if (logio::decodeEvent(e, p) && p.dim >= 2) {
           ++s.poses;
           const double t = static_cast<double>(p.utime) * 1e-6 - t0;
           if (!s.track.empty() && t == s.track.back()[0]) s.track.back() = {t, p.state[0], p.state[1]};
@@ -122,11 +122,11 @@ ExperimentResult runExperiment(const common::SystemConfig& cfg0, ImportOptions i
         }
       } else if (*e.channel == cfg.channels.gate) {
         lcmloc::gate_decision_t g;
-        if (eval::decodeEvent(e, g) && g.sensor == cfg.channels.gps && g.reason != "no_fix")
+        if (logio::decodeEvent(e, g) && g.sensor == cfg.channels.gps && g.reason != "no_fix")
           (g.accepted ? s.gps_accepted : s.gps_rejected)++;
       } else if (*e.channel == cfg.channels.status) {
         lcmloc::fusion_status_t st;
-        if (eval::decodeEvent(e, st) && st.event == "lockout") ++s.lockouts;
+        if (logio::decodeEvent(e, st) && st.event == "lockout") ++s.lockouts;
       }
     });
     std::error_code ec;

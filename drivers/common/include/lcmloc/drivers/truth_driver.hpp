@@ -23,7 +23,7 @@
 namespace lcmloc::common {
 
 /// Message time [us] a usable ground-truth sample stays below (and >= 0): the offline tools'
-/// limit (eval::kUtimeLimit, about 146,000 years), far from where utime arithmetic overflows.
+/// limit (logio::kUtimeLimit, about 146,000 years), far from where utime arithmetic overflows.
 inline constexpr int64_t kTruthUtimeLimit = int64_t{1} << 62;
 /// |x|, |y|, |distance| [m] of a usable sample: a million kilometres, far beyond any run, and
 /// small enough that the sensor models' arithmetic (e.g. a distance in encoder ticks) is exact.

@@ -18,9 +18,21 @@
 #include "lcmloc/bus/geodesy.hpp"
 #include "lcmloc/core/chi2.hpp"
 #include "lcmloc/core/scoring.hpp"
-#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/logio/log_reader.hpp"
 
 namespace lcmloc::eval {
+
+// The evaluation reads logs with logio's reader and speaks of its issues and times.
+using logio::badUtimeIssue;
+using logio::kUtimeLimit;
+using logio::LogIssue;
+using logio::printBadUtime;
+using logio::printIssues;
+using logio::RawEvent;
+using logio::secondsSince;
+using logio::uniqueStems;
+using logio::usableUtime;
+using logio::utimeSpan;
 
 /// One recorded estimate: (x, y, theta) and the top-left 3x3 block of its covariance.
 struct Estimate {

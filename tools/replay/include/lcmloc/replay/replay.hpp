@@ -1,5 +1,5 @@
 #pragma once
-// Offline replay: reads an LCM log directly (eval::LogScanner, no network),
+// Offline replay: reads an LCM log directly (logio::LogScanner, no network),
 // feeds every event through the fusion daemon's own code (fusion::FusionDaemon over a LogBus,
 // its intake on a reading thread and the rest on the caller's, ReplayOptions::read_ahead):
 // the sensor channels and the recorded FUSION_CONTROL commands, in canonical order by message
@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/sim/scenario_config.hpp"
 
 namespace lcmloc::replay {
@@ -49,7 +49,7 @@ struct ReplayResult {
   /// Why the output log could not be written ("": it was): the replay stopped there.
   std::string write_error;
   int64_t bytes_unreadable = 0;
-  std::vector<eval::LogIssue> issues;  ///< damage of the input, with event index and byte offset
+  std::vector<logio::LogIssue> issues;  ///< damage of the input, with event index and byte offset
   double seconds = 0;              ///< wall time of the replay
   /// CPU time [s] of each side (ReplayOptions::read_ahead: of each thread, otherwise of each part
   /// of the one): reading (the log, the bus's dispatch, the daemon's intake) and applying (the

@@ -17,7 +17,7 @@ namespace lcm {
 struct LogEvent;
 }  // namespace lcm
 
-namespace lcmloc::eval {
+namespace lcmloc::logio {
 
 /// Messages with |utime| >= kUtimeLimit (2^62 us, about 146,000 years) are skipped by the
 /// readers, counted and reported as issues: the difference of any two utimes below it, and such
@@ -124,4 +124,4 @@ struct ScanSummary {
 ScanSummary scanLog(const std::string& path, const std::function<void(const RawEvent&)>& on_event,
                     const std::atomic<bool>* stop = nullptr);
 
-}  // namespace lcmloc::eval
+}  // namespace lcmloc::logio

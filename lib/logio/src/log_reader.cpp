@@ -1,4 +1,4 @@
-#include "lcmloc/eval/log_reader.hpp"
+#include "lcmloc/logio/log_reader.hpp"
 
 
 #include <algorithm>
@@ -11,10 +11,9 @@
 
 #include <lcm/lcm-cpp.hpp>
 
-#include "lcmloc/app/process.hpp"
 #include "lcmloc/wire.hpp"
 
-namespace lcmloc::eval {
+namespace lcmloc::logio {
 namespace {
 
 constexpr int64_t kEventHeaderBytes = 28;  // sync, event number, utime, channel len, data len
@@ -22,11 +21,14 @@ constexpr int64_t kEventHeaderBytes = 28;  // sync, event number, utime, channel
 /// Size of the regular file at path. Throws std::runtime_error when there is none: a directory
 /// or a device would otherwise read as one damaged stretch of st_size bytes.
 int64_t logFileSize(const std::string& path) {
-  if (const std::string problem = common::fileProblem(path); problem == common::kNoSuchFile)
-    throw std::runtime_error("cannot open log '" + path + "': " + problem);
-  else if (!problem.empty())
-    throw std::runtime_error("cannot read log '" + path + "': it " + problem);
-  return static_cast<int64_t>(std::filesystem::file_size(path));
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const auto st = fs::status(path, ec);
+  if (ec || !fs::exists(st)) throw std::runtime_error("cannot open log '" + path + "': no such file");
+  if (!fs::is_regular_file(st))
+    throw std::runtime_error("cannot read log '" + path + "': it " +
+                             (fs::is_directory(st) ? "is a directory" : "is not a regular file"));
+  return static_cast<int64_t>(fs::file_size(path));
 }
 
 /// fread without the stream lock: a LogScanner's FILE is only ever used by the thread that
@@ -207,4 +209,4 @@ std::vector<std::string> uniqueStems(const std::vector<std::string>& names) {
   return stems;
 }
 
-}  // namespace lcmloc::eval
+}  // namespace lcmloc::logio
