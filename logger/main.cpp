@@ -20,7 +20,7 @@
 
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/process.hpp"
-#include "lcmloc/core/text.hpp"
+#include "lcmloc/common/text.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/logger/log_writer.hpp"
 #include "lcmloc/logger/types.hpp"
@@ -193,7 +193,7 @@ int main(int argc, char** argv) {
       if (!own && other.received == 0)
         spdlog::warn("more than {} channels: '{}' and every later new channel are counted together as '{}' (their "
                      "sequence gaps are not followed); every message is still recorded",
-                     logger::kMaxChannels, core::printable(ch), logger::kOtherChannels);
+                     logger::kMaxChannels, common::printable(ch), logger::kOtherChannels);
       ++s.received;
       int64_t seq = 0;
       const logger::TypeInfo* type = logger::findType(data, size);
@@ -212,11 +212,11 @@ int main(int argc, char** argv) {
           if (!sequences_full)
             spdlog::warn("more than {} sequences (channels, heartbeat processes): the sequence gaps of '{}' and of "
                          "every later new one are not counted",
-                         kMaxSequences, core::printable(key));
+                         kMaxSequences, common::printable(key));
           sequences_full = true;
         } else if (own) {
           const auto gap = gaps.observe(key, seq);
-          const std::string shown = gap.missing || gap.restarted || gap.ignored ? core::printable(key) : std::string();
+          const std::string shown = gap.missing || gap.restarted || gap.ignored ? common::printable(key) : std::string();
           if (gap.ignored) {
             ++s.ignored;
             s.gaps -= gap.uncounted;
@@ -309,7 +309,7 @@ int main(int argc, char** argv) {
 
     const auto w = writer.stats();
     for (const auto& [ch, s] : channelRows(stats, other, SIZE_MAX)) {
-      spdlog::info("  {:<24} {:>8} messages, {} sequence gaps, {} dropped{}", core::printable(ch), s.received, s.gaps,
+      spdlog::info("  {:<24} {:>8} messages, {} sequence gaps, {} dropped{}", common::printable(ch), s.received, s.gaps,
                    s.dropped, s.ignored ? fmt::format(", {} seq(s) ignored", s.ignored) : "");
     }
     const auto files = writer.files();

@@ -26,7 +26,7 @@
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/process.hpp"
 #include "lcmloc/core/filter.hpp"
-#include "lcmloc/core/text.hpp"
+#include "lcmloc/common/text.hpp"
 #include "lcmloc/common/transport.hpp"
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/fusion_status_t.hpp"
@@ -214,8 +214,8 @@ int main(int argc, char** argv) {
     }
     std::string detail = answer->detail;  // without the "CHANNEL seq N: " naming this command
     if (const auto at = detail.find(tag + ": "); at != std::string::npos) detail.erase(at, tag.size() + 2);
-    std::cout << fmt::format("{}: {} (filter {})\n", answer->event, core::printable(detail),
-                             core::printable(answer->filter));
+    std::cout << fmt::format("{}: {} (filter {})\n", answer->event, common::printable(detail),
+                             common::printable(answer->filter));
     return answer->event == "ack" ? common::kExitOk : kExitRefused;
   });
 }

@@ -12,7 +12,7 @@
 
 #include "lcmloc/common/config.hpp"
 #include "lcmloc/common/process.hpp"
-#include "lcmloc/core/text.hpp"
+#include "lcmloc/common/text.hpp"
 #include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/trajectory.hpp"
 #include "lcmloc/eval/trajectory_report.hpp"
@@ -152,7 +152,7 @@ int main(int argc, char** argv) {
       const auto bad = log.undecodable.find(ch);
       if (n != log.channel_counts.end() && bad != log.undecodable.end() && bad->second == n->second) {
         spdlog::error("{} {}: none of its {} messages is of the type that option reads ({}): is it the right "
-                      "channel?", flag, core::printable(ch), n->second,
+                      "channel?", flag, common::printable(ch), n->second,
                       flag == "--pose-channel" ? "pose_t" : flag == "--truth-channel" ? "ground_truth_t or gps_fix_t"
                                                                                       : "gate_decision_t");
         return kExitBadConfig;

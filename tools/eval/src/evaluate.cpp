@@ -81,8 +81,8 @@ FilterRun replay(const LogData& data, const EvalSetup& setup, const std::string&
   out.on_decision = [&](const std::string&, bool active, const core::GateDecision& d) {
     if (active) run.decisions.push_back({d, fault_keys.count({d.sensor, d.measurement_seq}) > 0});
   };
-  out.on_event = [&](const std::string& event, const std::string&, int64_t) {
-    if (event == "lockout") ++run.metrics.lockouts;
+  out.on_event = [&](const core::EngineEvent& e) {
+    if (e.kind == core::EventKind::Lockout) ++run.metrics.lockouts;
   };
   core::FusionEngine engine(cfg, setup.map, out);
   for (const auto& in : data.inputs) engine.push(in);
