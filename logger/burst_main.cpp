@@ -2,8 +2,8 @@
 // (seq 0, 1, ...), for benchmarking loggers (tools/bench_logger.sh).
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/process.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/app/process.hpp"
 #include "lcmloc/magruler_t.hpp"
 
 using namespace lcmloc;

@@ -18,12 +18,12 @@
 
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/process.hpp"
-#include "lcmloc/common/text.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/text.hpp"
 #include "lcmloc/heartbeat_t.hpp"
-#include "lcmloc/logger/log_writer.hpp"
-#include "lcmloc/logger/types.hpp"
+#include "lcmloc/logio/log_writer.hpp"
+#include "lcmloc/logio/types.hpp"
 #include "lcmloc/logger_status_t.hpp"
 
 using namespace lcmloc;

@@ -4,11 +4,11 @@
 
 #include <optional>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/convert.hpp"
-#include "lcmloc/common/process.hpp"
-#include "lcmloc/common/truth_driver.hpp"
-#include "lcmloc/models/world.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/drivers/sim_convert.hpp"
+#include "lcmloc/app/process.hpp"
+#include "lcmloc/drivers/truth_driver.hpp"
+#include "lcmloc/sim/world.hpp"
 
 using namespace lcmloc;
 

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "lcmloc/common/transport.hpp"
+#include "lcmloc/bus/transport.hpp"
 
 namespace lcmloc::gps {
 

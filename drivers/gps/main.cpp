@@ -1,5 +1,5 @@
 // lcmloc-gps: GNSS fixes on the GPS channel from one of two sources (gps.source):
-//   sim   GROUND_TRUTH -> GpsSensor (drivers/models: error, outages, jumps) -> lat/lon about
+//   sim   GROUND_TRUTH -> GpsSensor (lib/sim: error, outages, jumps) -> lat/lon about
 //         the datum (GeographicLib LocalCartesian) -> GPS
 //   gpsd  a real receiver (or gpsfake) through libgps -> GPS
 #include <spdlog/spdlog.h>
@@ -7,13 +7,13 @@
 #include <optional>
 
 #include "gpsd_source.hpp"
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/convert.hpp"
-#include "lcmloc/common/geodesy.hpp"
-#include "lcmloc/common/process.hpp"
-#include "lcmloc/common/truth_driver.hpp"
-#include "lcmloc/models/gnss_sensors.hpp"
-#include "lcmloc/models/world.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/drivers/sim_convert.hpp"
+#include "lcmloc/bus/geodesy.hpp"
+#include "lcmloc/app/process.hpp"
+#include "lcmloc/drivers/truth_driver.hpp"
+#include "lcmloc/sim/gnss_sensors.hpp"
+#include "lcmloc/sim/world.hpp"
 
 using namespace lcmloc;
 

@@ -1,16 +1,16 @@
 // lcmloc-imu: simulated 3-axis accelerometer, gyroscope and magnetometer.
 // GROUND_TRUTH -> ImuSensor (noise, constant + drifting biases, declination, disturbance,
-// saturation; drivers/models) -> IMU.
+// saturation; lib/sim) -> IMU.
 #include <spdlog/spdlog.h>
 
 #include <optional>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/convert.hpp"
-#include "lcmloc/common/process.hpp"
-#include "lcmloc/common/truth_driver.hpp"
-#include "lcmloc/models/gnss_sensors.hpp"
-#include "lcmloc/models/world.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/drivers/sim_convert.hpp"
+#include "lcmloc/app/process.hpp"
+#include "lcmloc/drivers/truth_driver.hpp"
+#include "lcmloc/sim/gnss_sensors.hpp"
+#include "lcmloc/sim/world.hpp"
 
 using namespace lcmloc;
 

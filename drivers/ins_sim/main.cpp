@@ -1,13 +1,13 @@
 // lcmloc-ins-sim: the §II simulation of the odometry/INS method (seeds/004): drives the vehicle
 // along the configured motion profile on the WGS-84 ellipsoid and publishes GROUND_TRUTH, IMU
 // (the paper's sensor grade) and ODOMETRY (distance increments with the scale error), paced by
-// the real-time factor. Models: drivers/models (InsSim), shared with lcmloc-ins-experiment.
+// the real-time factor. Models: lib/sim (InsSim), shared with lcmloc-ins-experiment.
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/convert.hpp"
-#include "lcmloc/common/process.hpp"
-#include "lcmloc/models/ins_sim.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/drivers/sim_convert.hpp"
+#include "lcmloc/app/process.hpp"
+#include "lcmloc/sim/ins_sim.hpp"
 
 using namespace lcmloc;
 

@@ -2,10 +2,10 @@
 // paced against wall time by the real-time factor. Exits 0 after the final sample.
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/convert.hpp"
-#include "lcmloc/common/process.hpp"
-#include "lcmloc/models/world.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/drivers/sim_convert.hpp"
+#include "lcmloc/app/process.hpp"
+#include "lcmloc/sim/world.hpp"
 
 using namespace lcmloc;
 

@@ -1,16 +1,16 @@
 // lcmloc-vision: simulated electro-optical detection system (seeds/004 §III).
-// GROUND_TRUTH -> VisionSensor (bearings to the landmark map, noise, resolution; drivers/models)
+// GROUND_TRUTH -> VisionSensor (bearings to the landmark map, noise, resolution; lib/sim)
 // -> VISION (landmark_bearings_t).
 #include <spdlog/spdlog.h>
 
 #include <optional>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/convert.hpp"
-#include "lcmloc/common/process.hpp"
-#include "lcmloc/common/truth_driver.hpp"
-#include "lcmloc/models/vision_sensor.hpp"
-#include "lcmloc/models/world.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/drivers/sim_convert.hpp"
+#include "lcmloc/app/process.hpp"
+#include "lcmloc/drivers/truth_driver.hpp"
+#include "lcmloc/sim/vision_sensor.hpp"
+#include "lcmloc/sim/world.hpp"
 
 using namespace lcmloc;
 

@@ -8,8 +8,8 @@
 #include <stdexcept>
 #include <vector>
 
-#include "lcmloc/common/convert.hpp"
-#include "lcmloc/common/process.hpp"
+#include "lcmloc/bus/convert.hpp"
+#include "lcmloc/app/process.hpp"
 #include "lcmloc/core/filter.hpp"
 #include "lcmloc/pose_t.hpp"
 

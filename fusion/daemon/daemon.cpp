@@ -6,12 +6,12 @@
 
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/common/convert.hpp"
+#include "lcmloc/bus/convert.hpp"
 #include "lcmloc/core/time_guard.hpp"
-#include "lcmloc/common/text.hpp"
-#include "lcmloc/common/csv.hpp"
+#include "lcmloc/app/text.hpp"
+#include "lcmloc/app/csv.hpp"
 #include "lcmloc/fusion_status_t.hpp"
-#include "lcmloc/models/world.hpp"
+#include "lcmloc/sim/world.hpp"
 
 namespace lcmloc::fusion {
 

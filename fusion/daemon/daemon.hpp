@@ -12,11 +12,11 @@
 #include <string>
 #include <vector>
 
-#include "lcmloc/common/cache_line.hpp"
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/geodesy.hpp"
-#include "lcmloc/common/process.hpp"
-#include "lcmloc/common/transport.hpp"
+#include "lcmloc/app/cache_line.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/bus/geodesy.hpp"
+#include "lcmloc/app/process.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "lcmloc/core/engine.hpp"
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/gps_fix_t.hpp"

@@ -7,7 +7,7 @@
 
 #include "daemon.hpp"
 #include "checkpoint.hpp"
-#include "lcmloc/common/convert.hpp"
+#include "lcmloc/bus/convert.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/pose_t.hpp"
 

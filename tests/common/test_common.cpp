@@ -12,11 +12,11 @@
 #include <utility>
 #include <vector>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/convert.hpp"
-#include "lcmloc/common/process.hpp"
-#include "lcmloc/common/text.hpp"
-#include "lcmloc/common/transport.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/drivers/sim_convert.hpp"
+#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/text.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/imu_t.hpp"
@@ -213,6 +213,18 @@ TEST(Config, OdometryGapKeysAreCheckedAndNamed) {
             std::string::npos) << errorOf("fusion: {odometry_gap_accel: .nan}");
   EXPECT_NE(errorOf("fusion: {odometry_gap_yaw_rate: x}").find("test.yaml: fusion.odometry_gap_yaw_rate"),
             std::string::npos);
+}
+
+// The resume period is the fusion's own setting, not the simulated odometry's rate.
+TEST(Config, TheResumePeriodIsAFusionSettingNotTheSimulatorsRate) {
+  const auto c = common::parseSystemConfig("odometry: {rate_hz: 50}\nfusion: {odometry_period: 0.02}", "g.yaml");
+  EXPECT_EQ(common::engineConfig(c).odometry_gap.resume_period_us, 20000);
+  const auto d = common::parseSystemConfig("odometry: {rate_hz: 50}", "g.yaml");
+  EXPECT_EQ(common::engineConfig(d).odometry_gap.resume_period_us, 10000);  // the default, whatever the simulator
+  EXPECT_EQ(common::engineConfig(common::parseSystemConfig("fusion: {odometry_period: 0}", "g.yaml"))
+                .odometry_gap.resume_period_us, 0);
+  EXPECT_NE(errorOf("fusion: {odometry_period: -0.01}").find("test.yaml: fusion.odometry_period: value -0.01 out of range"),
+            std::string::npos) << errorOf("fusion: {odometry_period: -0.01}");
 }
 
 // Lists of maps (GPS outages and jumps, INS motion segments and IMU dropouts): read item by

@@ -4,8 +4,8 @@
 
 #include <cmath>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/convert.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/bus/convert.hpp"
 
 using namespace lcmloc;
 

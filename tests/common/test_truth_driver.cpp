@@ -11,13 +11,13 @@
 #include <string>
 #include <vector>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/convert.hpp"
-#include "lcmloc/common/process.hpp"
-#include "lcmloc/common/truth_driver.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/drivers/sim_convert.hpp"
+#include "lcmloc/app/process.hpp"
+#include "lcmloc/drivers/truth_driver.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/heartbeat_t.hpp"
-#include "lcmloc/models/world.hpp"
+#include "lcmloc/sim/world.hpp"
 #include "lcmloc/odometry_t.hpp"
 
 using namespace lcmloc;

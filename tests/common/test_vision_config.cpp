@@ -3,7 +3,7 @@
 
 #include <string>
 
-#include "lcmloc/common/config.hpp"
+#include "lcmloc/app/config.hpp"
 
 using namespace lcmloc;
 

@@ -11,7 +11,7 @@
 #include <set>
 
 #include "process_fixture.hpp"
-#include "lcmloc/common/transport.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/logger_status_t.hpp"

@@ -17,12 +17,12 @@
 #include <lcm/lcm-cpp.hpp>
 #include <lcm/lcm_coretypes.h>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/process.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/app/process.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/heartbeat_t.hpp"
-#include "lcmloc/logger/event_file.hpp"
-#include "lcmloc/logger/log_writer.hpp"
+#include "lcmloc/logio/event_file.hpp"
+#include "lcmloc/logio/log_writer.hpp"
 #include "lcmloc/logtool/log_tool.hpp"
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"

@@ -8,9 +8,9 @@
 
 #include "lcmloc/core/ruler_model.hpp"
 #include "lcmloc/core/vehicle_model.hpp"
-#include "lcmloc/models/gnss_sensors.hpp"
-#include "lcmloc/models/schedule.hpp"
-#include "lcmloc/models/world.hpp"
+#include "lcmloc/sim/gnss_sensors.hpp"
+#include "lcmloc/sim/schedule.hpp"
+#include "lcmloc/sim/world.hpp"
 
 using namespace lcmloc;
 using namespace lcmloc::models;

@@ -7,8 +7,8 @@
 #include <stdexcept>
 
 #include "lcmloc/core/landmark_fix.hpp"
-#include "lcmloc/models/vision_sensor.hpp"
-#include "lcmloc/models/world.hpp"
+#include "lcmloc/sim/vision_sensor.hpp"
+#include "lcmloc/sim/world.hpp"
 
 using namespace lcmloc;
 using namespace lcmloc::models;

@@ -10,8 +10,8 @@
 #include <set>
 
 #include "process_fixture.hpp"
-#include "lcmloc/common/geodesy.hpp"
-#include "lcmloc/common/transport.hpp"
+#include "lcmloc/bus/geodesy.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "lcmloc/gate_decision_t.hpp"
 #include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/heartbeat_t.hpp"

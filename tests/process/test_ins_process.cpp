@@ -7,7 +7,7 @@
 #include <functional>
 
 #include "process_fixture.hpp"
-#include "lcmloc/common/transport.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/gate_decision_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"

@@ -12,7 +12,7 @@
 #include <thread>
 
 #include "process_fixture.hpp"
-#include "lcmloc/common/transport.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 

@@ -14,7 +14,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "process_fixture.hpp"
-#include "lcmloc/common/transport.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"

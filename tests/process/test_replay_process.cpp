@@ -15,8 +15,8 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "process_fixture.hpp"
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/transport.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/heartbeat_t.hpp"

@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "process_fixture.hpp"
-#include "lcmloc/common/transport.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/landmark_bearings_t.hpp"
 

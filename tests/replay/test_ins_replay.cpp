@@ -8,10 +8,10 @@
 
 #include <lcm/lcm-cpp.hpp>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/convert.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/drivers/sim_convert.hpp"
 #include "lcmloc/gate_decision_t.hpp"
-#include "lcmloc/models/ins_sim.hpp"
+#include "lcmloc/sim/ins_sim.hpp"
 #include "lcmloc/pose_t.hpp"
 #include "lcmloc/replay/replay.hpp"
 #include "test_log_writer.hpp"

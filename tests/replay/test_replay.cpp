@@ -13,7 +13,7 @@
 #include "process_fixture.hpp"
 #include "daemon/checkpoint.hpp"
 #include "daemon/daemon.hpp"
-#include "lcmloc/common/convert.hpp"
+#include "lcmloc/bus/convert.hpp"
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/pose_t.hpp"

@@ -8,10 +8,10 @@
 
 #include <cmath>
 
-#include "lcmloc/common/config.hpp"
+#include "lcmloc/app/config.hpp"
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/chi2.hpp"
-#include "lcmloc/models/scenario_runner.hpp"
+#include "lcmloc/sim/scenario_runner.hpp"
 
 using namespace lcmloc;
 using namespace lcmloc::models;

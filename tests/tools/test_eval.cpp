@@ -18,7 +18,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 
-#include "lcmloc/common/config.hpp"
+#include "lcmloc/app/config.hpp"
 #include "lcmloc/eval/evaluate.hpp"
 #include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/report.hpp"
@@ -27,7 +27,7 @@
 #include "lcmloc/gate_decision_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/magruler_t.hpp"
-#include "lcmloc/models/world.hpp"
+#include "lcmloc/sim/world.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
 #include "test_log_writer.hpp"

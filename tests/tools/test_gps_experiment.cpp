@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lcmloc/common/config.hpp"
+#include "lcmloc/app/config.hpp"
 #include "lcmloc/gps_experiment/experiment.hpp"
 
 using namespace lcmloc;

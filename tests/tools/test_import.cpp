@@ -12,12 +12,12 @@
 
 #include <fmt/format.h>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/convert.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/drivers/sim_convert.hpp"
 #include "lcmloc/gate_decision_t.hpp"
 #include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"
-#include "lcmloc/common/csv.hpp"
+#include "lcmloc/app/csv.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/import/checks.hpp"
 #include "lcmloc/import/import.hpp"

@@ -14,8 +14,8 @@
 #include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/convert.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/drivers/sim_convert.hpp"
 #include "lcmloc/landmark_experiment/experiment.hpp"
 #include "run_command.hpp"
 #include "test_log_writer.hpp"

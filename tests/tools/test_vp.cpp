@@ -9,8 +9,8 @@
 
 #include <fmt/format.h>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/convert.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/bus/convert.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/vp/vp.hpp"
 #include "run_command.hpp"

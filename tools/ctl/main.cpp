@@ -23,11 +23,11 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/process.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/app/process.hpp"
 #include "lcmloc/core/filter.hpp"
-#include "lcmloc/common/text.hpp"
-#include "lcmloc/common/transport.hpp"
+#include "lcmloc/app/text.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/imu_t.hpp"

@@ -10,9 +10,9 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/process.hpp"
-#include "lcmloc/common/text.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/text.hpp"
 #include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/trajectory.hpp"
 #include "lcmloc/eval/trajectory_report.hpp"

@@ -9,12 +9,12 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/process.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/app/process.hpp"
 #include "lcmloc/eval/evaluate.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/eval/report.hpp"
-#include "lcmloc/models/world.hpp"
+#include "lcmloc/sim/world.hpp"
 
 namespace {
 

@@ -3,8 +3,8 @@
 // GPS error; report.json and the figures of Fig. 1.
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/process.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/app/process.hpp"
 #include "lcmloc/gps_experiment/experiment.hpp"
 
 using namespace lcmloc;

@@ -8,9 +8,9 @@
 #include <lcm/lcm-cpp.hpp>
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/convert.hpp"
-#include "lcmloc/common/process.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/drivers/sim_convert.hpp"
+#include "lcmloc/app/process.hpp"
 #include "lcmloc/ins_experiment/experiment.hpp"
 
 using namespace lcmloc;

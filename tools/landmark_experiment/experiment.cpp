@@ -16,7 +16,7 @@
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/landmark_fix.hpp"
 #include "lcmloc/eval/gnuplot.hpp"
-#include "lcmloc/models/scenario_config.hpp"
+#include "lcmloc/sim/scenario_config.hpp"
 #include "lcmloc/eval/report.hpp"
 
 namespace lcmloc::landmark_experiment {

@@ -9,8 +9,8 @@
 #include <map>
 #include <stdexcept>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/process.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/app/process.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/landmark_bearings_t.hpp"

@@ -5,7 +5,7 @@
 
 #include <spdlog/fmt/fmt.h>
 
-#include "lcmloc/common/yaml_reader.hpp"
+#include "lcmloc/app/yaml_reader.hpp"
 
 namespace lcmloc::launcher {
 

@@ -3,7 +3,7 @@
 #include <string>
 #include <vector>
 
-#include "lcmloc/common/process.hpp"
+#include "lcmloc/app/process.hpp"
 
 namespace lcmloc::launcher {
 

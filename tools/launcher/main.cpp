@@ -20,8 +20,8 @@
 #include <spdlog/spdlog.h>
 
 #include "launch_config.hpp"
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/process.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/app/process.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 
 using namespace lcmloc;

@@ -7,8 +7,8 @@
 
 #include <CLI/CLI.hpp>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/process.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/app/process.hpp"
 #include "lcmloc/logtool/log_tool.hpp"
 
 using namespace lcmloc;

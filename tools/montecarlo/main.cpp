@@ -13,9 +13,9 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/process.hpp"
-#include "lcmloc/models/scenario_runner.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/app/process.hpp"
+#include "lcmloc/sim/scenario_runner.hpp"
 
 namespace {
 

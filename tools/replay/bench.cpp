@@ -17,8 +17,8 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/common/process.hpp"
-#include "lcmloc/common/transport.hpp"
+#include "lcmloc/app/process.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"

@@ -7,7 +7,7 @@
 #include <spdlog/spdlog.h>
 
 #include "bench.hpp"
-#include "lcmloc/common/process.hpp"
+#include "lcmloc/app/process.hpp"
 #include "lcmloc/replay/replay.hpp"
 
 using namespace lcmloc;

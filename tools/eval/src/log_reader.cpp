@@ -11,12 +11,12 @@
 
 #include <lcm/lcm-cpp.hpp>
 
-#include "lcmloc/common/convert.hpp"
+#include "lcmloc/drivers/sim_convert.hpp"
 #include "lcmloc/fault_event_t.hpp"
 #include "lcmloc/gate_decision_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/magruler_t.hpp"
-#include "lcmloc/common/process.hpp"
+#include "lcmloc/app/process.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
 #include "lcmloc/wire.hpp"

@@ -16,7 +16,7 @@
 
 #include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/report.hpp"
-#include "lcmloc/common/text.hpp"
+#include "lcmloc/app/text.hpp"
 
 namespace lcmloc::eval {
 

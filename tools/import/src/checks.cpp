@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-#include "lcmloc/common/config.hpp"
+#include "lcmloc/app/config.hpp"
 
 namespace lcmloc::import {
 

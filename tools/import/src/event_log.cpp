@@ -4,7 +4,7 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "lcmloc/logger/event_file.hpp"
+#include "lcmloc/logio/event_file.hpp"
 
 namespace lcmloc::import {
 

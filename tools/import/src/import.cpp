@@ -13,8 +13,8 @@
 #include <fmt/format.h>
 
 #include "lcmloc/beacon_range_t.hpp"
-#include "lcmloc/common/csv.hpp"
-#include "lcmloc/common/geodesy.hpp"
+#include "lcmloc/app/csv.hpp"
+#include "lcmloc/bus/geodesy.hpp"
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"

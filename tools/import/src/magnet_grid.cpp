@@ -15,8 +15,8 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/csv.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/app/csv.hpp"
 #include "lcmloc/core/vehicle_model.hpp"
 #include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/log_reader.hpp"

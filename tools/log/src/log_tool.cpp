@@ -20,12 +20,12 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/process.hpp"
-#include "lcmloc/common/text.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/text.hpp"
 #include "lcmloc/eval/log_reader.hpp"
-#include "lcmloc/logger/event_file.hpp"
-#include "lcmloc/logger/types.hpp"
+#include "lcmloc/logio/event_file.hpp"
+#include "lcmloc/logio/types.hpp"
 
 namespace lcmloc::logtool {
 namespace fs = std::filesystem;

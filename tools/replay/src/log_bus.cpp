@@ -3,7 +3,7 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "lcmloc/logger/event_file.hpp"
+#include "lcmloc/logio/event_file.hpp"
 #include "lcmloc/wire.hpp"
 
 namespace lcmloc::replay {

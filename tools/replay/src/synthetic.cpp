@@ -1,12 +1,12 @@
-// Synthetic logs from the simulator's own models (drivers/models): laps of an oval track.
+// Synthetic logs from the simulator's own models (lib/sim): laps of an oval track.
 #include <cmath>
 #include <stdexcept>
 #include <vector>
 
 #include <lcm/lcm-cpp.hpp>
 
-#include "lcmloc/common/convert.hpp"
-#include "lcmloc/models/world.hpp"
+#include "lcmloc/drivers/sim_convert.hpp"
+#include "lcmloc/sim/world.hpp"
 #include "lcmloc/replay/log_bus.hpp"
 #include "lcmloc/replay/replay.hpp"
 

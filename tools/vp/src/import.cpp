@@ -9,9 +9,9 @@
 
 #include <fmt/format.h>
 
-#include "lcmloc/common/config.hpp"
-#include "lcmloc/common/csv.hpp"
-#include "lcmloc/common/geodesy.hpp"
+#include "lcmloc/app/config.hpp"
+#include "lcmloc/app/csv.hpp"
+#include "lcmloc/bus/geodesy.hpp"
 #include "lcmloc/import/checks.hpp"
 #include "lcmloc/import/event_log.hpp"
 #include "lcmloc/gps_fix_t.hpp"

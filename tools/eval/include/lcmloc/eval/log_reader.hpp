@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "lcmloc/common/config.hpp"
+#include "lcmloc/app/config.hpp"
 #include "lcmloc/core/engine.hpp"
 
 namespace lcm {

@@ -15,7 +15,7 @@
 
 #include <Eigen/Core>
 
-#include "lcmloc/common/geodesy.hpp"
+#include "lcmloc/bus/geodesy.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 
 namespace lcmloc::eval {

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "lcmloc/models/scenario_runner.hpp"
+#include "lcmloc/sim/scenario_runner.hpp"
 
 namespace lcmloc::gps_experiment {
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "lcmloc/common/config.hpp"
+#include "lcmloc/app/config.hpp"
 #include "lcmloc/core/types.hpp"
 
 namespace lcmloc::import {

@@ -2,7 +2,7 @@
 // §II of Wang & Wang (seeds/004) as a scenario: the odometry/INS filter with online odometer
 // scale calibration ("odo_ins") against the traditional integration that ignores the scale
 // error ("odo_ins_uncal"), on the paper's 3600 s / ~65 km trajectory with the paper's sensor
-// grade. Runs the same models as lcmloc-ins-sim (drivers/models InsSim) through the same fusion
+// grade. Runs the same models as lcmloc-ins-sim (lib/sim InsSim) through the same fusion
 // engine as lcmloc-fusion, in process. Reproduces Fig. 1 (scale-error estimate over time) and
 // Fig. 2 (position error, calibrated vs traditional).
 #include <functional>
@@ -11,8 +11,8 @@
 
 #include "lcmloc/core/engine.hpp"
 #include "lcmloc/core/filter.hpp"
-#include "lcmloc/models/ins_sim.hpp"
-#include "lcmloc/models/vision_sensor.hpp"
+#include "lcmloc/sim/ins_sim.hpp"
+#include "lcmloc/sim/vision_sensor.hpp"
 
 namespace lcmloc::ins_experiment {
 

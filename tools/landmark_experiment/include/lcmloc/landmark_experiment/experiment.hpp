@@ -10,7 +10,7 @@
 
 #include <Eigen/Core>
 
-#include "lcmloc/models/vision_sensor.hpp"
+#include "lcmloc/sim/vision_sensor.hpp"
 
 namespace lcmloc::landmark_experiment {
 

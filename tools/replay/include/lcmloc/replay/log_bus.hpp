@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "lcmloc/common/cache_line.hpp"
-#include "lcmloc/common/transport.hpp"
+#include "lcmloc/app/cache_line.hpp"
+#include "lcmloc/bus/transport.hpp"
 
 namespace lcmloc::replay {
 

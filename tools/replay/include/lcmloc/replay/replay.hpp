@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "lcmloc/common/config.hpp"
+#include "lcmloc/app/config.hpp"
 #include "lcmloc/eval/log_reader.hpp"
-#include "lcmloc/models/scenario_config.hpp"
+#include "lcmloc/sim/scenario_config.hpp"
 
 namespace lcmloc::replay {
 
@@ -70,7 +70,7 @@ bool isDaemonOutput(const common::ChannelConfig& ch, const std::string& channel)
 
 /// A synthetic log (for the benchmark and tests): the vehicle drives laps of an oval track
 /// (two straights joined by half circles) with markers along the first lap, for duration_s of
-/// message time; the simulator's own models (drivers/models) produce ODOMETRY at the odometry
+/// message time; the simulator's own models (lib/sim) produce ODOMETRY at the odometry
 /// rate and MAGRULER detections. Event timestamps are message times.
 struct SyntheticLogStats {
   int64_t odometry = 0, detections = 0, markers = 0;

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "lcmloc/common/config.hpp"
+#include "lcmloc/app/config.hpp"
 
 namespace lcmloc::vp {
 

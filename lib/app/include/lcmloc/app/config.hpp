@@ -1,0 +1,157 @@
+#pragma once
+// YAML configuration -> plain config structs. One file describes a whole system run
+// (config/paper.yaml); each process reads the sections it needs. Unknown keys, wrong types and
+// out-of-range values raise ConfigError naming the file, the key path and the reason.
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+#include "lcmloc/bus/geodesy.hpp"
+#include "lcmloc/core/engine.hpp"
+#include "lcmloc/core/filter.hpp"
+#include "lcmloc/sim/ins_sim.hpp"
+#include "lcmloc/sim/scenario_config.hpp"
+
+namespace lcmloc::common {
+
+class ConfigError : public std::runtime_error {
+ public:
+  ConfigError(const std::string& file, const std::string& key, const std::string& reason);
+};
+
+/// The range [lo, hi] of a configuration key that a command-line option overrides too: one
+/// definition for the config reader and the option's check.
+struct Bounds {
+  double lo, hi;
+};
+inline constexpr Bounds kImuRateHz{0.1, 10000.0};         ///< imu.rate_hz, lcmloc-imu --rate
+inline constexpr Bounds kVisionRateHz{1e-3, 1000.0};      ///< vision.rate_hz, lcmloc-vision --rate
+inline constexpr Bounds kMarkerCount{0, 100000};          ///< markers.count, lcmloc-montecarlo --marker-spacing
+inline constexpr Bounds kRealtimeFactor{0.0, 1e6};        ///< scenario.realtime_factor, --realtime-factor
+inline constexpr Bounds kInsSimDuration{0.01, 1e6};       ///< ins_sim.duration [s], --duration
+inline constexpr Bounds kFlushPeriod{0.001, 3600.0};      ///< logger.flush_period [s], --flush-period
+inline constexpr Bounds kMaxFileSeconds{0.0, 1e9};        ///< logger.max_file_seconds, --max-file-seconds
+inline constexpr Bounds kOdometryScaleError{-0.5, 0.5};   ///< odometry.scale_error, montecarlo --scale-error
+inline constexpr Bounds kOdometrySteeringBias{-0.5, 0.5}; ///< odometry.steering_bias [rad]
+
+/// Channel names (defaults follow docs/ and the design guide).
+struct ChannelConfig {
+  std::string ground_truth = "GROUND_TRUTH";
+  std::string odometry = "ODOMETRY";
+  std::vector<std::string> magruler{"MAGRULER", "MAGRULER_FAULT"};  ///< fusion subscribes to all
+  std::string magruler_fault = "MAGRULER_FAULT";  ///< where the injector publishes
+  std::string fault_events = "FAULT_EVENTS";
+  std::string pose = "POSE";
+  std::string gate = "GATE";
+  std::string control = "FUSION_CONTROL";
+  std::string status = "FUSION_STATUS";
+  std::string heartbeat = "HEARTBEAT";
+  std::string imu = "IMU";
+  std::string gps = "GPS";
+  std::string landmarks = "LANDMARKS";  ///< landmark_obs_t
+  std::string beacons = "BEACONS";      ///< beacon_range_t
+  std::string vision = "VISION";  ///< landmark_bearings_t (three-landmark fix)
+};
+
+/// Where lcmloc-gps takes its fixes from (the `gps` section; the simulated receiver's model is
+/// models::GpsSensorConfig in the same section).
+struct GpsDriverConfig {
+  std::string source = "sim";         ///< "sim" (from GROUND_TRUTH) or "gpsd"
+  std::string gpsd_host = "localhost";
+  std::string gpsd_port = "2947";
+  std::string time_source = "fix";    ///< gpsd: utime from the fix's time ("fix") or on receipt ("receive")
+};
+
+struct FusionConfig {
+  core::FilterConfig filter;          ///< the active filter (type + parameters)
+  std::vector<std::string> shadow;    ///< extra filter types run side by side (POSE_<TYPE>)
+  double reorder_window = 0.05;       ///< canonical-order window of message time [s]
+  double status_period = 1.0;         ///< FUSION_STATUS period of message time [s]
+  /// Time-jump guard [s] of message time (0 = off): core::EngineConfig::max_time_jump_us.
+  double max_time_jump = 1.0;
+  /// Map CSV (id,x,y; docs/import_formats.md) of markers, landmarks and beacons; a relative path
+  /// is relative to the config file's directory. "" = the scenario's markers along the path.
+  std::string map_file;
+  /// POSE after every N-th odometry message (and every measurement); the odometry in between is
+  /// composed and applied with one time update (core::EngineConfig::output_every). 1 = every one.
+  int output_every = 1;
+  /// Landmark map for the three-landmark fix (`fusion.landmarks: [{id, x, y}, ...]`, local
+  /// metres, x east, y north). Empty in the file: the top-level `landmarks` (lcmloc-vision's).
+  std::map<int, core::Vec2> landmarks;
+  /// The three-landmark fix (`fusion.landmark_fix`): its gate and its condition limit
+  /// (max_condition; the other FixOptions keep their defaults).
+  core::LandmarkFixGate fix_gate;
+  core::landmark::FixOptions fix;
+  /// Odometry gaps (core::EngineConfig::odometry_gap, docs/odometry_gap.md): consecutive
+  /// odometry inputs of one channel more than this apart in message time, seq not following,
+  /// are bridged by every filter [s]; 0 = off.
+  double max_odometry_gap = 0.1;
+  double odometry_gap_accel = 0.5;     ///< speed change rate the bridge allows, 1 sigma [m/s^2]
+  double odometry_gap_yaw_rate = 0.05; ///< yaw-rate change the bridge allows, 1 sigma [rad/s]
+  /// [s] The odometry sender's period (core::OdometryGapConfig::resume_period_us): a daemon
+  /// started again from its checkpoint bridges the motion it did not see at the speed of its
+  /// first increment over this period; 0 = not known (bridged at speed 0, covariance grown).
+  double odometry_period = 0.01;
+};
+
+struct LoggerConfig {
+  std::string output = "out/run.lcmlog";  ///< file-name pattern: strftime codes and {index}
+  std::vector<std::string> channels;  ///< regexes; empty = everything
+  int queue_capacity = 1000000;       ///< messages held for the writer thread
+  int64_t queue_bytes = 512ll << 20;  ///< payload bytes held for the writer thread
+  int64_t max_file_bytes = 0;         ///< start a new file before exceeding this size (0 = never)
+  double max_file_seconds = 0;        ///< start a new file after this long [s, wall] (0 = never)
+  double flush_period = 0.2;          ///< fsync period [s, wall]
+  std::string status_channel = "LOGGER_STATUS";  ///< logger_status_t channel ("" = none)
+  double status_period = 1.0;         ///< status period [s, wall]
+  int recv_buf_size = 134217728;      ///< UDP receive buffer the logger sizes its sockets to [bytes]
+};
+
+struct SystemConfig {
+  std::string file;                   ///< where it was read from
+  models::ScenarioConfig scenario;
+  ChannelConfig channels;
+  FusionConfig fusion;
+  LoggerConfig logger;
+  Datum datum;                        ///< origin of the local frame for lat/lon conversions
+  GpsDriverConfig gps_driver;
+  models::InsSimConfig ins_sim;       ///< `ins_sim`: lcmloc-ins-sim and lcmloc-ins-experiment
+};
+
+/// Reads a system config file. Missing sections take defaults; throws ConfigError.
+SystemConfig loadSystemConfig(const std::string& path);
+/// Throws ConfigError naming flag when output is one of inputs (what: "input log", "input file"):
+/// the same file by device and inode, so also under another path, through a symbolic link or as
+/// a hard link. Checked before anything is written: writing would destroy the input.
+void refuseOutputOverInputs(const std::string& flag, const std::string& output,
+                            const std::vector<std::string>& inputs, const std::string& what = "input file");
+
+/// The text of a configuration file (what: "config file", "system file", ...): ConfigError when
+/// it does not exist, is a directory or another non-regular file (/dev/zero was read until memory
+/// ran out), is larger than 64 MB or cannot be read.
+std::string readConfigFile(const std::string& path, const std::string& what = "config file");
+/// Same from YAML text (file names the source in errors).
+SystemConfig parseSystemConfig(const std::string& yaml_text, const std::string& file);
+
+/// Filter parameters from a YAML map (used for `fusion.filter` and for FUSION_CONTROL's
+/// parameters string), applied on top of base. Throws ConfigError.
+/// The fusion engine's configuration from a system config (fusion.*): one conversion for the daemon (and so the replay) and lcmloc-eval.
+core::EngineConfig engineConfig(const SystemConfig& cfg);
+
+core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterConfig& base,
+                                     const std::string& file, const std::string& key_prefix);
+
+/// A simulated sensor samples GROUND_TRUTH: its rate (key) cannot be above vehicle.rate_hz.
+/// Throws ConfigError.
+void checkSampledRate(double rate_hz, const models::ScenarioConfig& sc, const std::string& file,
+                      const std::string& key);
+
+/// A list of filter types (`fusion.shadow`, `lcmloc-replay --shadow`, the experiments' --filters):
+/// each a known type, none twice (a shadow publishes on POSE_<TYPE>, an experiment writes one
+/// track per filter). Throws ConfigError naming key[i].
+void checkFilterList(const std::vector<std::string>& types, const std::string& file, const std::string& key);
+
+}  // namespace lcmloc::common
