@@ -14,8 +14,9 @@ BIN=$BUILD/bin
 PORT=$((30000 + $$ % 5000))
 URL="udpm://239.255.76.67:$PORT?ttl=0&recv_buf_size=4194304"
 SMALL_N=100000 SMALL_B=100 LARGE_N=10000 LARGE_B=10240
-for exe in lcmloc-logger lcmloc-burst lcmloc-log; do
-  [[ -x $BIN/$exe ]] || { echo "missing $BIN/$exe: build first" >&2; exit 2; }
+BURST=$BUILD/test-bin/lcmloc-burst  # (a benchmark program: not installed, not in bin/)
+for exe in $BIN/lcmloc-logger $BURST $BIN/lcmloc-log; do
+  [[ -x $exe ]] || { echo "missing $exe: build first" >&2; exit 2; }
 done
 command -v lcm-logger >/dev/null || { echo "lcm-logger not installed" >&2; exit 2; }
 [[ -x /usr/bin/time ]] || { echo "/usr/bin/time not installed (apt-get install time)" >&2; exit 2; }
@@ -50,8 +51,8 @@ for run in $(seq "$RUNS"); do
     --output "$dir/ours.lcmlog" 2>"$dir/ours.err" &
   ours_pid=$!
   sleep 1  # both subscribed
-  "$BIN/lcmloc-burst" --lcm-url "$URL" -n $SMALL_N -s $SMALL_B -c BURST_SMALL 2>"$dir/small.pub"
-  "$BIN/lcmloc-burst" --lcm-url "$URL" -n $LARGE_N -s $LARGE_B -c BURST_LARGE 2>"$dir/large.pub"
+  "$BURST" --lcm-url "$URL" -n $SMALL_N -s $SMALL_B -c BURST_SMALL 2>"$dir/small.pub"
+  "$BURST" --lcm-url "$URL" -n $LARGE_N -s $LARGE_B -c BURST_LARGE 2>"$dir/large.pub"
   small_rate=$(grep -o '([0-9]* msg/s)' "$dir/small.pub" | tr -dc 0-9)
   large_rate=$(grep -o '([0-9]* msg/s)' "$dir/large.pub" | tr -dc 0-9)
   settle "$dir/ours.lcmlog"; settle "$dir/lcm.lcmlog"

@@ -1,21 +1,21 @@
 #!/usr/bin/env bash
 # Runs the default scenario (the magnetic-ruler paper's experiment) live: every process is a
 # real executable talking over udpm:// on loopback, started by lcmloc-launcher from
-# config/system.yaml; the logger records out/demo/run.lcmlog. Then lcmloc-eval replays that log
-# through dead reckoning, the UKF and the gated UKF and writes out/demo/report.json, PNG figures
-# and a summary; lcmloc-evaluate scores the recorded POSE into out/demo/evaluate/ (report.json,
-# figures) and exports TUM files to out/demo/tum/. Same set-up as tools/test.sh (packages,
+# config/system.yaml; the logger records out/demo/run.lcmlog. Then lcmloc-evaluate scores the
+# recorded POSE and, replaying the log through the fusion daemon's code, dead reckoning, the UKF
+# and the gated UKF into out/demo/evaluate/ (report.json, figures, a summary) and exports TUM
+# files to out/demo/tum/. Same set-up as tools/test.sh (packages,
 # multicast route, build).
 set -euo pipefail
 
 usage() {
   cat << 'USAGE'
-usage: tools/demo.sh [--fast] [--factor X] [--out DIR] [--no-build]
+usage: tools/demo.sh [--fast] [--factor X] [-o|--output DIR] [--no-build]
   --fast        run the simulation 10x faster than real time (default: 1.0, live pace)
   --factor X    real-time factor X (1.0 = live, 10 = ten times faster; X > 1 also
                 scales fusion.reorder_window and fusion.max_time_jump by X, both
                 spans of message time)
-  --out DIR     output directory (default: out/demo)
+  -o, --output DIR  output directory (default: out/demo; its earlier results are replaced)
   --no-build    skip package installation and build (use what is in build/)
 Environment: LCMLOC_BUILD_DIR (default build/), LCM_DEFAULT_URL (default
 udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304).
@@ -29,7 +29,7 @@ while (($# > 0)); do
   case "$1" in
     --fast) factor=10 ;;
     --factor) factor="${2:?--factor needs a value}"; shift ;;
-    --out) out="${2:?--out needs a directory}"; shift ;;
+    -o | --output) out="${2:?--output needs a directory}"; shift ;;
     --no-build) build=0 ;;
     -h | --help) usage; exit 0 ;;
     *) echo "unknown argument: $1" >&2; usage >&2; exit 2 ;;
@@ -85,8 +85,6 @@ start=$SECONDS
 "$bin/lcmloc-launcher" --system "$LCMLOC_ROOT/config/system.yaml" --config "$scenario"
 lcmloc_log "live run done in $((SECONDS - start)) s: $log ($(stat -c %s "$log") bytes)"
 
-lcmloc_log "evaluating the log offline"
-"$bin/lcmloc-eval" "$log" --config "$scenario" --out "$out"
-
-lcmloc_log "scoring the recorded POSE against GROUND_TRUTH (docs/evaluate.md)"
-"$bin/lcmloc-evaluate" "$log" --out "$out/evaluate" --tum-dir "$out/tum" --segment-lengths 5,10,20
+lcmloc_log "scoring the recorded POSE and the replayed filters against GROUND_TRUTH (docs/evaluate.md)"
+"$bin/lcmloc-evaluate" "$log" --config "$scenario" --filters dead_reckoning,ukf,ukf_gated -o "$out/evaluate" --overwrite \
+  --tum-dir "$out/tum" --segment-lengths 5,10,20

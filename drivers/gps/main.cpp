@@ -1,71 +1,9 @@
-// lcmloc-gps: GNSS fixes on the GPS channel from one of two sources (gps.source):
-//   sim   GROUND_TRUTH -> GpsSensor (lib/sim: error, outages, jumps) -> lat/lon about
-//         the datum (GeographicLib LocalCartesian) -> GPS
-//   gpsd  a real receiver (or gpsfake) through libgps -> GPS
-#include <spdlog/spdlog.h>
-
-#include <optional>
-
-#include "gpsd_source.hpp"
-#include "lcmloc/app/config.hpp"
-#include "lcmloc/drivers/sim_convert.hpp"
-#include "lcmloc/bus/geodesy.hpp"
+// lcmloc-gps: GNSS fixes on the GPS channel, simulated from GROUND_TRUTH or from gpsd
+// (gps_driver.hpp).
+#include "gps_driver.hpp"
 #include "lcmloc/app/process.hpp"
-#include "lcmloc/drivers/truth_driver.hpp"
-#include "lcmloc/sim/gnss_sensors.hpp"
-#include "lcmloc/sim/world.hpp"
 
 using namespace lcmloc;
-
-namespace {
-
-int runSim(const common::SystemConfig& cfg, common::Bus& bus) {
-  const auto& sc = cfg.scenario;
-  std::optional<models::GpsSensor> sensor;
-  auto start = [&] { sensor.emplace(sc.gps, models::componentSeed(sc.seed, "gps")); };
-  start();
-  const common::LocalFrame frame(cfg.datum);
-  int64_t no_fix = 0;
-  common::TruthDriver driver(
-      bus, cfg, "lcmloc-gps",
-      [&](const std::string&, const lcmloc::ground_truth_t& m) {
-        if (auto f = sensor->sample(common::toCore(m))) {
-          if (!f->has_fix && no_fix++ == 0) spdlog::info("outage: no fix from utime {}", f->utime);
-          bus.publish(cfg.channels.gps, common::toLcm(*f, frame, driver.nextSeq()));
-        }
-      },
-      start, [&] { return common::Heartbeat::Counters{{"no_fix", no_fix}}; });
-  spdlog::info("simulated receiver: {} -> {} at {} Hz, {} error {} m, {} outage(s), {} jump(s), datum ({}, {})",
-               cfg.channels.ground_truth, cfg.channels.gps, sc.gps.rate_hz, sc.gps.error_model, sc.gps.error,
-               sc.gps.outages.size(), sc.gps.jumps.size(), cfg.datum.latitude, cfg.datum.longitude);
-  return driver.run([&] { return fmt::format("{} fixes out ({} without a fix)", driver.published(), no_fix); });
-}
-
-int runGpsd(const common::SystemConfig& cfg, common::Bus& bus) {
-  const auto& g = cfg.gps_driver;
-  gps::GpsdSource src(g.gpsd_host, g.gpsd_port, g.time_source == "fix");
-  int64_t seq = 0, no_fix = 0;
-  common::Heartbeat hb(bus, cfg.channels.heartbeat, "lcmloc-gps", [&] {
-    return common::Heartbeat::Counters{{"reports", src.reports()}, {"published", seq}, {"no_fix", no_fix}};
-  });
-  spdlog::info("gpsd at {}:{} -> {} (utime from {})", g.gpsd_host, g.gpsd_port, cfg.channels.gps,
-               g.time_source);
-  while (!common::stopRequested()) {
-    hb.tick();
-    auto fix = src.poll(100);
-    if (!fix) continue;
-    fix->seq = seq++;
-    if (fix->fix_type < 2) ++no_fix;
-    if (seq == 1)
-      spdlog::info("first report: fix type {}, ({:.7f}, {:.7f})", fix->fix_type, fix->latitude, fix->longitude);
-    bus.publish(cfg.channels.gps, *fix);
-  }
-  spdlog::info("stopping: {} gpsd reports, {} fixes out ({} without a fix)", src.reports(), seq, no_fix);
-  hb.publish("stopping");
-  return common::kExitOk;
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-gps: GNSS fixes on GPS, simulated (from GROUND_TRUTH) or from gpsd"};
@@ -82,6 +20,6 @@ int main(int argc, char** argv) {
     if (!host.empty()) cfg.gps_driver.gpsd_host = host;
     if (!port.empty()) cfg.gps_driver.gpsd_port = port;
     common::Bus bus(opts.lcm_url);
-    return cfg.gps_driver.source == "gpsd" ? runGpsd(cfg, bus) : runSim(cfg, bus);
+    return gps::run(cfg, bus);
   });
 }

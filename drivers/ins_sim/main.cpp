@@ -1,13 +1,7 @@
-// lcmloc-ins-sim: the §II simulation of the odometry/INS method (seeds/004): drives the vehicle
-// along the configured motion profile on the WGS-84 ellipsoid and publishes GROUND_TRUTH, IMU
-// (the paper's sensor grade) and ODOMETRY (distance increments with the scale error), paced by
-// the real-time factor. Models: lib/sim (InsSim), shared with lcmloc-ins-experiment.
-#include <spdlog/spdlog.h>
-
-#include "lcmloc/app/config.hpp"
-#include "lcmloc/drivers/sim_convert.hpp"
+// lcmloc-ins-sim: the §II simulation of the odometry/INS method (seeds/004), publishing
+// GROUND_TRUTH, IMU and ODOMETRY paced by the real-time factor (ins_sim_driver.hpp).
+#include "ins_sim_driver.hpp"
 #include "lcmloc/app/process.hpp"
-#include "lcmloc/sim/ins_sim.hpp"
 
 using namespace lcmloc;
 
@@ -19,55 +13,16 @@ int main(int argc, char** argv) {
   uint64_t seed = 0;
   app.add_option("--realtime-factor", rtf, "override scenario.realtime_factor (0 = as fast as possible)")
       ->check(CLI::Range(common::kRealtimeFactor.lo, common::kRealtimeFactor.hi));
-  app.add_option("--duration", duration, "override ins_sim.duration [s]")->check(CLI::Range(common::kInsSimDuration.lo, common::kInsSimDuration.hi));
-  app.add_option("--seed", seed, "override ins_sim.seed")
-      ->check(lcmloc::common::seed());
+  app.add_option("--duration", duration, "override ins_sim.duration [s]")
+      ->check(CLI::Range(common::kInsSimDuration.lo, common::kInsSimDuration.hi));
+  app.add_option("--seed", seed, "override ins_sim.seed")->check(common::seed());
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-ins-sim", [&] {
-    auto cfg = common::loadSystemConfig(opts.config);
-    auto& ic = cfg.ins_sim;
+    const auto cfg = common::loadSystemConfig(opts.config);
+    auto ic = cfg.ins_sim;
     if (duration > 0) ic.duration = duration;
     if (seed) ic.seed = seed;
-    const double factor = rtf >= 0.0 ? rtf : cfg.scenario.realtime_factor;
-    models::InsSim sim(ic, cfg.scenario.vehicle.start_utime);
-
     common::Bus bus(opts.lcm_url);
-    int64_t truth_seq = 0, imu_seq = 0, odo_seq = 0;
-    common::Heartbeat hb(bus, cfg.channels.heartbeat, "lcmloc-ins-sim", [&] {
-      return common::Heartbeat::Counters{{"truth", truth_seq}, {"imu", imu_seq}, {"odometry", odo_seq}};
-    });
-    hb.tick();
-    spdlog::info("ins_sim seed {}: {:.0f} s, profile {} (start {}), {} Hz, odometry every {} sample(s), "
-                 "real-time factor {}",
-                 ic.seed, ic.duration, ic.profile, ic.start, ic.rate_hz, ic.odometry_divider, factor);
-    common::Pacer pacer(factor);
-    bool running = pacer.waitUntil(cfg.scenario.vehicle.start_utime, [&] { hb.tick(); });
-    if (running) bus.publish(cfg.channels.ground_truth, common::toLcm(sim.initial().truth, truth_seq++));
-    models::InsSimStep s;
-    double last_report = 0.0;
-    while (running && !sim.finished()) {
-      s = sim.step();
-      if (!pacer.waitUntil(s.truth.utime, [&] { hb.tick(); })) {
-        running = false;
-        break;
-      }
-      // Odometry (rank before IMU at equal utime in the fusion engine) then IMU then truth.
-      if (s.odometry) bus.publish(cfg.channels.odometry, common::toLcm(*s.odometry, odo_seq++));
-      if (s.imu) bus.publish(cfg.channels.imu, common::toLcm(*s.imu, imu_seq++));
-      bus.publish(cfg.channels.ground_truth, common::toLcm(s.truth, truth_seq++));
-      if (sim.time() - last_report >= 600.0) {
-        last_report = sim.time();
-        spdlog::info("t = {:.0f} s, {:.1f} km travelled", sim.time(), s.truth.distance / 1000.0);
-      }
-    }
-    if (!running) {
-      spdlog::info("stopped by signal {} at t = {:.1f} s", common::stopSignal(), sim.time());
-      hb.publish("stopping");
-      return common::kExitOk;
-    }
-    spdlog::info("run over: {:.0f} s, {:.2f} km, {} IMU samples, {} odometry increments", sim.time(),
-                 s.truth.distance / 1000.0, imu_seq, odo_seq);
-    hb.publish("stopping");
-    return common::kExitOk;
+    return ins_sim::run(cfg, ic, rtf >= 0.0 ? rtf : cfg.scenario.realtime_factor, bus);
   });
 }

@@ -1,8 +1,10 @@
 // lcmloc-sim: drives the simulated vehicle along the scenario path and publishes GROUND_TRUTH,
 // paced against wall time by the real-time factor. Exits 0 after the final sample.
+// --write-map FILE: writes the world's markers as a fusion map file (id,x,y) instead.
 #include <spdlog/spdlog.h>
 
 #include "lcmloc/app/config.hpp"
+#include "lcmloc/drivers/scenario_map.hpp"
 #include "lcmloc/drivers/sim_convert.hpp"
 #include "lcmloc/app/process.hpp"
 #include "lcmloc/sim/world.hpp"
@@ -16,9 +18,12 @@ int main(int argc, char** argv) {
   double rtf = -1.0;
   app.add_option("--realtime-factor", rtf, "override scenario.realtime_factor (0 = as fast as possible)")
       ->check(CLI::Range(common::kRealtimeFactor.lo, common::kRealtimeFactor.hi));
+  std::string map_out;
+  app.add_option("--write-map", map_out, "write the scenario's markers as a map file (fusion.map_file) and exit");
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-sim", [&] {
     const auto cfg = common::loadSystemConfig(opts.config);
+    if (!map_out.empty()) return common::writeScenarioMap(cfg, map_out), common::kExitOk;
     const auto& sc = cfg.scenario;
     const double factor = rtf >= 0.0 ? rtf : sc.realtime_factor;
 
@@ -28,8 +33,7 @@ int main(int argc, char** argv) {
 
     common::Bus bus(opts.lcm_url);
     int64_t seq = 0;
-    common::Heartbeat hb(bus, cfg.channels.heartbeat, "lcmloc-sim",
-                         [&] { return common::Heartbeat::Counters{{"published", seq}}; });
+    common::Heartbeat hb(bus, cfg.channels.heartbeat, "lcmloc-sim", [&] { return common::Heartbeat::Counters{{"published", seq}}; });
     hb.tick();
     spdlog::info("scenario '{}' seed {}: {:.1f} m of path at {:.1f} m/s, real-time factor {}",
                  sc.name, sc.seed, stop_at, sc.vehicle.speed, factor);
@@ -43,14 +47,12 @@ int main(int argc, char** argv) {
     bool running = publish(vehicle.state());
     while (running && !vehicle.finished()) running = publish(vehicle.step());
 
-    if (!running) {
-      spdlog::info("stopped by signal {} after {} samples", common::stopSignal(), seq);
-      hb.publish("stopping");
-      return common::kExitOk;
-    }
     const auto& s = vehicle.state();
-    spdlog::info("run over: {} samples, {:.2f} m travelled, final pose ({:.3f}, {:.3f}, {:.3f})",
-                 seq, s.distance, s.x, s.y, s.heading);
+    if (!running)
+      spdlog::info("stopped by signal {} after {} samples", common::stopSignal(), seq);
+    else
+      spdlog::info("run over: {} samples, {:.2f} m travelled, final pose ({:.3f}, {:.3f}, {:.3f})",
+                   seq, s.distance, s.x, s.y, s.heading);
     hb.publish("stopping");
     return common::kExitOk;
   });

@@ -11,7 +11,6 @@
 #include "lcmloc/app/text.hpp"
 #include "lcmloc/app/csv.hpp"
 #include "lcmloc/fusion_status_t.hpp"
-#include "lcmloc/sim/world.hpp"
 
 namespace lcmloc::fusion {
 
@@ -80,10 +79,8 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
     }
     publishStatus(core::eventName(e.kind), detail, e.utime);
   };
-  core::MarkerMap map;
-  if (cfg.fusion.map_file.empty()) {
-    map = models::makeMarkerMap(models::Path(cfg.scenario.path), cfg.scenario.markers);
-  } else {
+  core::MarkerMap map;  // from the map file only ("" = no map); the simulator writes its own with lcmloc-sim --write-map
+  if (!cfg.fusion.map_file.empty()) {
     try {
       map = common::csv::loadMap(cfg.fusion.map_file);
     } catch (const std::runtime_error& e) {  // a configuration error: the key that names the file

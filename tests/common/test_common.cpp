@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <filesystem>
 #include <limits>
 #include <algorithm>
@@ -287,18 +288,80 @@ TEST(Config, ChannelNamesAreNonEmptyAndTheDaemonsOutputsHaveChannelsOfTheirOwn) 
   EXPECT_EQ(errorOf("channels: {pose: POSE_MAIN, magruler: [R1, R2, R3], magruler_fault: R3}\n"), "(no error)");
 }
 
+TEST(Process, AnExistingOutputIsRefusedWithoutOverwrite) {
+  namespace fs = std::filesystem;
+  const fs::path base = fs::temp_directory_path() / ("lcmloc_refuse_" + std::to_string(::getpid()));
+  fs::remove_all(base);
+  fs::create_directories(base / "empty");
+  fs::create_directories(base / "full");
+  std::ofstream((base / "full" / "report.json").string()) << "{}";
+  std::ofstream((base / "file.lcmlog").string()) << "x";
+  // Nothing there, or an empty directory: nothing to replace.
+  EXPECT_NO_THROW(common::refuseExistingOutput((base / "new.lcmlog").string(), false));
+  EXPECT_NO_THROW(common::refuseExistingOutput((base / "empty").string(), false));
+  EXPECT_NO_THROW(common::refuseExistingOutput("", false));
+  EXPECT_NO_THROW(common::refuseExistingOutput("/dev/null", false));  // a device is written to, not replaced
+  try {
+    common::refuseExistingOutput((base / "file.lcmlog").string(), false, "--log");
+    ADD_FAILURE() << "an existing file was accepted";
+  } catch (const common::UsageError& e) {
+    EXPECT_NE(std::string(e.what()).find("--log '" + (base / "file.lcmlog").string() + "' exists: give --overwrite"),
+              std::string::npos) << e.what();
+  }
+  EXPECT_THROW(common::refuseExistingOutput((base / "full").string(), false), common::UsageError);
+  EXPECT_THROW(common::prepareOutputDir((base / "full").string(), false), common::UsageError);
+  EXPECT_NO_THROW(common::refuseExistingOutput((base / "file.lcmlog").string(), true));
+  EXPECT_NO_THROW(common::prepareOutputDir((base / "full").string(), true));
+  EXPECT_TRUE(fs::exists(base / "full" / "report.json"));  // --overwrite replaces files; it deletes none
+  fs::remove_all(base);
+}
+
+TEST(Process, RunProcessGivesTheSharedExitCodesVersionAndFooter) {
+  auto run = [](std::vector<std::string> args, const std::function<int()>& body, std::string* help = nullptr) {
+    CLI::App app{"test program"};
+    common::CommonOptions opts;
+    opts.log_level = "off";
+    std::string out;
+    common::addOutputOption(app, out, "output");
+    args.insert(args.begin(), "prog");
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    testing::internal::CaptureStdout();
+    const int rc = common::runProcess(app, static_cast<int>(argv.size()), argv.data(), opts, "lcmloc-test", body);
+    const std::string printed = testing::internal::GetCapturedStdout();
+    if (help) *help = printed;
+    return rc;
+  };
+  auto ok = [] { return common::kExitOk; };
+  std::string printed;
+  EXPECT_EQ(run({"--version"}, ok, &printed), 0);
+  EXPECT_EQ(printed, "lcmloc-test " + common::version() + "\n");
+  EXPECT_EQ(run({"--help"}, ok, &printed), 0);
+  EXPECT_NE(printed.find(common::kExitCodesHelp), std::string::npos) << printed;
+  EXPECT_NE(printed.find("-o,--output"), std::string::npos) << printed;
+  EXPECT_EQ(run({"--bogus"}, ok), common::kExitUsageError);
+  EXPECT_EQ(run({}, [] () -> int { throw common::UsageError("no"); }), 2);
+  EXPECT_EQ(run({}, [] () -> int { throw common::ConfigError("f.yaml", "k", "bad"); }), 2);
+  EXPECT_EQ(run({}, [] () -> int { throw std::runtime_error("disk full"); }), 1);
+  EXPECT_EQ(run({}, [] { return common::kExitInputDamaged; }), 3);
+  EXPECT_EQ(common::kExitOk, 0);
+  EXPECT_EQ(common::kExitRuntimeError, 1);
+  EXPECT_EQ(common::kExitConfigError, 2);
+  EXPECT_EQ(common::kExitInputDamaged, 3);
+}
+
 TEST(Process, AnOutputDirectoryIsCheckedBeforeTheWork) {
-  // The experiments computed everything and then failed to create --out.
+  // The experiments computed everything and then failed to create --output.
   namespace fs = std::filesystem;
   const fs::path base = fs::temp_directory_path() / ("lcmloc_outdir_" + std::to_string(::getpid()));
   fs::remove_all(base);
   fs::create_directories(base);
-  common::prepareOutputDir((base / "a" / "b").string());
+  common::prepareOutputDir((base / "a" / "b").string(), false);
   EXPECT_TRUE(fs::is_directory(base / "a" / "b"));
   EXPECT_TRUE(fs::is_empty(base / "a" / "b"));  // the probe is removed
   std::ofstream((base / "file").string()) << "x";
   try {
-    common::prepareOutputDir((base / "file" / "sub").string());
+    common::prepareOutputDir((base / "file" / "sub").string(), true);
     ADD_FAILURE() << "a directory under a file was accepted";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("output directory '" + (base / "file" / "sub").string() + "'"), std::string::npos)

@@ -505,10 +505,12 @@ TEST_F(LogTools, ToCsvAndCutNeverWriteOverTheLog) {
       EXPECT_NE(r.err.find("is the input log"), std::string::npos) << cmd << "\n" << r.err;
     }
   }
-  // Several channels to a directory in which one CHANNEL.csv is the log itself.
+  // Several channels to a directory in which one CHANNEL.csv is the log itself: refused even with
+  // --overwrite (without it, the directory is refused as not empty).
   fs::create_directories(path("d"));
   fs::create_hard_link(log, path("d/POSE.csv"));
-  const ToolRun dir = tool("to-csv " + log + " -o " + path("d"));
+  EXPECT_EQ(tool("to-csv " + log + " -o " + path("d")).rc, 2);
+  const ToolRun dir = tool("to-csv " + log + " -o " + path("d") + " --overwrite");
   EXPECT_EQ(dir.rc, 2) << dir.err;
   EXPECT_NE(dir.err.find("is the input log"), std::string::npos) << dir.err;
   EXPECT_FALSE(fs::exists(path("d/ODOMETRY.csv"))) << "nothing written";

@@ -15,6 +15,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "process_fixture.hpp"
+#include "lcmloc/drivers/scenario_map.hpp"
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/bus/transport.hpp"
 #include "lcmloc/fusion_control_t.hpp"
@@ -87,7 +88,7 @@ class ReplayProcessTest : public ProcessFixture {
  protected:
   /// Runs lcmloc-replay and returns its output log's events.
   std::vector<Event> replay(const std::string& log, const std::string& config, const std::string& name) {
-    Child r(LCMLOC_REPLAY, {log, "-o", path(name), "--config", config}, path(name + ".out"));
+    Child r(LCMLOC_REPLAY, {log, "-o", path(name), "--overwrite", "--config", config}, path(name + ".out"));
     const auto rc = r.wait(60s);
     EXPECT_TRUE(rc.has_value());
     EXPECT_EQ(rc.value_or(-1), 0) << r.output();
@@ -121,8 +122,9 @@ class ReplayProcessTest : public ProcessFixture {
                                             std::to_string(s.curvature) + "}");
     const std::string config = writeFile(
         "oval.yaml", "path: {segments: [" + segs + "]}\nmarkers: {count: " + std::to_string(cfg.scenario.markers.count) +
-                         ", spacing: 2.0, first_at: 2.0}\nfusion: {shadow: []}\n");
+                         ", spacing: 2.0, first_at: 2.0}\nfusion: {shadow: [], map_file: oval_map.csv}\n");
     const auto loaded = lcmloc::common::loadSystemConfig(config);
+    lcmloc::common::writeScenarioMap(loaded, loaded.fusion.map_file);  // the daemon's map: the oval's markers
     const std::string log = path("full.lcmlog");
     lcmloc::replay::writeSyntheticLog(loaded.scenario, seconds, log, loaded.channels);
     return {config, log};
@@ -209,11 +211,11 @@ TEST_F(ReplayProcessTest, LiveRunEqualsOfflineReplayByteForByteWithSwitchAndShad
   ASSERT_TRUE(waitFor(bus, [&] { return w.poses.size() > 300; }, 30s)) << launcher.output();
 
   const auto [rc_unknown, out_unknown] = ctl(bus, scenario, {"switch", "no_such_filter"}, "ctl1.out");
-  EXPECT_EQ(rc_unknown, 3) << out_unknown;
+  EXPECT_EQ(rc_unknown, 5) << out_unknown;  // refused
   EXPECT_NE(out_unknown.find("refused: switch to 'no_such_filter'"), std::string::npos) << out_unknown;
   EXPECT_NE(out_unknown.find("unknown filter type"), std::string::npos) << out_unknown;
   const auto [rc_bad, out_bad] = ctl(bus, scenario, {"switch", "ukf", "--param", "pv_diag=[-1, 1]"}, "ctl2.out");
-  EXPECT_EQ(rc_bad, 3) << out_bad;
+  EXPECT_EQ(rc_bad, 5) << out_bad;
   EXPECT_NE(out_bad.find("refused"), std::string::npos) << out_bad;
   EXPECT_EQ(w.poses.back().filter, "ukf_gated") << "the running filter continues after a refusal";
   const auto [rc_ok, out_ok] = ctl(bus, scenario, {"switch", "ukf_calib", "--param", "scale_std0=0.03"}, "ctl3.out");
@@ -667,7 +669,7 @@ TEST_F(ReplayProcessTest, CtlTakesOnlyTheAnswerToItsOwnCommandAndNoTimeBeyondInt
   EXPECT_EQ(rc, 4) << out;
   std::tie(rc, out) = ctlAnswered("rejected_input", "too old: FUSION_CONTROL seq {seq} utime 5000000: duplicate",
                                   "own_reject.out");
-  EXPECT_EQ(rc, 3) << out;
+  EXPECT_EQ(rc, 5) << out;
   EXPECT_NE(out.find("rejected_input"), std::string::npos) << out;
   std::tie(rc, out) = ctlAnswered("ack", "FUSION_CONTROL seq {seq}: reset ukf_gated", "own_ack.out");
   EXPECT_EQ(rc, 0) << out;

@@ -173,7 +173,7 @@ logger: {output: )" + log + "}\n");
   const auto rc = launcher.wait(90s);
   ASSERT_TRUE(rc.has_value()) << launcher.output();
   ASSERT_EQ(*rc, 0) << launcher.output();
-  Child exp(LCMLOC_LANDMARK_EXPERIMENT, {"--log", log, "--config", scenario, "--out", path("report")},
+  Child exp(LCMLOC_LANDMARK_EXPERIMENT, {"--log", log, "--config", scenario, "-o", path("report")},
             path("experiment.out"));
   ASSERT_EQ(exp.wait(30s).value_or(-1), 0) << exp.output();
   std::printf("%s", exp.output().c_str());

@@ -3,7 +3,7 @@
 // tests/data/golden/expected.txt (a 64-bit FNV-1a digest of the output log plus a readable
 // summary: events per channel, GATE decisions by reason, the last pose of every pose channel).
 // A change of the fusion's numbers or decisions shows here. When the change is meant, rewrite
-// expected.txt with `LCMLOC_UPDATE_GOLDENS=1 build/bin/test_golden` and say why in the commit.
+// expected.txt with `LCMLOC_UPDATE_GOLDENS=1 build/test-bin/test_golden` and say why in the commit.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -106,7 +106,7 @@ TEST(Golden, CommittedLogsReplayToTheRecordedOutputByteForByte) {
   std::string all =
       "# Replay goldens (tests/replay/test_golden.cpp): for each NAME.lcmlog replayed with NAME.yaml,\n"
       "# the FNV-1a digest of the output log and a summary of it. Rewritten by\n"
-      "# LCMLOC_UPDATE_GOLDENS=1 build/bin/test_golden\n";
+      "# LCMLOC_UPDATE_GOLDENS=1 build/test-bin/test_golden\n";
   for (const std::string& name : names) {
     SCOPED_TRACE(name);
     const std::string yaml = (kDir / (name + ".yaml")).string();
@@ -124,7 +124,7 @@ TEST(Golden, CommittedLogsReplayToTheRecordedOutputByteForByte) {
     const auto it = expected.find(name);
     ASSERT_NE(it, expected.end()) << "no golden for " << name << " in expected.txt; got:\n" << got;
     EXPECT_EQ(got, it->second) << "the replay of " << name
-                               << " changed; if that is meant: LCMLOC_UPDATE_GOLDENS=1 build/bin/test_golden";
+                               << " changed; if that is meant: LCMLOC_UPDATE_GOLDENS=1 build/test-bin/test_golden";
   }
   if (update) {
     std::ofstream(kDir / "expected.txt") << all;

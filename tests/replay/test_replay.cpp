@@ -13,6 +13,7 @@
 #include "process_fixture.hpp"
 #include "daemon/checkpoint.hpp"
 #include "daemon/daemon.hpp"
+#include "lcmloc/drivers/scenario_map.hpp"
 #include "lcmloc/bus/convert.hpp"
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/fusion_status_t.hpp"
@@ -64,6 +65,8 @@ class ReplayTest : public ::testing::Test {
     cfg_ = common::loadSystemConfig(LCMLOC_PAPER_YAML);
     cfg_.scenario = replay::ovalScenario(cfg_.scenario, replay::OvalTrack{}, 60.0);
     cfg_.fusion.shadow.clear();
+    cfg_.fusion.map_file = path("map.csv");  // the daemon's map: the oval's markers
+    common::writeScenarioMap(cfg_, cfg_.fusion.map_file);
     log_ = path("in.lcmlog");
     stats_ = replay::writeSyntheticLog(cfg_.scenario, 60.0, log_, cfg_.channels);
   }
@@ -301,7 +304,7 @@ TEST_F(ReplayTest, DamagedLogIsReplayedUpToTheDamageAndSaysWhere) {
 
   Child missing(LCMLOC_REPLAY, {path("nope.lcmlog"), "-o", path("x.lcmlog"), "--config", LCMLOC_PAPER_YAML},
                 path("missing.out"));
-  EXPECT_EQ(missing.wait(30s).value_or(-1), 1) << missing.output();
+  EXPECT_EQ(missing.wait(30s).value_or(-1), 2) << missing.output();  // a usage error
   EXPECT_NE(missing.output().find("no such file"), std::string::npos) << missing.output();
 }
 

@@ -11,10 +11,11 @@
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/chi2.hpp"
-#include "lcmloc/sim/scenario_runner.hpp"
+#include "lcmloc/scenario/scenario_runner.hpp"
 
 using namespace lcmloc;
 using namespace lcmloc::models;
+using namespace lcmloc::scenario;
 
 namespace {
 

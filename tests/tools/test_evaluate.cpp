@@ -509,12 +509,12 @@ TEST_F(EvaluateTest, GpsFixTruthNeedsADatum) {
 
 TEST_F(EvaluateTest, BadInputsGiveClearErrors) {
   const std::string out = " --no-plots -o " + file("out");
-  // Missing file.
-  EXPECT_EQ(evaluate(file("missing.lcmlog") + out), 1);
-  EXPECT_NE(output_.find("cannot open"), std::string::npos) << output_;
-  // A directory: not read as a damaged log.
+  // Missing file: a usage error.
+  EXPECT_EQ(evaluate(file("missing.lcmlog") + out), 2);
+  EXPECT_NE(output_.find("no such file"), std::string::npos) << output_;
+  // A directory: not read as a damaged log (a usage error too).
   fs::create_directories(file("adir"));
-  EXPECT_EQ(evaluate(file("adir") + out), 1);
+  EXPECT_EQ(evaluate(file("adir") + out), 2);
   EXPECT_NE(output_.find("is a directory"), std::string::npos) << output_;
   EXPECT_EQ(output_.find("DAMAGE"), std::string::npos) << output_;
   // Estimates but no truth: an error naming the channels; --export-only exports anyway.
@@ -571,11 +571,11 @@ TEST_F(EvaluateTest, BadInputsGiveClearErrors) {
     }
   }
   EXPECT_EQ(evaluate(file("run.lcmlog") + out), 0) << output_;
-  EXPECT_EQ(evaluate(file("run.lcmlog") + out + " --gate-channel TRUTH_COPY"), 2);
+  EXPECT_EQ(evaluate(file("run.lcmlog") + out + " --gate-channel TRUTH_COPY --overwrite"), 2);
   EXPECT_NE(output_.find("--gate-channel TRUTH_COPY: none of its 30 messages is of the type that option reads "
                          "(gate_decision_t): is it the right channel?"), std::string::npos) << output_;
   EXPECT_EQ(output_.find("undecodable"), std::string::npos) << output_;
-  EXPECT_EQ(evaluate(file("run.lcmlog") + out + " --pose-channel TRUTH_COPY"), 2);
+  EXPECT_EQ(evaluate(file("run.lcmlog") + out + " --pose-channel TRUTH_COPY --overwrite"), 2);
   EXPECT_NE(output_.find("--pose-channel TRUTH_COPY: none of its 30 messages"), std::string::npos) << output_;
 }
 

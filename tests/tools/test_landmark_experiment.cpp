@@ -149,7 +149,7 @@ TEST(LandmarkExperiment, CommandWritesReportAndRefusesBadInput) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   auto runCmd = [&](const std::string& args) { return runExperimentCommand(args, dir); };
-  auto [rc, out] = runCmd("--runs 30 --seed 4 --out '" + (dir / "r").string() + "'");
+  auto [rc, out] = runCmd("--runs 30 --seed 4 -o '" + (dir / "r").string() + "'");
   EXPECT_EQ(rc, 0) << out;
   EXPECT_NE(out.find("apart_off_centre"), std::string::npos) << out;
   EXPECT_NE(out.find("120/120 runs"), std::string::npos) << out;  // progress, 4 cases x 30
@@ -170,7 +170,7 @@ TEST(LandmarkExperiment, CommandWritesReportAndRefusesBadInput) {
   EXPECT_NE(out.find("vision.resolution"), std::string::npos) << out;
   // Outside the safe circle: a bad argument, refused before the output directory is made (it was
   // exit 1 after).
-  std::tie(rc, out) = runCmd("--off-centre 1.0,0 --out '" + (dir / "r2").string() + "'");
+  std::tie(rc, out) = runCmd("--off-centre 1.0,0 -o '" + (dir / "r2").string() + "'");
   EXPECT_EQ(rc, 2) << out;
   EXPECT_NE(out.find("--off-centre: 1,0 is not inside 0.9 circumradius (the danger circle is at 1)"), std::string::npos)
       << out;
@@ -247,7 +247,7 @@ TEST(LandmarkExperiment, CommandSolvesARecordedLog) {
   std::ofstream(dir / "nomap.yaml") << "vision: {rate_hz: 1}\n";
   auto runCmd = [&](const std::string& args) { return runExperimentCommand(args, dir); };
   const std::string log = "--log '" + (dir / "run.lcmlog").string() + "'";
-  auto [rc, out] = runCmd(log + " --config '" + (dir / "map.yaml").string() + "' --out '" + (dir / "r").string() + "'");
+  auto [rc, out] = runCmd(log + " --config '" + (dir / "map.yaml").string() + "' -o '" + (dir / "r").string() + "'");
   ASSERT_EQ(rc, 0) << out;
   EXPECT_NE(out.find("299 observations with truth, 1 without"), std::string::npos) << out;
   std::ifstream rep(dir / "r" / "report.json");
@@ -262,17 +262,17 @@ TEST(LandmarkExperiment, CommandSolvesARecordedLog) {
   fs::copy_file(dir / "run.lcmlog", dir / "cut.lcmlog");
   fs::resize_file(dir / "cut.lcmlog", size - 5);  // the last event (a VISION message) cut short
   std::tie(rc, out) = runCmd("--log '" + (dir / "cut.lcmlog").string() + "' --config '" + (dir / "map.yaml").string() +
-                             "' --out '" + (dir / "rc").string() + "'");
+                             "' -o '" + (dir / "rc").string() + "'");
   EXPECT_EQ(rc, 3) << out;
   EXPECT_NE(out.find("DAMAGE in " + (dir / "cut.lcmlog").string()), std::string::npos) << out;
   EXPECT_NE(out.find("truncated"), std::string::npos) << out;
   EXPECT_NE(out.find("298 observations with truth, 1 without"), std::string::npos) << out;
-  std::tie(rc, out) = runCmd(log + " --config '" + (dir / "nomap.yaml").string() + "' --out '" + (dir / "r2").string() + "'");
+  std::tie(rc, out) = runCmd(log + " --config '" + (dir / "nomap.yaml").string() + "' -o '" + (dir / "r2").string() + "'");
   EXPECT_EQ(rc, 2) << out;
   EXPECT_NE(out.find("landmarks: --log needs the landmark map"), std::string::npos) << out;
   std::ofstream(dir / "empty.lcmlog") << "";
   std::tie(rc, out) = runCmd("--log '" + (dir / "empty.lcmlog").string() + "' --config '" + (dir / "map.yaml").string() +
-                             "' --out '" + (dir / "r3").string() + "'");
+                             "' -o '" + (dir / "r3").string() + "'");
   EXPECT_EQ(rc, 1) << out;
   EXPECT_NE(out.find("has no VISION message"), std::string::npos) << out;
   fs::remove_all(dir);

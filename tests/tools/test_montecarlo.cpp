@@ -24,7 +24,7 @@ class MonteCarloCommand : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
   std::pair<int, std::string> run(const std::string& args) {
-    return runCommand(LCMLOC_MONTECARLO_BIN, args + " --out '" + (dir_ / "report.json").string() + "'", dir_);
+    return runCommand(LCMLOC_MONTECARLO_BIN, args + " --overwrite -o '" + (dir_ / "report.json").string() + "'", dir_);
   }
   nlohmann::json report() const {
     std::ifstream f(dir_ / "report.json");

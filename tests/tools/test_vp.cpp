@@ -330,7 +330,7 @@ TEST(VpExperiment, OptionsAreCheckedBeforeAnythingIsWritten) {
 
   // The command line: exit 2 before the output directory is made.
   const std::string bin = LCMLOC_VP_EXPERIMENT_BIN;
-  const std::string base = "--dir " + d.string() + " --out " + eo.out_dir;
+  const std::string base = "--dir " + d.string() + " -o " + eo.out_dir;
   for (const std::string args : {"--filters bogus", "--filters tvekf,tvekf", "--holdout-every 1", "--holdout-phase 7",
                                  "--max-rows -1", "--gps-std -1"}) {
     const auto [code, text] = runCommand(bin, base + " " + args, d);

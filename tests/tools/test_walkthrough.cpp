@@ -34,7 +34,7 @@ TEST(Walkthrough, CsvDirectoryToScoredReportWithTheDocumentedCommands) {
   ASSERT_EQ(run(std::string(LCMLOC_REPLAY_BIN) + " " + dir + "/run.lcmlog --config " + dir +
                 "/config.yaml --with-inputs -o " + dir + "/estimates.lcmlog"),
             0);
-  ASSERT_EQ(run(std::string(LCMLOC_EVALUATE_BIN) + " " + dir + "/estimates.lcmlog --out " + dir + "/eval"), 0);
+  ASSERT_EQ(run(std::string(LCMLOC_EVALUATE_BIN) + " " + dir + "/estimates.lcmlog -o " + dir + "/eval"), 0);
   std::ifstream in(out / "eval" / "report.json");
   ASSERT_TRUE(in.good());
   const auto r = nlohmann::json::parse(in);

@@ -5,9 +5,12 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <optional>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "lcmloc/core/scoring.hpp"
 #include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/report.hpp"
 
@@ -28,17 +31,19 @@ const models::TruthState* truthAt(const std::vector<models::TruthState>& truth, 
 Result run(const models::ScenarioConfig& sc, const std::vector<core::FilterConfig>& filters,
            const Options& opt) {
   Result r;
-  r.scenario = models::runScenario(sc, filters);
+  r.scenario = scenario::runScenario(sc, filters);
   const auto& truth = r.scenario.truth;
   const int64_t t0 = truth.front().utime;
-  double se_all = 0;
-  int n_all = 0;
+  // Error of a fix against the truth at its time (nullopt: no fix, or no truth sample then).
+  auto fixError = [&](const models::GpsFixSample& g) -> std::optional<double> {
+    const auto* t = g.has_fix ? truthAt(truth, g.utime) : nullptr;
+    if (!t) return std::nullopt;
+    return std::hypot(g.x - t->x, g.y - t->y);
+  };
+  std::vector<double> gps_all;
   for (const auto& g : r.scenario.gps)
-    if (const auto* t = g.has_fix ? truthAt(truth, g.utime) : nullptr) {
-      se_all += std::pow(g.x - t->x, 2) + std::pow(g.y - t->y, 2);
-      ++n_all;
-    }
-  r.gps_rmse_all_m = n_all ? std::sqrt(se_all / n_all) : 0;
+    if (const auto e = fixError(g)) gps_all.push_back(*e);
+  r.gps_rmse_all_m = core::rms(gps_all);
   for (const auto& f : r.scenario.filters) {
     FilterSummary s;
     s.filter = f.filter;
@@ -57,24 +62,15 @@ Result run(const models::ScenarioConfig& sc, const std::vector<core::FilterConfi
     }
     if (start >= 0) s.convergence_s = static_cast<double>(start - t0) * 1e-6;
     if (start >= 0) {
-      double se = 0;
-      int n = 0;
-      for (const auto& p : tr) {
-        if (p.utime < start) continue;
-        const double e = std::hypot(p.estimate.x[0] - p.truth.x(), p.estimate.x[1] - p.truth.y());
-        se += e * e;
-        ++n;
-        s.steady_max_m = std::max(s.steady_max_m, e);
-      }
-      s.steady_rmse_m = n ? std::sqrt(se / n) : 0;
-      double gse = 0;
-      int gn = 0;
+      std::vector<double> steady, gps;
+      for (const auto& p : tr)
+        if (p.utime >= start) steady.push_back(std::hypot(p.estimate.x[0] - p.truth.x(), p.estimate.x[1] - p.truth.y()));
+      const auto st = core::errorStats(steady);
+      s.steady_rmse_m = st.rmse;
+      s.steady_max_m = st.max;
       for (const auto& g : r.scenario.gps)
-        if (const auto* t = g.has_fix && g.utime >= start ? truthAt(truth, g.utime) : nullptr) {
-          gse += std::pow(g.x - t->x, 2) + std::pow(g.y - t->y, 2);
-          ++gn;
-        }
-      s.gps_rmse_m = gn ? std::sqrt(gse / gn) : 0;
+        if (const auto e = g.utime >= start ? fixError(g) : std::nullopt) gps.push_back(*e);
+      s.gps_rmse_m = core::rms(gps);
     }
     r.filters.push_back(s);
   }

@@ -18,7 +18,9 @@ int main(int argc, char** argv) {
   std::vector<std::string> types{"tvekf", "ukf_gps", "dead_reckoning"};
   uint64_t seed = 0;
   gps_experiment::Options eo;
-  app.add_option("--out", out, "output directory")->capture_default_str();
+  bool overwrite = false;
+  common::addOutputOption(app, out, "output directory (report.json, figures)")->capture_default_str();
+  common::addOverwriteFlag(app, overwrite);
   app.add_option("--filters", types, "filters to run")->delimiter(',')->capture_default_str();
   app.add_option("--seed", seed, "override scenario.seed")
       ->check(lcmloc::common::seed());
@@ -27,7 +29,7 @@ int main(int argc, char** argv) {
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-gps-experiment", [&] {
     auto cfg = common::loadSystemConfig(opts.config);
-    common::prepareOutputDir(out);
+    common::prepareOutputDir(out, overwrite);
     if (seed) cfg.scenario.seed = seed;
     std::vector<core::FilterConfig> filters;
     for (const auto& t : types) {

@@ -22,7 +22,9 @@ int main(int argc, char** argv) {
   std::vector<double> pose;
   int show = 30;
   app.add_option("dir", io.dir, "directory holding the *.csv files")->required();
-  app.add_option("-o,--output", io.out_dir, "output directory (run.lcmlog, map.csv, config.yaml); omit to check only");
+  bool overwrite = false;
+  common::addOutputOption(app, io.out_dir, "output directory (run.lcmlog, map.csv, config.yaml); omit to check only");
+  common::addOverwriteFlag(app, overwrite);
   app.add_option("--time-unit", unit, "time column unit: auto, s, us (a header time_s / time_us fixes it per file)")
       ->capture_default_str()->check(CLI::IsMember({"auto", "s", "us"}));
   app.add_option("--time-base", base, "absolute (Unix epoch) or relative times: auto, absolute, relative")
@@ -40,6 +42,7 @@ int main(int argc, char** argv) {
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-import", [&]() -> int {
     const auto cfg = common::loadSystemConfig(opts.config);
+    common::refuseExistingOutput(io.out_dir, overwrite);
     io.datum = cfg.datum;
     io.channels = cfg.channels;
     io.unit = unit == "s" ? import::TimeUnit::Seconds : unit == "us" ? import::TimeUnit::Microseconds

@@ -7,11 +7,13 @@
 #include <iomanip>
 #include <map>
 #include <optional>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/engine.hpp"
+#include "lcmloc/core/scoring.hpp"
 #include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/report.hpp"
 
@@ -87,8 +89,8 @@ RunResult run(const std::string& name, const models::InsSimConfig& cfg, const co
   core::Vec2 dr_cal = core::Vec2::Zero(), dr_uncal = core::Vec2::Zero();
   double last_err = 0, last_std = 0;
   double one_order_candidate = -1, std_candidate = -1, std_at_start = 0;
-  double k_se_after_10 = 0;
-  int64_t k_n_after_10 = 0, k_below_after_10 = 0;
+  std::vector<double> k_err_after_10;  // |scale error| from 10 s after the motion started
+  int64_t k_below_after_10 = 0;
   models::InsSimStep st;
   while (!sim.finished()) {
     st = sim.step();
@@ -154,8 +156,7 @@ RunResult run(const std::string& name, const models::InsSimConfig& cfg, const co
       if (start_recorded && err < lim && one_order_candidate < 0) one_order_candidate = tm;
       if (tm >= 10.0) {
         r.k_err_max_after_10s = std::max(r.k_err_max_after_10s, err);
-        k_se_after_10 += err * err;
-        ++k_n_after_10;
+        k_err_after_10.push_back(err);
         if (err < lim) ++k_below_after_10;
       }
       if (start_recorded && k_std < std_at_start / 10.0 && std_candidate < 0) std_candidate = tm;
@@ -191,7 +192,8 @@ RunResult run(const std::string& name, const models::InsSimConfig& cfg, const co
   r.k_err_final = last_err;
   r.k_std_final = last_std;
   r.t_one_order_s = one_order_candidate;
-  r.k_err_rms_after_10s = k_n_after_10 ? std::sqrt(k_se_after_10 / k_n_after_10) : 0.0;
+  const auto k_n_after_10 = static_cast<int64_t>(k_err_after_10.size());
+  r.k_err_rms_after_10s = core::rms(k_err_after_10);
   r.k_fraction_one_order_after_10s = k_n_after_10 ? double(k_below_after_10) / k_n_after_10 : 0.0;
   r.t_std_one_order_s = std_candidate;
   return r;

@@ -17,6 +17,7 @@
 #include "lcmloc/core/landmark_fix.hpp"
 #include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/sim/scenario_config.hpp"
+#include "lcmloc/core/scoring.hpp"
 #include "lcmloc/eval/report.hpp"
 
 namespace lcmloc::landmark_experiment {
@@ -27,13 +28,6 @@ using Vec2 = Eigen::Vector2d;
 namespace {
 
 constexpr double kAs = 1.0 / models::kArcSec;  // rad -> arc seconds
-
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const auto k = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
-  return v[std::min(v.size() - 1, k > 0 ? k - 1 : 0)];
-}
 
 /// Centroid of the triangle of the three lines through lms[i] with azimuths az[i] (clockwise
 /// from north); false when two lines are parallel.
@@ -75,22 +69,21 @@ double boxProbability(const Eigen::Matrix2d& C, double a) {
 void finish(MethodStats& s, double paper_position) {
   const auto n = static_cast<double>(s.pos_errors.size());
   if (n == 0) return;
-  std::vector<double> norms, habs;
-  double se = 0;
+  std::vector<double> norms, habs, east, north;
   int within = 0;
   for (const auto& e : s.pos_errors) {
     norms.push_back(e.norm());
-    se += e.squaredNorm();
+    east.push_back(e.x());
+    north.push_back(e.y());
     s.axis_mean += e / n;
-    s.axis_rms += e.cwiseAbs2() / n;
     s.pos_mean += e.norm() / n;
     s.pos_max = std::max(s.pos_max, e.norm());
     within += std::abs(e.x()) < paper_position && std::abs(e.y()) < paper_position;
     s.axis_within_paper += Vec2(std::abs(e.x()) < paper_position, std::abs(e.y()) < paper_position) / n;
   }
-  s.axis_rms = s.axis_rms.cwiseSqrt();
-  s.pos_rms = std::sqrt(se / n);
-  s.pos_p95 = quantile(norms, 0.95);
+  s.axis_rms = Vec2(core::rms(east), core::rms(north));
+  s.pos_rms = core::rms(norms);
+  s.pos_p95 = core::percentileNearestRank(norms, 0.95);
   s.within_paper = within / n;
   if (s.heading_errors.empty()) return;
   double sh = 0;
@@ -99,9 +92,9 @@ void finish(MethodStats& s, double paper_position) {
     sh += h * h / n;
     habs.push_back(std::abs(h));
   }
-  s.heading_rms = std::sqrt(sh);
+  s.heading_rms = core::rms(s.heading_errors);
   s.heading_std = std::sqrt(std::max(0.0, sh - s.heading_mean * s.heading_mean) * n / std::max(1.0, n - 1));
-  s.heading_p95 = quantile(habs, 0.95);
+  s.heading_p95 = core::percentileNearestRank(habs, 0.95);
 }
 
 const MethodStats& method(const CaseResult& c, const std::string& name) {

@@ -17,9 +17,7 @@ using logtool::CutOptions;
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-log: look inside LCM logs (ours or lcm-logger's): info, to-csv, cut.\n"
                "A truncated or damaged log is read up to and past the damage, which is reported with its\n"
-               "byte offset and event number.\n"
-               "Exit: 0 ok, 1 error, 2 bad arguments or no such log, 3 the log is damaged (the command's\n"
-               "work is done with the intact events)."};
+               "byte offset and event number (exit 3: the command's work is done with the intact events)."};
   common::CommonOptions opts;
   common::addOfflineOptions(app, opts, "system YAML file (checked when given; the log tools need no settings)");
   app.require_subcommand(1);
@@ -34,12 +32,15 @@ int main(int argc, char** argv) {
   csv_cmd->add_option("log", log_path, "LCM log file")->required();
   csv_cmd->add_option("--channel,-c", channels, "channel regex (repeatable; default: every channel)")
       ->allow_extra_args(false);  // one regex per -c: the log path after it is no regex
-  csv_cmd->add_option("--output,-o", output,
-                      "CSV file ('-' or none: stdout) for one channel; a directory (one CHANNEL.csv each) for several");
+  bool overwrite = false;
+  common::addOutputOption(*csv_cmd, output,
+                          "CSV file ('-' or none: stdout) for one channel; a directory (one CHANNEL.csv each) for several");
+  common::addOverwriteFlag(*csv_cmd, overwrite);
 
   auto* cut_cmd = app.add_subcommand("cut", "copy a time window and/or a channel subset into a new log");
   cut_cmd->add_option("log", log_path, "LCM log file")->required();
-  cut_cmd->add_option("--output,-o", output, "new log file")->required();
+  common::addOutputOption(*cut_cmd, output, "new log file")->required();
+  common::addOverwriteFlag(*cut_cmd, overwrite);
   cut_cmd->add_option("--channel,-c", cut_opts.channels, "channel regex to keep (repeatable; default: all)")
       ->allow_extra_args(false);  // one regex per -c: the log path after it is no regex
   cut_cmd->add_option("--from", cut_opts.from, "keep from this many seconds after the first event")
@@ -54,6 +55,10 @@ int main(int argc, char** argv) {
     if (const std::string problem = common::fileProblem(log_path); !problem.empty())
       throw common::ConfigError(log_path, "", problem == common::kNoSuchFile ? "no such log file" : problem + ": not a log file");
     if (info_cmd->parsed()) return logtool::info(log_path);
+    if (!output.empty() && output != "-") {
+      common::refuseOutputOverInputs("--output", output, {log_path}, "input log");  // (the more useful message)
+      common::refuseExistingOutput(output, overwrite);
+    }
     if (csv_cmd->parsed()) return logtool::toCsv(log_path, channels, output);
     return logtool::cut(log_path, output, cut_opts);
   });

@@ -11,14 +11,14 @@ here=$(dirname "$0")
 mkdir -p "$out"
 printf 'fusion: {max_odometry_gap: 0}\n' > "$out/off.yaml"
 printf 'fusion: {}\n' > "$out/on.yaml"
-"$bin/lcmloc-log" to-csv "$log" -c GROUND_TRUTH -o "$out/truth.csv" > /dev/null 2>&1
+"$bin/lcmloc-log" to-csv "$log" -c GROUND_TRUTH -o "$out/truth.csv" --overwrite > /dev/null 2>&1
 for g in $gaps; do
   python3 "$here/cut_gap.py" "$log" "$out/gap$g.lcmlog" "$start" "$g" > /dev/null
   for mode in off on; do
     r=$out/gap${g}_$mode
-    "$bin/lcmloc-replay" "$out/gap$g.lcmlog" --config "$out/$mode.yaml" -o "$r.lcmlog" --progress 0 > /dev/null 2>&1 || true
-    "$bin/lcmloc-log" to-csv "$r.lcmlog" -c POSE -o "$r.pose.csv" > /dev/null 2>&1
-    "$bin/lcmloc-log" to-csv "$r.lcmlog" -c GATE -o "$r.gate.csv" > /dev/null 2>&1
+    "$bin/lcmloc-replay" "$out/gap$g.lcmlog" --config "$out/$mode.yaml" -o "$r.lcmlog" --overwrite --progress 0 > /dev/null 2>&1 || true
+    "$bin/lcmloc-log" to-csv "$r.lcmlog" -c POSE -o "$r.pose.csv" --overwrite > /dev/null 2>&1
+    "$bin/lcmloc-log" to-csv "$r.lcmlog" -c GATE -o "$r.gate.csv" --overwrite > /dev/null 2>&1
     printf 'gap %s s, gap handling %s: ' "$g" "$mode"
     python3 "$here/analyze.py" "$out/truth.csv" "$r.pose.csv" "$r.gate.csv" "$start" "$g"
   done

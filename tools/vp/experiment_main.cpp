@@ -21,9 +21,10 @@ int main(int argc, char** argv) {
   vp::ImportOptions io;
   vp::ExperimentOptions eo;
   std::string dir = LCMLOC_VP_DIR;
-  bool no_init = false;
+  bool no_init = false, overwrite = false;
   app.add_option("--dir", dir, "data directory holding vp_odometry.csv and vp_gps.csv")->capture_default_str();
-  app.add_option("--out", eo.out_dir, "output directory")->capture_default_str();
+  common::addOutputOption(app, eo.out_dir, "output directory (report.json, figures)")->capture_default_str();
+  common::addOverwriteFlag(app, overwrite);
   app.add_option("--filters", eo.filters, "filters to run")->delimiter(',')->capture_default_str();
   app.add_option("--holdout-every", io.holdout_every,
                  "hold every k-th fix out, k >= 2 (the filters get the others and are scored at these)")
@@ -41,7 +42,7 @@ int main(int argc, char** argv) {
   return common::runProcess(app, argc, argv, opts, "lcmloc-vp-experiment", [&]() -> int {
     const auto cfg = common::loadSystemConfig(opts.config);
     vp::checkExperimentOptions(cfg, io, eo);  // before the output directory is made
-    common::prepareOutputDir(eo.out_dir);
+    common::prepareOutputDir(eo.out_dir, overwrite);
     io.odometry_csv = dir + "/vp_odometry.csv";
     io.gps_csv = dir + "/vp_gps.csv";
     io.stop = [] { return common::stopRequested(); };

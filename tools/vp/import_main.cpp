@@ -1,7 +1,4 @@
 // lcmloc-import-vp: Victoria Park CSV files (odometry + GPS) -> an LCM log of lcmloc types.
-#include <iostream>
-
-#include <spdlog/spdlog.h>
 
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/app/process.hpp"
@@ -24,7 +21,9 @@ int main(int argc, char** argv) {
   app.add_option("--dir", dir, "data directory holding vp_odometry.csv and vp_gps.csv");
   app.add_option("--odometry", io.odometry_csv, "odometry CSV (overrides --dir)");
   app.add_option("--gps", io.gps_csv, "GPS CSV (overrides --dir)");
-  app.add_option("-o,--output", io.output, "output LCM log")->required();
+  bool overwrite = false;
+  common::addOutputOption(app, io.output, "output LCM log")->required();
+  common::addOverwriteFlag(app, overwrite);
   app.add_option("--wheelbase", io.wheelbase, "L [m]")->capture_default_str()->check(lcmloc::common::positive());
   app.add_option("--encoder-offset", io.encoder_offset,
                  "H: speed encoder left of the rear axle centre [m], at most half a vehicle's track")
@@ -45,20 +44,6 @@ int main(int argc, char** argv) {
   app.footer("The datum (lat/lon of the local frame's origin) and the channel names come from --config.");
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-import-vp", [&]() -> int {
-    const auto cfg = common::loadSystemConfig(opts.config);
-    if (io.odometry_csv.empty() && !dir.empty()) io.odometry_csv = dir + "/vp_odometry.csv";
-    if (io.gps_csv.empty() && !dir.empty()) io.gps_csv = dir + "/vp_gps.csv";
-    if (io.odometry_csv.empty() || io.gps_csv.empty()) {
-      spdlog::error("give --dir DIR or both --odometry FILE and --gps FILE");
-      return common::kExitConfigError;
-    }
-    io.datum = cfg.datum;
-    io.odometry_channel = cfg.channels.odometry;
-    io.gps_channel = cfg.channels.gps;
-    io.stop = [] { return common::stopRequested(); };
-    spdlog::info("importing {} and {} -> {}", io.odometry_csv, io.gps_csv, io.output);
-    const auto r = vp::importVictoriaPark(io);
-    std::cout << vp::importSummary(io, r, show);
-    return common::kExitOk;
+    return vp::importCommand(common::loadSystemConfig(opts.config), io, dir, show, overwrite);
   });
 }

@@ -114,7 +114,9 @@ void writeMap(const std::string& path, const core::MarkerMap& map) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error("cannot create '" + path + "'");
   out << "id,x,y\n";
-  for (const auto& m : map) out << fmt::format("{},{:.6f},{:.6f}\n", m.id, m.x, m.y);
+  // fmt's "{}" is the shortest text that reads back to the same double: a map written and read
+  // again is the same map, bit for bit.
+  for (const auto& m : map) out << fmt::format("{},{},{}\n", m.id, m.x, m.y);
   if (!out) throw std::runtime_error("cannot write '" + path + "'");
 }
 

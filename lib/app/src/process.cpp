@@ -134,8 +134,45 @@ std::string fileProblem(const std::string& path, std::uintmax_t max_bytes) {
   return "";
 }
 
-void prepareOutputDir(const std::string& dir) {
+void requireInputFile(const std::string& path, const std::string& what) {
+  if (const std::string problem = fileProblem(path); !problem.empty())
+    throw UsageError(what + " '" + path + "': " + (problem == kNoSuchFile ? "no such file" : "it " + problem));
+}
+
+const char* const kExitCodesHelp =
+    "Exit status: 0 ok, 1 runtime error, 2 usage or configuration error (also a missing input file, or an "
+    "existing output without --overwrite), 3 damaged input (the work is done with its intact part).";
+
+std::string version() { return LCMLOC_VERSION; }
+
+CLI::Option* addOutputOption(CLI::App& app, std::string& path, const std::string& help) {
+  return app.add_option("-o,--output", path, help);
+}
+
+CLI::Option* addOverwriteFlag(CLI::App& app, bool& overwrite) {
+  return app.add_flag("--overwrite", overwrite,
+                      "replace an existing output (a file, or the files in a directory that is not empty); "
+                      "without it an existing output is refused (exit 2)");
+}
+
+void refuseExistingOutput(const std::string& path, bool overwrite, const std::string& flag) {
   namespace fs = std::filesystem;
+  if (overwrite || path.empty()) return;
+  std::error_code ec;
+  const auto st = fs::status(path, ec);  // (a link: what it points to)
+  if (ec || !fs::exists(st)) return;
+  if (fs::is_directory(st)) {
+    if (fs::directory_iterator(path, ec) == fs::directory_iterator() && !ec) return;  // empty: nothing to replace
+    throw UsageError(flag + " '" + path + "' is a directory that is not empty: give --overwrite to replace the "
+                     "files in it, or another " + flag);
+  }
+  if (!fs::is_regular_file(st)) return;  // a device or a FIFO (/dev/null, /dev/stdout): written to, not replaced
+  throw UsageError(flag + " '" + path + "' exists: give --overwrite to replace it, or another " + flag);
+}
+
+void prepareOutputDir(const std::string& dir, bool overwrite) {
+  namespace fs = std::filesystem;
+  refuseExistingOutput(dir, overwrite);
   const fs::path d = dir.empty() ? fs::path(".") : fs::path(dir);
   std::error_code ec;
   fs::create_directories(d, ec);
@@ -148,6 +185,7 @@ void prepareOutputDir(const std::string& dir) {
 }
 
 void setupLogging(const std::string& process_name, const std::string& level) {
+  spdlog::drop(process_name);  // (set up again: a test that runs several programs' runProcess)
   auto logger = spdlog::stderr_color_mt(process_name);
   spdlog::set_default_logger(logger);
   spdlog::set_pattern("%H:%M:%S.%e [%n] %^%l%$: %v");
@@ -173,8 +211,18 @@ const std::atomic<bool>& stopFlag() { return g_stop; }
 void requestStop() { g_stop.store(true); }
 int stopSignal() { return g_signal.load(); }
 
+namespace {
+void addExitCodesFooter(CLI::App& app) {
+  const std::string own = app.get_footer();
+  app.footer(own.empty() ? std::string(kExitCodesHelp) : own + "\n" + kExitCodesHelp);
+  for (CLI::App* sub : app.get_subcommands({})) addExitCodesFooter(*sub);
+}
+}  // namespace
+
 int runProcess(CLI::App& app, int argc, char** argv, const CommonOptions& opts,
                const std::string& process_name, const std::function<int()>& body) {
+  app.set_version_flag("--version", process_name + " " + version(), "print the program's name and version, and exit");
+  addExitCodesFooter(app);
   try {
     app.parse(argc, argv);
     checkNumbers(app);
@@ -190,6 +238,9 @@ int runProcess(CLI::App& app, int argc, char** argv, const CommonOptions& opts,
   } catch (const ConfigError& e) {
     spdlog::error("configuration error: {}", e.what());
     return kExitConfigError;
+  } catch (const UsageError& e) {
+    spdlog::error("{}", e.what());
+    return kExitUsageError;
   } catch (const CLI::Error& e) {  // an argument found bad after parsing (e.g. lcmloc-ctl's --param)
     spdlog::error("{}", e.what());
     return kExitConfigError;

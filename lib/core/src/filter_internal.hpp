@@ -17,6 +17,10 @@ namespace lcmloc::core::detail {
 void copyMatching(const FilterState& from, const std::vector<std::string>& names,
                   Eigen::VectorXd& x, Eigen::MatrixXd& P);
 
+/// The odometry-only and magnetic-ruler filters ("dead_reckoning", "ukf", "ukf_gated",
+/// "ukf_calib") over the map; nullptr for another type. The configuration is checked already.
+std::unique_ptr<Filter> makeRulerFilter(const FilterConfig& cfg, const MarkerMap& map);
+
 /// The GNSS filters ("tvekf", "ukf_gps"); nullptr for another type. Throws
 /// std::invalid_argument for an invalid configuration.
 std::unique_ptr<Filter> makeGnssFilter(const FilterConfig& cfg);

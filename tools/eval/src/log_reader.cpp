@@ -11,14 +11,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 
-#include "lcmloc/drivers/sim_convert.hpp"
-#include "lcmloc/fault_event_t.hpp"
-#include "lcmloc/gate_decision_t.hpp"
-#include "lcmloc/ground_truth_t.hpp"
-#include "lcmloc/magruler_t.hpp"
 #include "lcmloc/app/process.hpp"
-#include "lcmloc/odometry_t.hpp"
-#include "lcmloc/pose_t.hpp"
 #include "lcmloc/wire.hpp"
 
 namespace lcmloc::eval {
@@ -35,106 +28,6 @@ int64_t logFileSize(const std::string& path) {
     throw std::runtime_error("cannot read log '" + path + "': it " + problem);
   return static_cast<int64_t>(std::filesystem::file_size(path));
 }
-
-/// Decodes one payload; records an issue and returns false when it does not decode.
-template <typename T>
-bool decode(const lcm::LogEvent& ev, T& msg, LogData& out, int64_t offset) {
-  if (msg.decode(ev.data, 0, ev.datalen) >= 0) return true;
-  out.issues.push_back({out.events_read - 1, offset,
-                        "undecodable " + ev.channel + " message (" + std::to_string(ev.datalen) +
-                            " bytes, not a " + T::getTypeName() + ")"});
-  return false;
-}
-
-class Decoder {
- public:
-  Decoder(const common::ChannelConfig& ch, LogData& out)
-      : ch_(ch), ruler_(ch.magruler.begin(), ch.magruler.end()), out_(out) {}
-
-  void handle(const lcm::LogEvent& ev, int64_t offset) {
-    const std::string& c = ev.channel;
-    if (c == ch_.ground_truth) truth(ev, offset);
-    else if (c == ch_.odometry) odometry(ev, offset);
-    else if (ruler_.count(c)) ruler(ev, offset);
-    else if (c == ch_.fault_events) fault(ev, offset);
-    else if (c == ch_.pose) pose(ev, offset);
-    else if (c == ch_.gate) gate(ev, offset);
-  }
-
- private:
-  void invalid(int64_t offset, const std::string& what) {
-    out_.issues.push_back({out_.events_read - 1, offset, what});
-  }
-  /// False, counted and reported, for |utime| >= kUtimeLimit.
-  bool usable(const lcm::LogEvent& ev, int64_t utime, int64_t offset) {
-    if (usableUtime(utime)) return true;
-    ++out_.bad_utime;
-    invalid(offset, badUtimeIssue(ev.channel, utime));
-    return false;
-  }
-  void truth(const lcm::LogEvent& ev, int64_t offset) {
-    lcmloc::ground_truth_t m{};
-    if (!decode(ev, m, out_, offset) || !usable(ev, m.utime, offset)) return;
-    out_.truth.push_back({m.utime, m.x, m.y, m.heading, m.distance});
-  }
-  void odometry(const lcm::LogEvent& ev, int64_t offset) {
-    lcmloc::odometry_t m{};
-    if (!decode(ev, m, out_, offset)) return;
-    ++out_.odometry_messages;
-    if (!usable(ev, m.utime, offset)) return;
-    std::string why;
-    auto in = common::toCore(m, &why);
-    if (!in) return invalid(offset, "invalid " + ev.channel + " seq " + std::to_string(m.seq) + ": " + why);
-    out_.inputs.push_back({ev.channel, m.seq, m.utime, *in});
-  }
-  void ruler(const lcm::LogEvent& ev, int64_t offset) {
-    lcmloc::magruler_t m{};
-    if (!decode(ev, m, out_, offset)) return;
-    ++out_.ruler_messages;
-    if (!usable(ev, m.utime, offset)) return;
-    std::string why;
-    auto det = common::toCore(m, ev.channel, &why);
-    if (!det) {
-      if (!why.empty())
-        invalid(offset, "invalid " + ev.channel + " seq " + std::to_string(m.seq) + ": " + why);
-      return;
-    }
-    ++out_.ruler_detections;
-    out_.inputs.push_back({ev.channel, m.seq, m.utime, *det});
-  }
-  void fault(const lcm::LogEvent& ev, int64_t offset) {
-    lcmloc::fault_event_t m{};
-    if (!decode(ev, m, out_, offset) || !usable(ev, m.utime, offset)) return;
-    out_.faults.push_back({m.utime, m.kind, m.channel, m.measurement_seq, m.x, m.y, m.lateral_offset});
-  }
-  void pose(const lcm::LogEvent& ev, int64_t offset) {
-    lcmloc::pose_t m{};
-    if (!decode(ev, m, out_, offset) || !usable(ev, m.utime, offset)) return;
-    if (m.dim < 3 || static_cast<int>(m.state.size()) < 3)
-      return invalid(offset, "pose with fewer than 3 states");
-    out_.live_poses.push_back({m.utime, m.filter, m.state[0], m.state[1], m.state[2], m.status});
-  }
-  void gate(const lcm::LogEvent& ev, int64_t offset) {
-    lcmloc::gate_decision_t m{};
-    if (!decode(ev, m, out_, offset) || !usable(ev, m.utime, offset)) return;
-    core::GateDecision d;
-    d.utime = m.utime;
-    d.sensor = m.sensor;
-    d.measurement_seq = m.measurement_seq;
-    d.innovation = Eigen::Map<const Eigen::VectorXd>(m.innovation.data(),
-                                                     static_cast<Eigen::Index>(m.innovation.size()));
-    d.mahalanobis = m.mahalanobis;
-    d.gate = m.gate;
-    d.accepted = m.accepted;
-    d.marker_id = m.marker_id;
-    d.reason = m.reason;
-    out_.live_decisions.push_back({m.filter, d});
-  }
-
-  const common::ChannelConfig& ch_;
-  std::set<std::string> ruler_;
-  LogData& out_;
-};
 
 /// fread without the stream lock: a LogScanner's FILE is only ever used by the thread that
 /// reads with it, and as soon as the process has a second thread every locked fread costs two
@@ -273,33 +166,6 @@ ScanSummary scanLog(const std::string& path, const std::function<void(const RawE
   out.damaged = scanner.damaged();
   return out;
 }
-
-LogData readLog(const std::string& path, const common::ChannelConfig& channels,
-                const std::atomic<bool>* stop) {
-  LogData out;
-  out.path = path;
-  LogScanner scanner(path, &out.issues);
-  out.file_size = scanner.fileSize();
-  Decoder decoder(channels, out);
-  while (!(stop && stop->load())) {
-    const lcm::LogEvent* ev = scanner.next();
-    if (!ev) break;
-    out.events_read = scanner.eventsRead();
-    ++out.channel_counts[ev->channel];
-    decoder.handle(*ev, scanner.eventOffset());
-  }
-  out.events_read = scanner.eventsRead();
-  out.bytes_unreadable = scanner.bytesUnreadable();
-  if (stop && stop->load()) out.interrupted = true;
-  out.damaged = out.bytes_unreadable > 0;
-  // Damage and bad messages in file order.
-  std::stable_sort(out.issues.begin(), out.issues.end(),
-                   [](const LogIssue& a, const LogIssue& b) { return a.byte_offset < b.byte_offset; });
-  std::stable_sort(out.truth.begin(), out.truth.end(),
-                   [](const TruthSample& a, const TruthSample& b) { return a.utime < b.utime; });
-  return out;
-}
-
 
 std::string badUtimeIssue(const std::string& channel, int64_t utime) {
   return channel + " message with utime " + std::to_string(utime) + " skipped: |utime| >= 2^62 us";

@@ -6,6 +6,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "lcmloc/eval/trajectory.hpp"
+#include "lcmloc/fault_event_t.hpp"
 #include "lcmloc/gate_decision_t.hpp"
 #include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"
@@ -30,6 +31,7 @@ class TrajectoryDecoder {
     else if (c == opt_.pose_channel) pose(ev, 0);
     else if (opt_.all_pose_channels && c.size() > 5 && c.compare(0, 5, "POSE_") == 0) pose(ev, trackIndex(c));
     else if (c == opt_.gate_channel) gate(ev);
+    else if (c == opt_.fault_channel) fault(ev);
   }
 
   /// Sorts every track and the truth by utime; extra tracks by channel name.
@@ -156,7 +158,14 @@ class TrajectoryDecoder {
   void gate(const lcm::LogEvent& ev) {
     lcmloc::gate_decision_t m{};
     if (!decode(ev, m) || !usable(ev, m.utime)) return;
-    out_.gates.push_back({m.utime, m.filter, m.sensor, m.reason, m.dim, m.mahalanobis, m.accepted != 0});
+    out_.gates.push_back({m.utime, m.filter, m.sensor, m.reason, m.dim, m.mahalanobis, m.accepted != 0,
+                          m.measurement_seq, m.gate});
+  }
+
+  void fault(const lcm::LogEvent& ev) {
+    lcmloc::fault_event_t m{};
+    if (!decode(ev, m) || !usable(ev, m.utime)) return;
+    out_.faults.push_back({m.utime, m.kind, m.channel, m.measurement_seq});
   }
 
   const TrajectoryLogOptions& opt_;

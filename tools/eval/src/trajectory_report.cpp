@@ -150,11 +150,25 @@ json makeTrajectoryReport(const TrajectoryLog& log, const std::vector<TrackScore
                {"by_filter_sensor", gateListJson(gates.by_filter_sensor)},
                {"by_filter", gateListJson(gates.by_filter)},
                {"by_sensor", gateListJson(gates.by_sensor)}};
+  if (!log.faults.empty()) {
+    json by = json::array();
+    for (const auto& g : faultStatistics(log.gates, log.faults)) {
+      const auto& c = g.counts;
+      by.push_back({{"filter", g.filter}, {"accepted", c.accepted}, {"rejected", c.rejected}, {"ignored", c.ignored},
+                    {"faults_decided", c.faults_decided}, {"faults_accepted", c.faults_accepted},
+                    {"faults_rejected", c.faults_rejected}, {"valid_rejected", c.valid_rejected}});
+    }
+    j["faults"] = {{"announced", log.faults.size()}, {"by_filter", by}};
+  }
+  if (const auto& c = meta.live_vs_replay)
+    j["live_vs_replay"] = {{"filter", c->filter},
+                           {"matched_poses", c->matched},
+                           {"max_diff_m", c->max_diff_m >= 0 ? json(c->max_diff_m) : json(nullptr)}};
   return j;
 }
 
 void printTrajectorySummary(std::ostream& os, const TrajectoryLog& log, const std::vector<TrackScore>& scores,
-                            const GateStats& gates) {
+                            const GateStats& gates, const std::optional<ReplayComparison>& live_vs_replay) {
   os << std::left << std::setw(22) << "channel" << std::right << std::setw(8) << "scored" << std::setw(9)
      << "RMSE[m]" << std::setw(9) << "med[m]" << std::setw(9) << "p95[m]" << std::setw(9) << "max[m]"
      << std::setw(10) << "hRMSE[d]" << std::setw(9) << "final%" << std::setw(10) << "NEES3" << std::setw(10)
@@ -210,6 +224,23 @@ void printTrajectorySummary(std::ostream& os, const TrajectoryLog& log, const st
       }
       os << "\n";
     }
+  }
+  if (!log.faults.empty()) {
+    os << log.faults.size() << " fault(s) announced on FAULT_EVENTS\n"
+       << std::left << std::setw(22) << "fault filter" << std::right << std::setw(16) << "faults rejected"
+       << std::setw(16) << "faults accepted" << std::setw(16) << "valid rejected" << "\n";
+    for (const auto& g : faultStatistics(log.gates, log.faults))
+      os << std::left << std::setw(22) << withoutControlCharacters(g.filter) << std::right << std::setw(16)
+         << g.counts.faults_rejected << std::setw(16) << g.counts.faults_accepted << std::setw(16)
+         << g.counts.valid_rejected << "\n";
+  }
+  if (live_vs_replay) {
+    os << "recorded " << withoutControlCharacters(live_vs_replay->filter) << " against its replay: ";
+    if (live_vs_replay->matched)
+      os << live_vs_replay->matched << " estimates at equal times, largest difference " << std::setprecision(6)
+         << live_vs_replay->max_diff_m << " m\n";
+    else
+      os << "no estimate at an equal time\n";
   }
   os << "log: " << log.events_read << " events, " << log.file_size << " bytes";
   if (log.damaged) os << ", DAMAGED (" << log.bytes_unreadable << " bytes unreadable)";
@@ -318,6 +349,7 @@ PlotResult writeTrajectoryPlots(const TrajectoryLog& log, const std::vector<Trac
     res.figures.insert(res.figures.end() - (s.nees2.samples ? 1 : 0),
                        {"trajectory_" + st + ".png", "errors_" + st + ".png"});
   }
+  writeGatePlots(gp, log, t0, dir, res.figures);
   gp << "set output\n";
   gp.close();
   if (res.figures.empty()) {

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include "lcmloc/core/scoring.hpp"
 #include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 #include "lcmloc/eval/trajectory.hpp"
@@ -141,12 +142,11 @@ ExperimentResult runExperiment(const common::SystemConfig& cfg0, ImportOptions i
       s.err.push_back(e);
     }
     s.scored = static_cast<int64_t>(s.err.size());
-    double se = 0;
-    for (double e : s.err) se += e * e;
-    s.rmse_m = s.scored ? std::sqrt(se / static_cast<double>(s.scored)) : 0;
-    s.median_m = eval::percentile(s.err, 0.5);
-    s.p95_m = eval::percentile(s.err, 0.95);
-    s.max_m = s.err.empty() ? 0 : *std::max_element(s.err.begin(), s.err.end());
+    const auto st = core::errorStats(s.err);
+    s.rmse_m = st.rmse;
+    s.median_m = st.median;
+    s.p95_m = st.p95;
+    s.max_m = st.max;
     res.scores.push_back(std::move(s));
   }
 

@@ -3,15 +3,18 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <iostream>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/app/csv.hpp"
 #include "lcmloc/bus/geodesy.hpp"
+#include "lcmloc/app/process.hpp"
 #include "lcmloc/import/checks.hpp"
 #include "lcmloc/import/event_log.hpp"
 #include "lcmloc/gps_fix_t.hpp"
@@ -217,6 +220,25 @@ std::string importSummary(const ImportOptions& opt, const ImportResult& r, int m
   }
   if (r.interrupted) s += "interrupted: the output holds what was read so far\n";
   return s;
+}
+
+int importCommand(const common::SystemConfig& cfg, ImportOptions io, const std::string& dir, int max_refusals,
+                  bool overwrite) {
+  if (io.odometry_csv.empty() && !dir.empty()) io.odometry_csv = dir + "/vp_odometry.csv";
+  if (io.gps_csv.empty() && !dir.empty()) io.gps_csv = dir + "/vp_gps.csv";
+  if (io.odometry_csv.empty() || io.gps_csv.empty())
+    throw common::UsageError("give --dir DIR or both --odometry FILE and --gps FILE");
+  common::requireInputFile(io.odometry_csv, "--odometry");
+  common::requireInputFile(io.gps_csv, "--gps");
+  common::refuseExistingOutput(io.output, overwrite);
+  io.datum = cfg.datum;
+  io.odometry_channel = cfg.channels.odometry;
+  io.gps_channel = cfg.channels.gps;
+  io.stop = [] { return common::stopRequested(); };
+  spdlog::info("importing {} and {} -> {}", io.odometry_csv, io.gps_csv, io.output);
+  const auto r = importVictoriaPark(io);
+  std::cout << importSummary(io, r, max_refusals);
+  return common::kExitOk;
 }
 
 }  // namespace lcmloc::vp

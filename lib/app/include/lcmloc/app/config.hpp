@@ -73,7 +73,8 @@ struct FusionConfig {
   /// Time-jump guard [s] of message time (0 = off): core::EngineConfig::max_time_jump_us.
   double max_time_jump = 1.0;
   /// Map CSV (id,x,y; docs/import_formats.md) of markers, landmarks and beacons; a relative path
-  /// is relative to the config file's directory. "" = the scenario's markers along the path.
+  /// is relative to the config file's directory. "" = no map (the daemon reads no other: a
+  /// simulated run writes its world's markers with `lcmloc-sim --write-map`).
   std::string map_file;
   /// POSE after every N-th odometry message (and every measurement); the odometry in between is
   /// composed and applied with one time update (core::EngineConfig::output_every). 1 = every one.
@@ -138,7 +139,8 @@ SystemConfig parseSystemConfig(const std::string& yaml_text, const std::string& 
 
 /// Filter parameters from a YAML map (used for `fusion.filter` and for FUSION_CONTROL's
 /// parameters string), applied on top of base. Throws ConfigError.
-/// The fusion engine's configuration from a system config (fusion.*): one conversion for the daemon (and so the replay) and lcmloc-eval.
+/// The fusion engine's configuration from a system config (fusion.*): one conversion for the
+/// daemon (and so the replay and lcmloc-evaluate).
 core::EngineConfig engineConfig(const SystemConfig& cfg);
 
 core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterConfig& base,

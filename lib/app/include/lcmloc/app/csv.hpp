@@ -34,7 +34,8 @@ std::ifstream openCsv(const std::string& path, std::string& header);
 /// for any bad row or a duplicate id (a map is configuration: nothing is skipped).
 core::MarkerMap loadMap(const std::string& path);
 
-/// Writes a map file (header "id,x,y", 6 decimals). Throws std::runtime_error.
+/// Writes a map file (header "id,x,y"; each coordinate the shortest text that reads back to the
+/// same double, so loadMap gives map again exactly). Throws std::runtime_error.
 void writeMap(const std::string& path, const core::MarkerMap& map);
 
 }  // namespace lcmloc::common::csv

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -18,10 +19,30 @@
 
 namespace lcmloc::common {
 
-/// Exit codes shared by every executable. kExitInputDamaged: a tool that reads an LCM log did its
-/// work, but the log was truncated or had corrupt events: it read up to and past the damage and
-/// reported each damaged place (the result lacks what was there).
-enum ExitCode : int { kExitOk = 0, kExitRuntimeError = 1, kExitConfigError = 2, kExitInputDamaged = 3 };
+/// Exit codes shared by every executable (runProcess states them in every --help):
+///  0 ok; 1 a runtime error; 2 a usage or configuration error: a bad command line, a bad config
+///  file, a missing input file, an output that exists without --overwrite; 3 damaged input: a
+///  tool that reads an LCM log did its work, but the log was truncated or had corrupt events: it
+///  read up to and past the damage and reported each damaged place (the result lacks what was
+///  there). A program's own codes (lcmloc-ctl's) come after these.
+enum ExitCode : int {
+  kExitOk = 0,
+  kExitRuntimeError = 1,
+  kExitUsageError = 2,
+  kExitConfigError = kExitUsageError,
+  kExitInputDamaged = 3
+};
+/// The footer runProcess adds to every program's --help.
+extern const char* const kExitCodesHelp;
+
+/// The project's version (CMake's project(VERSION)), which --version prints after the program's name.
+std::string version();
+
+/// A usage error found after parsing: runProcess exits 2 with its message.
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 struct CommonOptions {
   std::string config;     ///< scenario/system YAML file
@@ -71,15 +92,29 @@ CLI::Validator seed();         ///< an unsigned 64-bit integer, without a sign (
 /// /dev/zero would be read until memory runs out) or is "larger than N MB".
 std::string fileProblem(const std::string& path, std::uintmax_t max_bytes = UINTMAX_MAX);
 inline constexpr const char* kNoSuchFile = "no such file";
+/// Throws UsageError (exit 2) naming what ("input log", "--odometry") when path is not a file
+/// that can be read (fileProblem): a missing input is a usage error.
+void requireInputFile(const std::string& path, const std::string& what);
+
+/// -o,--output: where the program writes (a file, or a directory where it writes several).
+CLI::Option* addOutputOption(CLI::App& app, std::string& path, const std::string& help);
+/// --overwrite: replace an existing output (without it, refuseExistingOutput refuses it).
+CLI::Option* addOverwriteFlag(CLI::App& app, bool& overwrite);
+/// Throws UsageError (exit 2) when path exists (a regular file, or a directory that is not
+/// empty) and overwrite is false, naming flag: no program replaces an output without
+/// --overwrite. A device or a FIFO (/dev/null) is written to, not replaced: accepted.
+void refuseExistingOutput(const std::string& path, bool overwrite, const std::string& flag = "--output");
 
 /// Creates the output directory dir (and its parents) and checks that a file can be written in
-/// it: a long experiment finds a bad --out before it computes, not after. Throws
-/// std::runtime_error naming dir and the reason.
-void prepareOutputDir(const std::string& dir);
+/// it: a long experiment finds a bad --output before it computes, not after. Throws
+/// std::runtime_error naming dir and the reason. With overwrite false, a directory that exists
+/// and is not empty is refused first (refuseExistingOutput).
+void prepareOutputDir(const std::string& dir, bool overwrite);
 
 /// Parses the command line and runs body(), turning exceptions into one clear error line and
-/// an exit code (ConfigError -> 2, anything else -> 1). A bad command line exits 2 with CLI11's
-/// message (--help: 0). Returns the process exit code.
+/// an exit code (ConfigError, UsageError -> 2, anything else -> 1). A bad command line exits 2
+/// with CLI11's message. Adds --version (prints "process_name version()", exit 0) and the exit
+/// codes as a footer of --help (exit 0) to app and its subcommands. Returns the exit code.
 int runProcess(CLI::App& app, int argc, char** argv, const CommonOptions& opts,
                const std::string& process_name, const std::function<int()>& body);
 

@@ -1,6 +1,5 @@
 #pragma once
-// Reads an LCM log file directly (lcm::LogFile, no network) and decodes the channels the
-// evaluation needs. A damaged log (truncated tail, corrupt event, undecodable payload) is read
+// Reads an LCM log file directly (no network), event by event. A damaged log (truncated tail, corrupt event, undecodable payload) is read
 // up to and past the damage where possible; every problem is recorded with its event index and
 // byte offset.
 #include <atomic>
@@ -13,8 +12,6 @@
 #include <string>
 #include <vector>
 
-#include "lcmloc/app/config.hpp"
-#include "lcmloc/core/engine.hpp"
 
 namespace lcm {
 struct LogEvent;
@@ -39,35 +36,6 @@ inline double secondsSince(int64_t utime, int64_t t0) {
                      : -(static_cast<double>(utimeSpan(utime, t0)) * 1e-6);
 }
 
-struct TruthSample {
-  int64_t utime = 0;
-  double x = 0, y = 0, heading = 0, distance = 0;
-};
-
-/// One FAULT_EVENTS message: which measurement was faulty (ground truth for scoring).
-struct FaultRecord {
-  int64_t utime = 0;
-  std::string kind;
-  std::string channel;
-  int64_t measurement_seq = 0;
-  double x = 0, y = 0;          ///< true position of M when injected [m]
-  double lateral_offset = 0;    ///< d_m the fault reported [m]
-};
-
-/// A pose published live by the fusion daemon (POSE).
-struct LivePose {
-  int64_t utime = 0;
-  std::string filter;
-  double x = 0, y = 0, theta = 0;
-  int status = 0;
-};
-
-/// A gate decision published live by the fusion daemon (GATE).
-struct LiveDecision {
-  std::string filter;
-  core::GateDecision decision;
-};
-
 /// A problem found while reading: damage of the file or a message that could not be used.
 struct LogIssue {
   int64_t event_index = 0;   ///< index of the event (0-based, counting events read so far); -1: the log as a whole
@@ -82,27 +50,6 @@ void printIssues(std::ostream& os, const std::vector<LogIssue>& issues, std::siz
 /// A warning line when skipped (messages dropped for their utime, see kUtimeLimit) is not 0.
 void printBadUtime(std::ostream& os, int64_t skipped);
 
-struct LogData {
-  std::string path;
-  int64_t file_size = 0;
-  int64_t events_read = 0;        ///< events returned intact by the reader
-  int64_t bytes_unreadable = 0;   ///< bytes skipped over damage
-  bool damaged = false;           ///< some part of the file could not be read
-  bool interrupted = false;       ///< reading stopped early on request (SIGINT)
-  std::map<std::string, int64_t> channel_counts;
-  std::vector<TruthSample> truth;            ///< sorted by utime
-  std::vector<core::EngineInput> inputs;     ///< odometry + ruler detections, in log order
-  int64_t odometry_messages = 0, ruler_messages = 0, ruler_detections = 0;
-  std::vector<FaultRecord> faults;
-  std::vector<LivePose> live_poses;
-  std::vector<LiveDecision> live_decisions;
-  std::vector<LogIssue> issues;              ///< file damage first noticed, then bad messages
-  int64_t bad_utime = 0;                     ///< messages skipped for |utime| >= kUtimeLimit (also in issues)
-
-  /// Something to evaluate: at least one sensor input.
-  bool usable() const { return !inputs.empty(); }
-};
-
 /// One file-name stem per name, all different: letters, digits, '_' and '-' are kept, any other
 /// byte becomes '_'. A name that is already such a stem keeps it; a stem taken by an earlier
 /// name or by a name that is kept as it is gets "_2", "_3", ... (POSE_A.B next to POSE_A_B
@@ -114,8 +61,8 @@ std::vector<std::string> uniqueStems(const std::vector<std::string>& names);
 /// reader also rejects an intact event when the sync word after it is damaged, and cannot say
 /// where an event starts. Damage (a truncated tail, a corrupt event) is skipped by
 /// resynchronising on the next sync word; each damaged stretch is appended to issues with the
-/// index of the event it precedes and its byte offset. readLog, scanLog and the offline replay
-/// (lcmloc-replay) all read through it.
+/// index of the event it precedes and its byte offset. scanLog, readTrajectoryLog and the offline
+/// replay (lcmloc-replay) all read through it.
 class LogScanner {
  public:
   /// Throws std::runtime_error when the file cannot be opened or is not a regular file (a
@@ -176,10 +123,5 @@ struct ScanSummary {
 /// Throws std::runtime_error when the file cannot be opened. stop is polled between events.
 ScanSummary scanLog(const std::string& path, const std::function<void(const RawEvent&)>& on_event,
                     const std::atomic<bool>* stop = nullptr);
-
-/// Reads the log at path. Throws std::runtime_error when the file cannot be opened.
-/// stop (optional) is polled between events; when set, reading ends early.
-LogData readLog(const std::string& path, const common::ChannelConfig& channels,
-                const std::atomic<bool>* stop = nullptr);
 
 }  // namespace lcmloc::eval

@@ -16,6 +16,8 @@
 #include <Eigen/Core>
 
 #include "lcmloc/bus/geodesy.hpp"
+#include "lcmloc/core/chi2.hpp"
+#include "lcmloc/core/scoring.hpp"
 #include "lcmloc/eval/log_reader.hpp"
 
 namespace lcmloc::eval {
@@ -43,22 +45,24 @@ struct TruthPose {
   bool has_heading = true;
 };
 
-/// One gate_decision_t.
-struct GateRecord {
-  int64_t utime = 0;
-  std::string filter, sensor, reason;
-  int dim = 0;                       ///< innovation dimension (the NIS's degrees of freedom)
-  double nis = 0;                    ///< v' S^-1 v (mahalanobis field)
-  bool accepted = false;
-};
+/// One gate_decision_t (core::GateRecord: mahalanobis field as nis).
+using core::GateRecord;
 
 struct TrajectoryLogOptions {
   std::string pose_channel = "POSE";
   bool all_pose_channels = false;    ///< also every other channel named POSE_*
   std::string truth_channel = "GROUND_TRUTH";
   std::string gate_channel = "GATE";
+  std::string fault_channel = "FAULT_EVENTS";  ///< fault_event_t: measurements known to be faults
   /// Needed only when the truth channel holds gps_fix_t (lat/lon -> local x east, y north).
   std::optional<common::Datum> datum;
+};
+
+/// One fault_event_t: the measurement (channel, measurement_seq) is a known fault.
+struct AnnouncedFault {
+  int64_t utime = 0;
+  std::string kind, channel;
+  int64_t measurement_seq = -1;
 };
 
 struct TrajectoryLog {
@@ -71,6 +75,7 @@ struct TrajectoryLog {
   std::vector<TruthPose> truth;      ///< sorted by utime, one sample per utime
   std::string truth_type;            ///< "ground_truth_t", "gps_fix_t" or "" (none decoded)
   std::vector<GateRecord> gates;     ///< in log order
+  std::vector<AnnouncedFault> faults;  ///< in log order
   std::vector<LogIssue> issues;      ///< damage and undecodable/invalid messages, in file order
   int64_t bad_utime = 0;             ///< messages skipped for |utime| >= kUtimeLimit (also in issues)
 };
@@ -100,46 +105,15 @@ enum class TruthMiss { kNone, kBefore, kAfter, kGap };
 std::optional<TruthPose> interpolateTruth(const std::vector<TruthPose>& truth, int64_t utime,
                                           int64_t max_gap_us, TruthMiss* why = nullptr);
 
-/// Quantile of the chi-square distribution with dof (> 0, any size) degrees of freedom.
-double chi2QuantileAnyDof(double p, double dof);
-
-struct ErrorStats {
-  int64_t n = 0;
-  double rmse = 0, mean = 0, median = 0, p95 = 0, max = 0;
-};
-
-/// Sorted-sample percentile, linear between order statistics (numpy's default); q in [0, 1].
-double percentile(std::vector<double> v, double q);
-ErrorStats errorStats(const std::vector<double>& v);   ///< of absolute values
-
-struct ConsistencyStats {
-  int dof = 0;
-  int64_t samples = 0;
-  double mean = 0;
-  double mean_lo = 0, mean_hi = 0;       ///< two-sided bounds of the mean over `samples` draws
-  double sample_lo = 0, sample_hi = 0;   ///< two-sided per-sample interval
-  double fraction_inside = 0;            ///< of samples inside [sample_lo, sample_hi]
-  std::string verdict = "none";          ///< honest, optimistic, conservative, none (no samples)
-  /// Samples of a time series are correlated; the same test with the effective sample size
-  /// n_eff = n / (1 + 2 sum of the autocorrelations) (Geyer's initial positive sequence).
-  double effective_samples = 0;
-  double mean_lo_effective = 0, mean_hi_effective = 0;
-  std::string verdict_effective = "none";
-};
-
-/// Effective sample size of a series (n when uncorrelated, less when positively correlated).
-double effectiveSampleSize(const std::vector<double>& series);
-
-/// Mean of values (each chi-square with its dof when consistent) against the bounds; values
-/// and dofs have equal length. sample bounds use dofs.front() (all equal in practice).
-ConsistencyStats consistency(const std::vector<double>& values, const std::vector<int>& dofs,
-                             double confidence);
-
-struct DriftStats {
-  double length_m = 0;
-  int64_t segments = 0;                  ///< one per scored start with a segment of that length
-  double mean_pct = 0, median_pct = 0, max_pct = 0;
-};
+// The statistics are the scoring library's (lcmloc/core/scoring.hpp).
+using core::chi2QuantileAnyDof;
+using core::ConsistencyStats;
+using core::consistency;
+using core::DriftStats;
+using core::effectiveSampleSize;
+using core::ErrorStats;
+using core::errorStats;
+using core::percentile;
 
 /// One scored estimate.
 struct ScoredPose {
@@ -177,22 +151,30 @@ struct TrackScore {
 TrackScore scoreTrack(const EstimateTrack& track, const std::vector<TruthPose>& truth,
                       const EvaluateOptions& opt);
 
-struct GateGroup {
-  std::string filter, sensor;            ///< "*" when aggregated over all
-  int64_t decisions = 0, accepted = 0, rejected = 0, ignored = 0;
-  std::map<std::string, int64_t> reasons;
-  double mean_dof = 0;                   ///< mean innovation dimension of the accepted ones
-  ConsistencyStats nis;                  ///< NIS of the accepted measurements
-  double nis_mean_all = 0;               ///< mean NIS over every decision with a finite NIS
+/// The decisions of one filter on measurements some of which are announced faults.
+struct FaultGroup {
+  std::string filter;
+  core::FaultCounts counts;
 };
 
-struct GateStats {
-  std::vector<GateGroup> by_filter_sensor, by_filter, by_sensor;  ///< sorted by name
+/// Per filter (sorted by name), its gate decisions counted against the announced faults: a
+/// decision is on a fault when its (sensor, measurement_seq) is a fault's (channel,
+/// measurement_seq).
+std::vector<FaultGroup> faultStatistics(const std::vector<GateRecord>& gates,
+                                        const std::vector<AnnouncedFault>& faults);
+
+/// The recorded estimates against the replay of the same filter (lcmloc-evaluate --filters).
+struct ReplayComparison {
+  std::string filter;                ///< the filter the recorded poses name (the last one)
+  int64_t matched = 0;               ///< recorded estimates with a replayed one at the same utime
+  double max_diff_m = -1;            ///< largest position difference among them (-1: none matched)
 };
 
-/// Counts per (filter, sensor), per filter, per sensor. A decision whose reason is
-/// "dead_reckoning" is ignored (the filter uses no measurement), the others are accepted or
-/// rejected.
-GateStats gateStatistics(const std::vector<GateRecord>& gates, double confidence);
+/// Compares recorded with replayed at equal utime (the last estimate at each utime of each).
+ReplayComparison compareTracks(const EstimateTrack& recorded, const EstimateTrack& replayed);
+
+using core::GateGroup;
+using core::GateStats;
+using core::gateStatistics;
 
 }  // namespace lcmloc::eval

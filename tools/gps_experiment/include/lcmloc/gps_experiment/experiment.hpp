@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "lcmloc/sim/scenario_runner.hpp"
+#include "lcmloc/scenario/scenario_runner.hpp"
 
 namespace lcmloc::gps_experiment {
 
@@ -26,7 +26,7 @@ struct FilterSummary {
 };
 
 struct Result {
-  models::ScenarioResult scenario;
+  scenario::ScenarioResult scenario;
   std::vector<FilterSummary> filters;
   double gps_rmse_all_m = 0;  ///< raw GPS RMSE over the whole run
 };

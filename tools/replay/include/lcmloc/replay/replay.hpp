@@ -21,7 +21,7 @@ struct ReplayOptions {
   std::string input;
   std::string output;              ///< "" = count only, write nothing
   /// Also copy the input events to the output (all channels except the daemon's outputs, the
-  /// heartbeats and LCM_SELF_TEST), so the output log is complete for lcmloc-eval.
+  /// heartbeats and LCM_SELF_TEST), so the output log is complete for lcmloc-evaluate.
   bool with_inputs = false;
   double progress_period_s = 2.0;  ///< [s, wall] between progress lines (<= 0: none)
   /// Two threads: one reads the log and runs the daemon's intake on each message (decoding,

@@ -79,6 +79,13 @@ ImportResult importVictoriaPark(const ImportOptions& opt);
 /// Human report of an import (counts, time span, the first refusals).
 std::string importSummary(const ImportOptions& opt, const ImportResult& r, int max_refusals = 20);
 
+/// lcmloc-import-vp's work after its command line: the CSV files from dir unless given, the
+/// datum and channels from cfg, the import and its summary (importSummary) on stdout. Throws
+/// common::UsageError (exit 2) without both inputs, for a missing input and for an existing
+/// output without overwrite. Returns common::kExitOk.
+int importCommand(const common::SystemConfig& cfg, ImportOptions io, const std::string& dir, int max_refusals,
+                  bool overwrite);
+
 // ---------------------------------------------------------------------------------------------
 struct ExperimentOptions {
   std::vector<std::string> filters{"tvekf", "ukf_gps", "dead_reckoning"};

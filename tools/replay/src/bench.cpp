@@ -1,5 +1,6 @@
-// lcmloc-replay --bench: offline replay throughput on a long synthetic log.
-#include "bench.hpp"
+// lcmloc-replay --bench (bench.hpp): offline replay throughput on a long synthetic log.
+#include "lcmloc/drivers/scenario_map.hpp"
+#include "lcmloc/replay/bench.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -110,6 +111,8 @@ int runBench(const common::SystemConfig& base, const BenchOptions& opts) {
   common::SystemConfig cfg = base;
   cfg.scenario = ovalScenario(base.scenario, OvalTrack{}, opts.duration_s);
   cfg.fusion.shadow.clear();
+  cfg.fusion.map_file = (fs::path(opts.dir) / "synthetic_map.csv").string();  // the oval's markers
+  common::writeScenarioMap(cfg, cfg.fusion.map_file);
 
   /// One measured configuration: filter, fusion.output_every, output file or not, one thread or two.
   struct Case {

@@ -1,16 +1,19 @@
 // In-process scenario: world + sensors stepped in the driver processes' order, feeding one
 // FusionEngine per filter config, then metrics against ground truth.
-#include "lcmloc/sim/scenario_runner.hpp"
+#include "lcmloc/scenario/scenario_runner.hpp"
 
-#include <Eigen/Cholesky>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 #include "lcmloc/core/angles.hpp"
+#include "lcmloc/core/scoring.hpp"
 
-namespace lcmloc::models {
+namespace lcmloc::scenario {
 namespace {
+
+using namespace models;
 
 const char* const kOdometryChannel = "ODOMETRY";
 const char* const kRulerChannel = "MAGRULER";
@@ -47,19 +50,15 @@ core::EngineOutputs outputsFor(FilterRun* run) {
   return out;
 }
 
-double nees(const core::FilterState& s, const TruthState& t) {
+std::optional<double> nees(const core::FilterState& s, const TruthState& t) {
   const Eigen::Vector3d e(s.x(0) - t.x, s.x(1) - t.y, core::wrapAngle(s.x(2) - t.heading));
-  const Eigen::Matrix3d P = s.P.topLeftCorner<3, 3>();
-  const Eigen::LDLT<Eigen::Matrix3d> ldlt(P);
-  if (ldlt.info() != Eigen::Success) return NAN;
-  return e.dot(ldlt.solve(e));
+  return core::nees<3>(e, s.P.topLeftCorner<3, 3>());
 }
 
 void computeMetrics(FilterRun& run, const std::vector<TruthState>& truth, int64_t t0,
                     int64_t period_us, int lockout_rejections) {
   ScenarioFilterResult& r = run.result;
-  double se = 0.0, nees_sum = 0.0;
-  int nees_n = 0;
+  std::vector<double> errors, nees_values;
   for (const auto& s : run.states) {
     const int64_t k = (s.utime - t0) / period_us;
     if (k < 0 || k >= static_cast<int64_t>(truth.size()) || truth[k].utime != s.utime) continue;
@@ -69,30 +68,30 @@ void computeMetrics(FilterRun& run, const std::vector<TruthState>& truth, int64_
     p.truth = core::Pose(t.x, t.y, t.heading);
     p.estimate = s;
     r.track.push_back(p);
-    const double err = std::hypot(s.x(0) - t.x, s.x(1) - t.y);
-    se += err * err;
-    r.max_error_m = std::max(r.max_error_m, err);
-    r.final_error_m = err;
-    const double n = nees(s, t);
-    if (std::isfinite(n)) { nees_sum += n; ++nees_n; }
+    errors.push_back(std::hypot(s.x(0) - t.x, s.x(1) - t.y));
+    const auto n = nees(s, t);
+    if (n && std::isfinite(*n)) nees_values.push_back(*n);
   }
-  if (!r.track.empty()) r.rmse_m = std::sqrt(se / r.track.size());
-  if (nees_n > 0) r.mean_nees = nees_sum / nees_n;
+  const auto e = core::errorStats(errors);
+  r.rmse_m = e.rmse;
+  r.max_error_m = e.max;
+  if (!errors.empty()) r.final_error_m = errors.back();
+  if (!nees_values.empty()) r.mean_nees = core::errorStats(nees_values).mean;
 
+  core::FaultCounts counts;
   int trailing_gate_rejections = 0;
   for (std::size_t i = 0; i < r.decisions.size(); ++i) {
     const auto& d = r.decisions[i];
     const bool fault = r.decision_is_fault[i];
-    if (fault) ++r.faults_total;
-    if (d.reason == "dead_reckoning") continue;  // the filter ignores the ruler: no decision
-    (d.accepted ? r.accepted : r.rejected)++;
-    if (fault) {
-      if (!d.accepted) ++r.faults_rejected;
-    } else {
-      if (!d.accepted) ++r.valid_rejected;
+    core::countDecision(counts, d.accepted, d.reason, fault);
+    if (!fault && !core::isIgnoredDecision(d.reason))
       trailing_gate_rejections = (!d.accepted && d.reason == "gate") ? trailing_gate_rejections + 1 : 0;
-    }
   }
+  r.faults_total = counts.faults_decided;
+  r.faults_rejected = counts.faults_rejected;
+  r.valid_rejected = counts.valid_rejected;
+  r.accepted = counts.accepted;
+  r.rejected = counts.rejected;
   r.locked_out = run.ever_lockout_status || r.lockout_events > 0 ||
                  (lockout_rejections > 0 && trailing_gate_rejections >= lockout_rejections);
 }
@@ -171,4 +170,4 @@ ScenarioResult runScenario(const ScenarioConfig& sc, const std::vector<core::Fil
   return res;
 }
 
-}  // namespace lcmloc::models
+}  // namespace lcmloc::scenario

@@ -1,7 +1,8 @@
 #pragma once
 // In-process scenario: the same world and sensor models the driver processes wrap, stepped in
 // the same order, feeding one or more filters through the fusion engine. Used by the scenario
-// tests and the Monte Carlo command (no LCM, deterministic for a given config and seed).
+// tests, the Monte Carlo and the GPS experiment (no LCM, deterministic for a given config and
+// seed). Scored with the scoring library (lcmloc/core/scoring.hpp).
 #include <map>
 #include <string>
 #include <vector>
@@ -10,7 +11,11 @@
 #include "lcmloc/sim/gnss_sensors.hpp"
 #include "lcmloc/sim/world.hpp"
 
-namespace lcmloc::models {
+namespace lcmloc::scenario {
+
+using models::GpsFixSample;
+using models::ScenarioConfig;
+using models::TruthState;
 
 struct TrackPoint {
   int64_t utime = 0;
@@ -43,4 +48,4 @@ struct ScenarioResult {
 ScenarioResult runScenario(const ScenarioConfig& scenario,
                            const std::vector<core::FilterConfig>& filters, int output_every = 1);
 
-}  // namespace lcmloc::models
+}  // namespace lcmloc::scenario

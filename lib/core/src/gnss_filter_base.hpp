@@ -1,0 +1,154 @@
+#pragma once
+// What the GNSS filters ("tvekf": tvekf_filter.cpp, "ukf_gps": gps_ukf_filter.cpp) share: the
+// state (x, y, theta, speed, distance), the odometry time step with the IMU's forward
+// acceleration, the magnetometer and GPS measurements behind their gates, the lock-out
+// detectors and the GPS-course heading aid (gnss_filters.cpp). Not installed; src/ only.
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "filter_internal.hpp"
+#include "lcmloc/core/filter.hpp"
+
+namespace lcmloc::core::gnss_filter {
+
+enum : int { kX = 0, kY = 1, kTheta = 2, kSpeed = 3, kDistance = 4, kN = 5 };
+
+/// Consecutive gate rejections of one measurement kind. Every n-th rejection in a row is a
+/// lock-out: the caller inflates the covariance of the states that measurement observes, so
+/// the gate, which compares the innovation with that covariance, opens within a bounded
+/// number of rejections (the inflation grows geometrically). An acceptance ends it.
+class Lockout {
+ public:
+  explicit Lockout(int n) : n_(n) {}
+  /// Records a rejection; true when the covariance is to be inflated now.
+  bool reject() {
+    ++count_;
+    if (n_ <= 0 || count_ % n_ != 0) return false;
+    active_ = true;
+    return true;
+  }
+  void accept() { count_ = 0; active_ = false; }
+  bool active() const { return active_; }
+ private:
+  int n_;
+  int count_ = 0;
+  bool active_ = false;
+};
+
+/// One odometry interval as the time update sees it.
+struct Step {
+  double T = 0;          ///< [s]
+  double a = 0;          ///< forward acceleration over the interval [m/s^2]
+  double a_std = 0;      ///< its 1 sigma [m/s^2]
+  bool has_steering = true;
+  double psi = 0;        ///< steering [rad]
+  double delta_theta = 0;  ///< heading increment when !has_steering [rad]
+};
+
+/// What both GNSS filters share: state names, timing, the IMU acceleration of each interval,
+/// the encoder's accumulated distance, gates, lock-outs and the status. A filter supplies its
+/// state's storage, its time update and its heading and position corrections.
+class GnssFilterBase : public Filter {
+ public:
+  explicit GnssFilterBase(const FilterConfig& c)
+      : cfg_(c), g_(c.gnss),
+        gate1_(c.gate.enabled ? c.gate.threshold(1) : std::numeric_limits<double>::infinity()),
+        gate2_(c.gate.enabled ? c.gate.threshold(2) : std::numeric_limits<double>::infinity()),
+        gps_lock_(c.gnss.gps_lockout_rejections), mag_lock_(c.gnss.mag_lockout_rejections) {}
+
+  bool uses(Measurement m) const override { return m != Measurement::Ruler; }
+
+  void stateInto(FilterState& s) const override {
+    s.utime = utime_;
+    fillState(s.x, s.P);
+    detail::setNames(s, names());
+    s.status = status();
+  }
+
+  void initialize(const FilterState& from) override;
+  void predict(const OdometryInput& odo) override;
+  std::optional<GateDecision> update(const ImuInput& m) override;
+  std::optional<GateDecision> update(const GpsInput& gps) override;
+
+  /// An odometry gap: the time update of the next increment spans it already (position from
+  /// speed and heading, speed from the IMU's acceleration); the encoder distance, which lacks the
+  /// gap's travel, is re-based there instead of pulling the distance and speed back.
+  std::string bridgeOdometryGap(const OdometryGap& gap) override {
+    encoder_gap_s_ = gap.seconds;
+    return name() + ": speed and heading carry the position over the gap; encoder distance re-based";
+  }
+
+  /// IMU samples whose forward acceleration was saturated or not finite (not used).
+  int64_t saturatedImuSamples() const override { return saturated_; }
+  /// GPS-course heading aid (gnss.course_distance, tvekf): heading updates accepted / gated.
+  int64_t courseAccepted() const { return course_accepted_; }
+  int64_t courseRejected() const { return course_rejected_; }
+
+ protected:
+  static const std::vector<std::string>& names() {
+    static const std::vector<std::string> n{"x", "y", "theta", "speed", "distance"};
+    return n;
+  }
+  void initialState(Eigen::VectorXd& x, Eigen::MatrixXd& P) const;
+  FilterStatus status() const override;
+  /// Heading variance added over a step by the steering noise, the speed uncertainty (through
+  /// eq. 10) and the heading random walk.
+  double headingNoise(const Step& st, double v, double Pv) const;
+  double headingIncrement(const Step& st, double v) const;
+
+  virtual void fillState(Eigen::VectorXd& x, Eigen::MatrixXd& P) const = 0;
+  virtual void setState(const Eigen::VectorXd& x, const Eigen::MatrixXd& P) = 0;
+  virtual void timeUpdate(const Step& st) = 0;
+  /// Fill d (innovation, mahalanobis, reason, accepted) and correct if it passes the gate.
+  virtual void headingUpdate(double z, double r, GateDecision& d) = 0;
+  virtual double heading() const = 0;
+  virtual void positionUpdate(const Vec2& z, double r, GateDecision& d) = 0;
+  virtual void inflateHeading() = 0;
+  virtual void inflatePosition() = 0;
+  /// Adds the position random walk of dt seconds to the position covariance.
+  virtual void growPosition(double dt) = 0;
+
+  /// GPS-course heading aid (for a vehicle without magnetometer): between two accepted fixes
+  /// at least gnss.course_distance of travel apart, the direction of the GPS chord minus the
+  /// direction of the dead-reckoned chord (odometry integrated along the filter's heading over
+  /// the same stretch) is the heading error, whatever the path's curvature, as long as that error
+  /// was constant over the stretch. Fused as a heading measurement theta + error with variance
+  /// 2 sd^2 / |chord|^2 (+ gnss.course_std^2) behind the 1-dof gate; then re-anchored.
+  void courseAid(const Vec2& z, double sd);
+
+  FilterConfig cfg_;
+  GnssConfig g_;
+  bool use_course_ = false;  ///< the GPS-course heading aid applies (tvekf)
+  double gate1_, gate2_;  ///< chi-square gates of 1-D (heading) and 2-D (position) innovations
+  double enc_sum_ = 0;    ///< encoder distance accumulated since the start [m] (eq. 5's s(k))
+  double encoder_gap_s_ = 0;  ///< an odometry gap the next increment follows [s] (bridgeOdometryGap)
+
+ private:
+  int64_t utime_ = 0;
+  bool have_odo_time_ = false;
+  bool clock_from_state_ = false;  ///< the clock runs from the state initialize() took
+  static constexpr int64_t kMaxHandOverGapUs = 500000;
+  int64_t last_odo_utime_ = 0;
+  double acc_sum_ = 0;
+  int acc_n_ = 0;
+  int64_t saturated_ = 0;
+  bool have_fix_ = false;
+  int64_t last_fix_utime_ = 0;
+  int64_t last_position_utime_ = 0;  ///< time the position prediction has reached
+  Lockout gps_lock_, mag_lock_;
+  bool course_open_ = false;
+  Vec2 course_anchor_ = Vec2::Zero(), course_dr_ = Vec2::Zero();
+  double course_dist_ = 0;
+  int64_t course_accepted_ = 0, course_rejected_ = 0;
+};
+
+/// The time-varying EKF of Choi and Kong ("tvekf"; tvekf_filter.cpp).
+std::unique_ptr<Filter> makeTvEkf(const FilterConfig& cfg);
+/// The UKF over the same sensors ("ukf_gps"; gps_ukf_filter.cpp).
+std::unique_ptr<Filter> makeGpsUkf(const FilterConfig& cfg);
+
+}  // namespace lcmloc::core::gnss_filter
