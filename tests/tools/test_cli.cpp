@@ -101,7 +101,6 @@ TEST(CommandLine, AMissingInputFileIsAUsageError) {
   for (const auto& [name, args] : std::vector<std::pair<std::string, std::string>>{
            {"lcmloc-replay", missing + " -o " + (dir / "o.lcmlog").string()},
            {"lcmloc-evaluate", missing + " -o " + (dir / "e").string()},
-           {"lcmloc-eval", missing + " -o " + (dir / "e").string()},
            {"lcmloc-log", "info " + missing},
            {"lcmloc-landmark-experiment", "--log " + missing + " -o " + (dir / "l").string()},
            {"lcmloc-import-vp", "--odometry " + missing + " --gps " + missing + " -o " + (dir / "v").string()}}) {

@@ -571,9 +571,9 @@ TEST_F(EvaluateReplayTest, CommandLineOnADamagedLogWritesTheReportAndExits3) {
 
 TEST_F(EvaluateReplayTest, CommandLineFailsWhenNothingIsUsable) {
   const std::string opts = " --filters " + kAllFilters + " --no-plots --overwrite -o " + file("out");
-  EXPECT_NE(evaluate(file("missing.lcmlog"), opts), 0);
+  EXPECT_EQ(evaluate(file("missing.lcmlog"), opts), 2);  // a usage error, as in every tool
   fs::create_directories(file("adir"));
-  EXPECT_EQ(evaluate(file("adir"), opts), 1);
+  EXPECT_EQ(evaluate(file("adir"), opts), 2);
   EXPECT_NE(slurp(file("stdout.txt")).find("is a directory"), std::string::npos) << slurp(file("stdout.txt"));
   { std::ofstream empty(file("empty.lcmlog")); }
   EXPECT_EQ(evaluate(file("empty.lcmlog"), opts), 1);
