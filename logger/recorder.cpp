@@ -9,7 +9,7 @@
 
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/core/text.hpp"
+#include "lcmloc/app/text.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/logio/types.hpp"
 #include "lcmloc/logger_status_t.hpp"
@@ -165,7 +165,7 @@ void Recorder::onMessage(const std::string& ch, const uint8_t* data, std::size_t
   if (!own && other_.received == 0)
     spdlog::warn("more than {} channels: '{}' and every later new channel are counted together as '{}' (their "
                  "sequence gaps are not followed); every message is still recorded",
-                 kMaxChannels, core::printable(ch), kOtherChannels);
+                 kMaxChannels, common::printable(ch), kOtherChannels);
   ++s.received;
   int64_t seq = 0;
   const TypeInfo* type = findType(data, size);
@@ -184,11 +184,11 @@ void Recorder::onMessage(const std::string& ch, const uint8_t* data, std::size_t
       if (!sequences_full_)
         spdlog::warn("more than {} sequences (channels, heartbeat processes): the sequence gaps of '{}' and of "
                      "every later new one are not counted",
-                     kMaxSequences, core::printable(key));
+                     kMaxSequences, common::printable(key));
       sequences_full_ = true;
     } else if (own) {
       const auto gap = gaps_.observe(key, seq);
-      const std::string shown = gap.missing || gap.restarted || gap.ignored ? core::printable(key) : std::string();
+      const std::string shown = gap.missing || gap.restarted || gap.ignored ? common::printable(key) : std::string();
       if (gap.ignored) {
         ++s.ignored;
         s.gaps -= gap.uncounted;
@@ -287,7 +287,7 @@ int Recorder::finish() {
 void Recorder::summary() const {
   const auto w = writer_.stats();
   for (const auto& [ch, s] : channels()) {
-    spdlog::info("  {:<24} {:>8} messages, {} sequence gaps, {} dropped{}", core::printable(ch), s.received, s.gaps,
+    spdlog::info("  {:<24} {:>8} messages, {} sequence gaps, {} dropped{}", common::printable(ch), s.received, s.gaps,
                  s.dropped, s.ignored ? fmt::format(", {} seq(s) ignored", s.ignored) : "");
   }
   const auto files = writer_.files();

@@ -7,7 +7,8 @@
 #include <spdlog/spdlog.h>
 
 #include "lcmloc/bus/convert.hpp"
-#include "lcmloc/core/text.hpp"
+#include "lcmloc/core/time_guard.hpp"
+#include "lcmloc/app/text.hpp"
 #include "lcmloc/app/csv.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 
@@ -50,30 +51,33 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
   out.on_decision = [this](const std::string& f, bool, const core::GateDecision& d) {
     bus_.publish(cfg_.channels.gate, common::toLcm(d, f, out_seq_[cfg_.channels.gate]++));
     if (!d.accepted && d.reason == "gate")
-      spdlog::info("{}: {} seq {} rejected by the gate (tau = {:.2f} > {:.3f})", f, core::printable(d.sensor),
+      spdlog::info("{}: {} seq {} rejected by the gate (tau = {:.2f} > {:.3f})", f, common::printable(d.sensor),
                    d.measurement_seq, d.mahalanobis, d.gate);
   };
-  out.on_event = [this](const std::string& event, const std::string& detail, int64_t utime) {
+  out.on_event = [this](const core::EngineEvent& e) {
     event_seen_ = true;
-    if (event == "too_old") {
-      ++rejected_;
-      if (log_throttle_.allow("too_old"))
-        spdlog::warn("rejected input: {} (older than the {:.3f} s reorder window)", core::printable(detail),
-                     cfg_.fusion.reorder_window);
-      publishStatus("rejected_input", "too old: " + detail, utime);
-      return;
+    const std::string detail = core::eventText(e);
+    switch (e.kind) {
+      case core::EventKind::TooOld:
+        ++rejected_;
+        if (log_throttle_.allow("too_old"))
+          spdlog::warn("rejected input: {} (older than the {:.3f} s reorder window)", common::printable(detail),
+                       cfg_.fusion.reorder_window);
+        publishStatus("rejected_input", "too old: " + detail, e.utime);
+        return;
+      case core::EventKind::TooNew:  // the time-jump guard dropped it (fusion.max_time_jump)
+        ++rejected_;
+        if (log_throttle_.allow("too_new")) spdlog::warn("rejected input: {}", common::printable(detail));
+        publishStatus("rejected_input", "too new: " + detail, last_utime_);
+        return;
+      case core::EventKind::OdometryGap:
+      case core::EventKind::Ambiguous:  // the estimate may be off: a warning
+        spdlog::warn("{}: {}", core::eventName(e.kind), common::printable(detail));
+        break;
+      default:
+        spdlog::info("{}: {}", core::eventName(e.kind), common::printable(detail));
     }
-    if (event == "too_new") {  // the time-jump guard dropped it (fusion.max_time_jump)
-      ++rejected_;
-      if (log_throttle_.allow("too_new")) spdlog::warn("rejected input: {}", core::printable(detail));
-      publishStatus("rejected_input", "too new: " + detail, last_utime_);
-      return;
-    }
-    if (event == "odometry_gap" || event == "ambiguous")  // the estimate may be off: a warning
-      spdlog::warn("{}: {}", event, core::printable(detail));
-    else
-      spdlog::info("{}: {}", event, core::printable(detail));
-    publishStatus(event, detail, utime);
+    publishStatus(core::eventName(e.kind), detail, e.utime);
   };
   core::MarkerMap map;  // from the map file only ("" = no map); the simulator writes its own with lcmloc-sim --write-map
   if (!cfg.fusion.map_file.empty()) {
@@ -122,7 +126,7 @@ void FusionDaemon::release(const std::optional<core::FilterState>& init, const s
   if (held_dropped_ > 0)
     detail += fmt::format("; {} inputs queued while waiting were dropped, the oldest first (more than {} came in)",
                           held_dropped_, kMaxHeld);
-  spdlog::info("started: {}", core::printable(detail));
+  spdlog::info("started: {}", common::printable(detail));
   publishStatus("started", detail, utime);
   auto held = std::move(held_);
   held_.clear();
@@ -148,14 +152,14 @@ bool FusionDaemon::checkEcho(const lcmloc::pose_t& m) {
         "another process publishes on {} (seq {}, utime {}, filter {}; this daemon's next seq is {}): a second fusion "
         "daemon on this bus? Its poses interleave with these; stop one ({} so far)",
         cfg_.channels.pose, m.seq, m.utime, m.filter, pose_seqs_, foreign_outputs_);
-    spdlog::warn("{}", core::printable(detail));
+    spdlog::warn("{}", common::printable(detail));
     publishStatus("foreign_output", detail, last_utime_);
   }
   return true;
 }
 
 void FusionDaemon::warn(const std::string& event, const std::string& detail) {
-  spdlog::warn("{}", core::printable(detail));
+  spdlog::warn("{}", common::printable(detail));
   publishStatus(event, detail, last_utime_);
 }
 
@@ -165,16 +169,16 @@ void FusionDaemon::reportSeq(const IntakeItem& item) {
   gaps_ += gap.missing - gap.uncounted;  // (the tracker's count: a small jump is taken back when it was an outlier)
   if (gap.ignored) {  // a lone corrupt seq: neither a loss nor a restart (and maybe a gap too)
     const std::string what = gap.describeIgnored(ch);
-    if (log_throttle_.allow("ignored:" + ch)) spdlog::warn("{}", core::printable(what));
+    if (log_throttle_.allow("ignored:" + ch)) spdlog::warn("{}", common::printable(what));
     publishStatus("seq_ignored", what, last_utime_);
   }
   if (gap) {
     const std::string what = gap.describe(ch);
-    if (log_throttle_.allow("gap:" + ch)) spdlog::warn("{}", core::printable(what));
+    if (log_throttle_.allow("gap:" + ch)) spdlog::warn("{}", common::printable(what));
     publishStatus("drop", what, last_utime_);
   } else if (gap.restarted) {
     const std::string what = gap.describeRestart(ch);
-    if (log_throttle_.allow("restart:" + ch)) spdlog::warn("{}", core::printable(what));
+    if (log_throttle_.allow("restart:" + ch)) spdlog::warn("{}", common::printable(what));
     publishStatus("source_restart", what, last_utime_);
   }
 }
@@ -182,13 +186,13 @@ void FusionDaemon::reportSeq(const IntakeItem& item) {
 void FusionDaemon::reject(const std::string& ch, int64_t seq, int64_t utime, const std::string& why) {
   ++rejected_;
   const std::string detail = ch + " seq " + std::to_string(seq) + ": " + why;
-  if (log_throttle_.allow("reject:" + ch)) spdlog::warn("rejected input: {}", core::printable(detail));
+  if (log_throttle_.allow("reject:" + ch)) spdlog::warn("rejected input: {}", common::printable(detail));
   publishStatus("rejected_input", detail, utime > 0 ? utime : last_utime_);
 }
 
 void FusionDaemon::decodeError(const std::string& ch, const std::string& why) {
   ++rejected_;
-  if (log_throttle_.allow("decode:" + ch)) spdlog::warn("rejected input: {}: {}", core::printable(ch), why);
+  if (log_throttle_.allow("decode:" + ch)) spdlog::warn("rejected input: {}: {}", common::printable(ch), why);
   publishStatus("rejected_input", ch + ": " + why, last_utime_);
 }
 
@@ -219,8 +223,8 @@ void FusionDaemon::checkResumeGap(const core::EngineInput& in) {
   const std::string detail = fmt::format(
       "{} seq {}: the first input comes {:.3f} s of message time after the state this daemon started from (utime {}): "
       "the motion in between was not seen (the filters bridge it: odometry_gap)",
-      in.channel.str(), in.seq, (static_cast<double>(in.utime) - static_cast<double>(*init_utime_)) * 1e-6, *init_utime_);
-  spdlog::warn("{}", core::printable(detail));
+      in.channel, in.seq, (static_cast<double>(in.utime) - static_cast<double>(*init_utime_)) * 1e-6, *init_utime_);
+  spdlog::warn("{}", common::printable(detail));
   publishStatus("resume_gap", detail, in.utime);
 }
 
@@ -251,19 +255,14 @@ DaemonIntake::DaemonIntake(const common::SystemConfig& cfg) : cfg_(cfg), frame_(
 void DaemonIntake::start(IntakeItem& out, IntakeItem::Kind kind, const std::string& ch, int64_t seq, int64_t utime) {
   out.kind = kind;
   out.seq_event = false;
-  if (!core::sameText(channel_, ch)) channel_ = ch;  // (one name lookup per change of channel)
-  out.input.channel = channel_;
+  out.input.channel = ch;
   out.input.seq = seq;
   out.input.utime = utime;
 }
 
 void DaemonIntake::tracked(IntakeItem& out, const std::string& ch, int64_t seq, int64_t utime) {
   start(out, IntakeItem::Kind::Nothing, ch, seq, utime);
-  // The tracker's last key is the channel of the tracked message before: on that channel again
-  // (the usual case) the key need not be compared again.
-  const bool same = channel_ == tracked_channel_;
-  tracked_channel_ = channel_;
-  if (same ? gaps_.followsLast(seq) : gaps_.follows(ch, seq)) return;
+  if (gaps_.follows(ch, seq)) return;
   const common::SeqGap gap = gaps_.observe(ch, seq);
   if (gap.missing > 0 || gap.uncounted > 0 || gap.ignored || gap.restarted) {
     out.seq_event = true;
@@ -358,7 +357,7 @@ void DaemonIntake::control(const std::string& ch, const lcmloc::fusion_control_t
         fc = common::parseFilterConfig(params, fc, ch, "parameters");
       } catch (const std::exception& e) {
         out.kind = IntakeItem::Kind::Refused;
-        out.more().note = "refused switch to '" + core::printable(m.filter) + "': " + core::printable(e.what());
+        out.more().note = "refused switch to '" + common::printable(m.filter) + "': " + common::printable(e.what());
         out.more().why = ch + " seq " + std::to_string(m.seq) + ": switch to '" + m.filter + "': " + e.what();
         return;
       }
@@ -387,7 +386,7 @@ std::string FusionDaemon::poseChannel(const std::string& filter, bool active) co
 void FusionDaemon::publishState(const std::string& filter, bool active, const core::FilterState& s) {
   PoseOut* po = nullptr;
   for (auto& p : pose_out_)
-    if (p.active == active && core::sameText(p.filter, filter)) {
+    if (p.active == active && p.filter == filter) {
       po = &p;
       break;
     }
@@ -428,7 +427,7 @@ void FusionDaemon::publishStatus(const std::string& event, const std::string& de
   m.filter = engine_->activeFilter();
   m.status = static_cast<int32_t>(last_status_);
   m.event = event;
-  m.detail = core::printable(detail);  // names from the bus inside: no control characters on the bus again
+  m.detail = common::printable(detail);  // names from the bus inside: no control characters on the bus again
   m.messages_in = messages_in_;
   m.messages_used = engine_->counters().processed;
   m.messages_rejected = rejected_;

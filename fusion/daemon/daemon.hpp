@@ -87,8 +87,6 @@ class DaemonIntake {
   const common::SystemConfig& cfg_;
   common::SeqTracker gaps_;
   common::LocalFrame frame_;  ///< lat/lon of GPS fixes -> local metric frame (cfg.datum)
-  core::ChannelName channel_;  ///< the channel of the message before
-  core::ChannelName tracked_channel_;  ///< the channel of the seq-tracked message before
 };
 
 /// The daemon is written against common::MessageBus: lcmloc-fusion runs it over LCM, the

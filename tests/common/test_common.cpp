@@ -16,6 +16,7 @@
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/drivers/sim_convert.hpp"
 #include "lcmloc/app/process.hpp"
+#include "lcmloc/app/text.hpp"
 #include "lcmloc/bus/transport.hpp"
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/heartbeat_t.hpp"
@@ -980,4 +981,17 @@ TEST(Process, HeartbeatPublishesNameStateAndCounters) {
   ASSERT_EQ(got[0].num_counters, 1);
   EXPECT_EQ(got[0].counter_names[0], "n");
   EXPECT_EQ(got[0].counters[0], 7);
+}
+
+TEST(Printable, ControlCharactersAndInvalidUtf8BecomeQuestionMarks) {
+  EXPECT_EQ(common::printable("POSE_A.b-1"), "POSE_A.b-1");
+  EXPECT_EQ(common::printable("a\nb\x1b[2J\x07\x7f"), "a?b?[2J??");
+  // C1 controls in UTF-8 (U+009B is CSI, ESC [ in one character), kept: text beyond them.
+  EXPECT_EQ(common::printable("\xc2\x9b" "2J\xc2\x9d" "0;x\xc2\x9c"), "?2J?0;x?");
+  EXPECT_EQ(common::printable("caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x9a\x97 \xc2\xa0"), "caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x9a\x97 \xc2\xa0");
+  // Not UTF-8: stray continuation and lead bytes, an overlong '/', a surrogate, a cut sequence.
+  EXPECT_EQ(common::printable("\xff\xfe\x80"), "???");
+  EXPECT_EQ(common::printable("\xc0\xaf"), "??");
+  EXPECT_EQ(common::printable("\xed\xa0\x80"), "???");
+  EXPECT_EQ(common::printable("ok\xe2\x82"), "ok??");
 }

@@ -9,13 +9,11 @@
 #include <thread>
 #include <vector>
 
-#include "lcmloc/core/channel_name.hpp"
 #include "lcmloc/core/engine.hpp"
 #include "lcmloc/core/filter.hpp"
 #include "lcmloc/core/odometry_batch.hpp"
 #include "lcmloc/core/vehicle_model.hpp"
 #include "lcmloc/core/reorder.hpp"
-#include "lcmloc/core/text.hpp"
 #include "lcmloc/core/time_guard.hpp"
 
 using namespace lcmloc::core;
@@ -67,9 +65,9 @@ struct Recorder {
       log.push_back("decision:" + f + ":" + d.reason);
       if (active) decisions.push_back(d);
     };
-    o.on_event = [this](const std::string& e, const std::string& detail, int64_t utime) {
-      log.push_back("event:" + e);
-      events.push_back({e, detail, utime});
+    o.on_event = [this](const EngineEvent& e) {
+      log.push_back(std::string("event:") + eventName(e.kind));
+      events.push_back({eventName(e.kind), eventText(e), e.utime});
     };
     return o;
   }
@@ -411,19 +409,6 @@ TEST(Engine, AFilterWhoseStateRunsAwayStartsOverInsteadOfPublishingIt) {
   EXPECT_EQ(Eigen::VectorXd(out.x.head(3)), cfg.filter.initial_pose);
 }
 
-TEST(Printable, ControlCharactersAndInvalidUtf8BecomeQuestionMarks) {
-  EXPECT_EQ(printable("POSE_A.b-1"), "POSE_A.b-1");
-  EXPECT_EQ(printable("a\nb\x1b[2J\x07\x7f"), "a?b?[2J??");
-  // C1 controls in UTF-8 (U+009B is CSI, ESC [ in one character), kept: text beyond them.
-  EXPECT_EQ(printable("\xc2\x9b" "2J\xc2\x9d" "0;x\xc2\x9c"), "?2J?0;x?");
-  EXPECT_EQ(printable("caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x9a\x97 \xc2\xa0"), "caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x9a\x97 \xc2\xa0");
-  // Not UTF-8: stray continuation and lead bytes, an overlong '/', a surrogate, a cut sequence.
-  EXPECT_EQ(printable("\xff\xfe\x80"), "???");
-  EXPECT_EQ(printable("\xc0\xaf"), "??");
-  EXPECT_EQ(printable("\xed\xa0\x80"), "???");
-  EXPECT_EQ(printable("ok\xe2\x82"), "ok??");
-}
-
 TEST(UnusableState, PositionsAndVariancesBeyondAnyLocalFrameAreRefused) {
   FilterState s;
   s.x = Eigen::Vector3d(kMaxAbsPosition, -kMaxAbsPosition, 0.0);
@@ -735,8 +720,8 @@ struct StateTrace {
     o.on_state = [this](const std::string&, bool active, const FilterState& s) {
       if (active) states.push_back(s);
     };
-    o.on_event = [this](const std::string& e, const std::string& detail, int64_t) {
-      events.push_back(e + ": " + detail);
+    o.on_event = [this](const EngineEvent& e) {
+      events.push_back(eventName(e.kind) + std::string(": ") + eventText(e));
     };
     return o;
   }
@@ -825,31 +810,4 @@ TEST(Engine, InputsFarInThePastAreDroppedAsTooOldUnlessThreeInARowStartANewTimeB
   ASSERT_EQ(after.states.size(), clean.states.size() + 1);  // + the corrupt input's
   EXPECT_EQ(after.states.back().x, clean.states.back().x);
   EXPECT_EQ(after.states.back().P, clean.states.back().P);
-}
-
-TEST(ChannelNameTest, OneCopyPerNameWhereverAndOnWhicheverThreadItIsMade) {
-  const std::string odo = "ODOMETRY";
-  const ChannelName a(odo), b(std::string_view("ODOMETRY_AND_MORE").substr(0, 8)), c("MAGRULER");
-  EXPECT_TRUE(a == b);
-  EXPECT_EQ(&a.str(), &b.str());  // the same copy
-  EXPECT_FALSE(a == c);
-  EXPECT_TRUE(a != c);
-  EXPECT_TRUE(a == odo);
-  EXPECT_TRUE(c == "MAGRULER");
-  EXPECT_TRUE(c < a);  // by the names, not by where they are stored
-  EXPECT_FALSE(a < c);
-  EXPECT_EQ(a + " seq 3", "ODOMETRY seq 3");
-  EXPECT_EQ("on " + c, "on MAGRULER");
-  EXPECT_TRUE(ChannelName().empty());
-  EXPECT_TRUE(ChannelName() == ChannelName(""));
-  // Made at once on several threads, a new name is still stored once.
-  std::vector<const std::string*> seen(8);
-  std::vector<std::thread> threads;
-  for (std::size_t i = 0; i < seen.size(); ++i)
-    threads.emplace_back([&seen, i] {
-      for (int k = 0; k < 1000; ++k) seen[i] = &ChannelName("CHANNEL_" + std::to_string(k)).str();
-    });
-  for (auto& t : threads) t.join();
-  for (const std::string* p : seen) EXPECT_EQ(p, &ChannelName("CHANNEL_999").str());
-  EXPECT_EQ(*seen[0], "CHANNEL_999");
 }

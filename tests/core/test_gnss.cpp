@@ -386,7 +386,7 @@ TEST(GnssEngine, MeasurementsGoOnlyToFiltersThatUseThem) {
   std::vector<std::string> events;
   EngineOutputs out;
   out.on_decision = [&](const std::string& f, bool, const GateDecision& d) { decisions.push_back({f, d}); };
-  out.on_event = [&](const std::string& e, const std::string&, int64_t) { events.push_back(e); };
+  out.on_event = [&](const EngineEvent& e) { events.push_back(eventName(e.kind)); };
   MarkerMap map{{0, 100.0, 0.0}};
   FusionEngine engine(ec, map, out);
   int64_t t = 1'000'000, seq = 0;
@@ -419,7 +419,7 @@ TEST(GnssEngine, LockoutAndRecoveryEventsForGps) {
   ec.filter.p0_diag = Vec3(1.0, 1.0, 0.01);
   std::vector<std::string> events;
   EngineOutputs out;
-  out.on_event = [&](const std::string& e, const std::string&, int64_t) { events.push_back(e); };
+  out.on_event = [&](const EngineEvent& e) { events.push_back(eventName(e.kind)); };
   FusionEngine engine(ec, {}, out);
   for (int k = 0; k < 30; ++k) {
     const int64_t t = 1'000'000 + k * 1'000'000;
@@ -441,7 +441,7 @@ TEST(GnssEngine, SaturatedImuStretchesAreReportedOncePerStretch) {
   ec.shadow = {"tvekf"};
   std::vector<std::pair<std::string, std::string>> events;
   EngineOutputs out;
-  out.on_event = [&](const std::string& e, const std::string& d, int64_t) { events.push_back({e, d}); };
+  out.on_event = [&](const EngineEvent& e) { events.push_back({eventName(e.kind), eventText(e)}); };
   FusionEngine engine(ec, {}, out);
   for (int k = 0; k < 100; ++k) {
     const int64_t t = 1'000'000 + k * 10'000;
@@ -494,7 +494,7 @@ TEST(GnssEngine, ABrokenFilterIsRepairedBySwitchAndSetPoseNotFatal) {
   ec.reorder_window_us = 0;
   std::vector<std::pair<std::string, std::string>> events;
   EngineOutputs out;
-  out.on_event = [&](const std::string& e, const std::string& d, int64_t) { events.emplace_back(e, d); };
+  out.on_event = [&](const EngineEvent& e) { events.emplace_back(eventName(e.kind), eventText(e)); };
   FusionEngine engine(ec, {}, out);
   int64_t t = 1'000'000, seq = 0;
   for (int k = 0; k < 10; ++k, t += 10'000) {

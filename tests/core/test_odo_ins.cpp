@@ -49,7 +49,7 @@ struct Recorder {
   std::vector<GateDecision> decisions;
   EngineOutputs outputs() {
     EngineOutputs o;
-    o.on_event = [this](const std::string& e, const std::string& d, int64_t) { events.emplace_back(e, d); };
+    o.on_event = [this](const EngineEvent& e) { events.emplace_back(eventName(e.kind), eventText(e)); };
     o.on_decision = [this](const std::string&, bool active, const GateDecision& d) {
       if (active) decisions.push_back(d);
     };
@@ -642,7 +642,7 @@ TEST(OdoInsFilter, AnOdometryGapIsBridgedByTheInsAndTheIncrementAfterItIsNoSpeed
     o.on_state = [&](const std::string&, bool active, const FilterState& s) {
       if (active) states.push_back(s);
     };
-    o.on_event = [&](const std::string& e, const std::string& d, int64_t) { events.push_back(e + ": " + d); };
+    o.on_event = [&](const EngineEvent& e) { events.push_back(eventName(e.kind) + std::string(": ") + eventText(e)); };
     FusionEngine e(ec, {}, o);
     const int64_t t0 = 1000000;
     int64_t seq = 0;

@@ -51,7 +51,7 @@ struct Drive {
     EngineOutputs o;
     o.on_state = [&](const std::string& f, bool, const FilterState& s) { states[f].push_back({s.utime, s}); };
     o.on_decision = [&](const std::string& f, bool, const GateDecision& d) { decisions[f].push_back(d); };
-    o.on_event = [&](const std::string& e, const std::string& d, int64_t) { events.emplace_back(e, d); };
+    o.on_event = [&](const EngineEvent& e) { events.emplace_back(eventName(e.kind), eventText(e)); };
     FusionEngine engine(cfg, line(30), o);
     const int64_t t0 = 1000000, dt = 10000;
     double y = 0.0;
@@ -207,7 +207,7 @@ TEST(OdometryGap, ASlowSenderWhoseSeqFollowsAndAShortLossAreNoGap) {
   // Odometry at 2 Hz, seq following: each increment covers its interval, nothing was lost.
   std::vector<std::pair<std::string, std::string>> events;
   EngineOutputs o;
-  o.on_event = [&](const std::string& e, const std::string& d, int64_t) { events.emplace_back(e, d); };
+  o.on_event = [&](const EngineEvent& e) { events.emplace_back(eventName(e.kind), eventText(e)); };
   EngineConfig c = config(true);
   FusionEngine e(c, line(5), o);
   int64_t seq = 0;
@@ -235,7 +235,7 @@ TEST(OdometryGap, ARestartedSenderIsAGapAndOffMeansOff) {
   for (const bool on : {true, false}) {
     std::vector<std::string> events;
     EngineOutputs o;
-    o.on_event = [&](const std::string& e, const std::string& d, int64_t) { events.push_back(e + ": " + d); };
+    o.on_event = [&](const EngineEvent& e) { events.push_back(eventName(e.kind) + std::string(": ") + eventText(e)); };
     FusionEngine e(config(on), line(5), o);
     for (int k = 1; k <= 100; ++k) {  // seq 1..100, then the driver restarts 2 s later at seq 0
       OdometryInput odo;
@@ -338,7 +338,7 @@ TEST(OdometryGap, RulerDetectionsWhileTheOdometryIsMissingAreRefusedNamingTheMis
   std::vector<std::pair<std::string, std::string>> events;
   std::vector<std::string> reasons;
   EngineOutputs o;
-  o.on_event = [&](const std::string& e, const std::string& d, int64_t) { events.emplace_back(e, d); };
+  o.on_event = [&](const EngineEvent& e) { events.emplace_back(eventName(e.kind), eventText(e)); };
   o.on_decision = [&](const std::string& f, bool, const GateDecision& d) { reasons.push_back(f + ":" + d.reason); };
   FusionEngine e(config(true), line(30), o);
   const int64_t t0 = 1000000;
@@ -413,7 +413,7 @@ TEST(OdometryGap, TheFirstOdometryLongAfterTheStartStateIsBridged) {
     cfg.reorder_window_us = 0;
     cfg.odometry_gap.resume_period_us = resume_period_us;
     EngineOutputs o;
-    o.on_event = [&](const std::string& e, const std::string& d, int64_t) { events->push_back(e + ": " + d); };
+    o.on_event = [&](const EngineEvent& e) { events->push_back(eventName(e.kind) + std::string(": ") + eventText(e)); };
     FusionEngine engine(cfg, line(30), o);
     FilterState start;
     start.utime = 5000000;

@@ -474,7 +474,7 @@ TEST(DaemonIntakeTest, ConvertsOdometryInPlaceIntoAnItemOfAnyKind) {
   r.quality = 0.9;
   intake.ruler(cfg.channels.magruler.front(), r, item);
   ASSERT_EQ(item.kind, fusion::IntakeItem::Kind::Input);
-  ASSERT_TRUE(std::holds_alternative<core::Boxed<core::RulerDetection>>(item.input.payload));
+  ASSERT_TRUE(std::holds_alternative<core::RulerDetection>(item.input.payload));
 
   lcmloc::odometry_t o{};
   o.utime = 2000;
@@ -488,7 +488,7 @@ TEST(DaemonIntakeTest, ConvertsOdometryInPlaceIntoAnItemOfAnyKind) {
   ASSERT_TRUE(std::holds_alternative<core::OdometryInput>(item.input.payload));
   const auto expect = [&](const lcmloc::odometry_t& m) {
     const auto& in = std::get<core::OdometryInput>(item.input.payload);
-    EXPECT_EQ(item.input.channel.str(), cfg.channels.odometry);
+    EXPECT_EQ(item.input.channel, cfg.channels.odometry);
     EXPECT_EQ(item.input.seq, m.seq);
     EXPECT_EQ(item.input.utime, m.utime);
     EXPECT_EQ(in.utime, m.utime);

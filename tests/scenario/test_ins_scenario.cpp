@@ -143,7 +143,7 @@ MidDrive joinWhileMoving(double t_join, bool reset, int odometry_divider = 1) {
         in.channel = "FUSION_CONTROL";
         in.seq = 0;
         in.utime = st.truth.utime;
-        in.payload = core::Boxed<core::ControlCommand>(core::ResetFilter{});
+        in.payload = core::ControlCommand(core::ResetFilter{});
         e->push(std::move(in));
       } else {
         e.emplace(ec, core::MarkerMap{}, out);

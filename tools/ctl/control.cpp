@@ -15,7 +15,7 @@
 
 #include "lcmloc/app/process.hpp"
 #include "lcmloc/bus/transport.hpp"
-#include "lcmloc/core/text.hpp"
+#include "lcmloc/app/text.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/imu_t.hpp"
 #include "lcmloc/odometry_t.hpp"
@@ -167,8 +167,8 @@ int send(const common::SystemConfig& cfg, const std::string& lcm_url, lcmloc::fu
   }
   std::string detail = answer->detail;  // without the "CHANNEL seq N: " naming this command
   if (const auto at = detail.find(tag + ": "); at != std::string::npos) detail.erase(at, tag.size() + 2);
-  std::cout << fmt::format("{}: {} (filter {})\n", answer->event, core::printable(detail),
-                           core::printable(answer->filter));
+  std::cout << fmt::format("{}: {} (filter {})\n", answer->event, common::printable(detail),
+                           common::printable(answer->filter));
   return answer->event == "ack" ? common::kExitOk : kExitRefused;
 }
 

@@ -5,7 +5,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/core/text.hpp"
+#include "lcmloc/app/text.hpp"
 
 namespace lcmloc::common {
 
@@ -60,8 +60,8 @@ TruthDriver::TruthDriver(Bus& bus, const SystemConfig& cfg, std::string process,
 void TruthDriver::onMessage(const std::string& ch, const lcmloc::ground_truth_t& m) {
   ++received_;
   const auto gap = gaps_.observe(ch, m.seq);
-  if (gap.ignored && throttle_.allow(ch + ":ignored")) spdlog::warn("{}", core::printable(gap.describeIgnored(ch)));
-  if (gap && throttle_.allow(ch)) spdlog::warn("{}", core::printable(gap.describe(ch)));
+  if (gap.ignored && throttle_.allow(ch + ":ignored")) spdlog::warn("{}", common::printable(gap.describeIgnored(ch)));
+  if (gap && throttle_.allow(ch)) spdlog::warn("{}", common::printable(gap.describe(ch)));
   // One rule for every driver, before the time guard and any sensor model: a NaN or a corrupt
   // utime would otherwise poison a model's state for good (an odometer stuck at NaN) or overflow
   // its time arithmetic.

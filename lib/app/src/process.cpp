@@ -18,7 +18,6 @@
 #include <spdlog/spdlog.h>
 
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/core/text.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 
 namespace lcmloc::common {
@@ -318,7 +317,7 @@ bool Pacer::waitUntil(int64_t sim_utime, const std::function<void()>& idle) {
 SeqGap SeqTracker::observe(const std::string& key, int64_t seq) {
   // Most messages come on the channel of the message before: try that entry first.
   std::size_t i = last_;
-  if (!(i < entries_.size() && core::sameText(entries_[i].first, key))) {
+  if (!(i < entries_.size() && entries_[i].first == key)) {
     const auto found = index_.find(key);
     if (found == index_.end()) {
       index_.emplace(key, entries_.size());

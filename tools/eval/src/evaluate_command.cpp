@@ -11,7 +11,7 @@
 
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/app/process.hpp"
-#include "lcmloc/core/text.hpp"
+#include "lcmloc/app/text.hpp"
 #include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/replay_filters.hpp"
 
@@ -154,7 +154,7 @@ int runEvaluate(EvaluateCommand c) {
     const auto bad = log.undecodable.find(ch);
     if (n != log.channel_counts.end() && bad != log.undecodable.end() && bad->second == n->second) {
       spdlog::error("{} {}: none of its {} messages is of the type that option reads ({}): is it the right "
-                    "channel?", flag, core::printable(ch), n->second,
+                    "channel?", flag, common::printable(ch), n->second,
                     flag == "--pose-channel" ? "pose_t" : flag == "--truth-channel" ? "ground_truth_t or gps_fix_t"
                                                                                     : "gate_decision_t");
       return kExitBadConfig;

@@ -16,11 +16,11 @@
 
 #include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/report.hpp"
-#include "lcmloc/core/text.hpp"
+#include "lcmloc/app/text.hpp"
 
 namespace lcmloc::eval {
 
-std::string withoutControlCharacters(std::string text) { return core::printable(text); }
+std::string withoutControlCharacters(std::string text) { return common::printable(text); }
 
 std::string gnuplotQuote(const std::string& text) {
   std::string out = "'";

@@ -22,7 +22,7 @@
 
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/app/process.hpp"
-#include "lcmloc/core/text.hpp"
+#include "lcmloc/app/text.hpp"
 #include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/logio/event_file.hpp"
 #include "lcmloc/logio/types.hpp"
@@ -136,7 +136,7 @@ int info(const std::string& path) {
     auto undecodableEvent = [&](const std::string& why) {
       ++c.undecodable;
       if (++undecodable <= 10)
-        bad.push_back(fmt::format("undecodable {} event at byte {} (event {}): {} bytes, {}", core::printable(*ev.channel), ev.offset,
+        bad.push_back(fmt::format("undecodable {} event at byte {} (event {}): {} bytes, {}", common::printable(*ev.channel), ev.offset,
                                   ev.index, ev.size, why));
     };
     if (noFingerprint(ev)) return undecodableEvent("shorter than a fingerprint");  // not a type of its own
@@ -170,7 +170,7 @@ int info(const std::string& path) {
     if (c.types.size() > 1) type = "mixed (" + std::to_string(c.types.size()) + " types)";
     const double span = spanSeconds(c.first, c.last);
     const std::string rate = (c.count > 1 && span > 0) ? fmt::format("{:.2f}", (c.count - 1) / span) : "-";
-    std::cout << fmt::format("{:<24} {:<28} {:>9} {:>10} {:>12} {:>9} {:>11}\n", core::printable(name), type, c.count, rate, c.bytes,
+    std::cout << fmt::format("{:<24} {:<28} {:>9} {:>10} {:>12} {:>9} {:>11}\n", common::printable(name), type, c.count, rate, c.bytes,
                              c.gaps, c.undecodable);
   }
   std::cout << fmt::format("total: {} events, {} sequence gaps, {} undecodable\n", s.events_read, seqs.gaps(),
@@ -249,8 +249,8 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
     columns[*ev.channel].merge(fields);
   });
   for (const auto& [ch, n] : unknown)
-    spdlog::warn("{}: {} event(s) of a type this tool does not know, not exported", core::printable(ch), n);
-  for (const auto& [ch, n] : undecodable) spdlog::warn("{}: {} undecodable event(s) skipped", core::printable(ch), n);
+    spdlog::warn("{}: {} event(s) of a type this tool does not know, not exported", common::printable(ch), n);
+  for (const auto& [ch, n] : undecodable) spdlog::warn("{}: {} undecodable event(s) skipped", common::printable(ch), n);
   reportDamage(s, path, nullptr);
   if (columns.empty()) {
     if (channel_regexes.empty())
@@ -263,7 +263,7 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
     if (cols.size() > kMaxColumns)
       throw std::runtime_error(fmt::format(
           "{}: more than {} columns (widest message: {} fields): too wide for a CSV, nothing written; select the "
-          "other channels with -c", core::printable(ch), kMaxColumns, cols.widest));
+          "other channels with -c", common::printable(ch), kMaxColumns, cols.widest));
     cols.finish();
   }
   const bool to_dir = columns.size() > 1;
@@ -326,7 +326,7 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
   single->flush();
   if (!*single) throw std::runtime_error(std::string("writing CSV to ") + (to_stdout ? "stdout" : output) + " failed");
   for (const auto& [ch, n] : rows)
-    spdlog::info("{}: {} rows, {} columns{}", core::printable(ch), n, columns[ch].names.size() + 1,
+    spdlog::info("{}: {} rows, {} columns{}", common::printable(ch), n, columns[ch].names.size() + 1,
                  to_dir ? " -> " + paths.at(ch)
                         : (to_stdout ? "" : " -> " + output));
   return s.damaged ? common::kExitInputDamaged : common::kExitOk;

@@ -3,7 +3,6 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "lcmloc/core/text.hpp"
 #include "lcmloc/logio/event_file.hpp"
 #include "lcmloc/wire.hpp"
 
@@ -65,7 +64,7 @@ bool LogBus::write(const std::string& channel, const void* data, std::size_t siz
   ++written_;
   // A handful of channels: a linear search beats a map lookup per event.
   auto it = per_channel_.begin();
-  while (it != per_channel_.end() && !core::sameText(it->first, channel)) ++it;
+  while (it != per_channel_.end() && it->first != channel) ++it;
   if (it == per_channel_.end())
     per_channel_.emplace_back(channel, 1);
   else
@@ -104,7 +103,7 @@ const std::vector<std::size_t>& LogBus::route(const std::string& channel) {
 
 int LogBus::dispatch(const std::string& channel, const void* data, std::size_t size, int64_t recv_utime) {
   // (the usual case, the channel of the event before, inline: no call per event)
-  const auto& idx = last_channel_ && core::sameText(*last_channel_, channel) ? *last_route_ : route(channel);
+  const auto& idx = last_channel_ && *last_channel_ == channel ? *last_route_ : route(channel);
   return call(idx, channel, data, size, recv_utime);
 }
 

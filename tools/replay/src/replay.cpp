@@ -14,7 +14,6 @@
 #include <spdlog/spdlog.h>
 
 #include "daemon/daemon.hpp"
-#include "lcmloc/core/text.hpp"
 #include "lcmloc/replay/log_bus.hpp"
 #include "handoff.hpp"
 
@@ -124,7 +123,7 @@ class Reader {
       takeIssues(b);
       // Same channel as the event before: that one was not an output either, so it went to the
       // bus, which then need not look the channel up again.
-      const bool again = !last_channel_.empty() && core::sameText(ev->channel, last_channel_);
+      const bool again = !last_channel_.empty() && ev->channel == last_channel_;
       if (!again) {
         last_channel_ = ev->channel;
         last_is_output_ = isDaemonOutput(cfg_.channels, ev->channel);

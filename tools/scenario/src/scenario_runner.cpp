@@ -44,8 +44,8 @@ core::EngineOutputs outputsFor(FilterRun* run) {
     run->result.decisions.push_back(d);
     run->result.decision_is_fault.push_back(d.sensor == kFaultChannel);  // GPS/IMU: never a fault
   };
-  out.on_event = [run](const std::string& event, const std::string&, int64_t) {
-    if (event == "lockout") ++run->result.lockout_events;
+  out.on_event = [run](const core::EngineEvent& e) {
+    if (e.kind == core::EventKind::Lockout) ++run->result.lockout_events;
   };
   return out;
 }

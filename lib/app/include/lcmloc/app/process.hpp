@@ -16,7 +16,6 @@
 #include <CLI/CLI.hpp>
 
 #include "lcmloc/bus/transport.hpp"
-#include "lcmloc/core/text.hpp"
 
 namespace lcmloc::common {
 
@@ -217,7 +216,7 @@ class SeqTracker {
   /// observe() of the usual message, inline: true when seq follows on the key observed last (the
   /// message is taken, nothing to report); false, nothing changed, otherwise: observe() it then.
   bool follows(const std::string& key, int64_t seq) {
-    return last_ < entries_.size() && core::sameText(entries_[last_].first, key) && followsLast(seq);
+    return last_ < entries_.size() && entries_[last_].first == key && followsLast(seq);
   }
   /// follows() for a caller that knows the key is the one observed last (the one of its
   /// previous observe() or follows()): no comparison of the key.

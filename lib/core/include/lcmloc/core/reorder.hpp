@@ -13,13 +13,6 @@
 
 namespace lcmloc::core {
 
-/// How ReorderBuffer moves an item into a reused slot: move assignment, unless an overload for
-/// the item's type (found by argument-dependent lookup) does it faster.
-template <typename T>
-void assignSlot(T& slot, T&& item) {
-  slot = std::move(item);
-}
-
 struct OrderKey {
   int64_t utime = 0;
   int rank = 0;     ///< fixed per channel (e.g. odometry before ruler at equal utime)
@@ -60,7 +53,7 @@ class ReorderBuffer {
     } else {
       slot = free_.back();
       free_.pop_back();
-      assignSlot(slots_[slot], std::move(item));
+      slots_[slot] = std::move(item);
     }
     // Written in place, field by field: a Key made first and then copied in would be read back
     // whole (wide loads) right after its fields were stored one by one, which the CPU cannot

@@ -77,6 +77,13 @@ class TimeBaseGuard {
   int64_t confirmSpan() const { return confirm_span_; }
   /// Newest message time taken (INT64_MIN: none yet, or time started over).
   int64_t newest() const { return newest_; }
+  /// Nothing taken or held: time starts over (also from within confirm, for a time base behind).
+  void reset() {
+    newest_ = INT64_MIN;
+    held_.clear();
+    held_utime_ = 0;
+    side_ = kAhead;
+  }
 
  private:
   /// offer() of an input beyond the guard (side): held, or confirming a new time base.

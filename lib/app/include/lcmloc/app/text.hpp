@@ -1,29 +1,10 @@
 #pragma once
-// Short strings from messages (channel and filter names): equality without a library call (the
-// per-message paths of the daemon and the replay compare a channel name several times per
-// message, and the names are a few bytes long), and their form for a terminal or a log line.
+// Strings from the bus or a log (channel, filter and sensor names, details) as a terminal or a
+// log line may show them.
 #include <cstdint>
-#include <cstring>
 #include <string>
 
-namespace lcmloc::core {
-
-inline bool sameText(const std::string& a, const std::string& b) {
-  const std::size_t n = a.size();
-  if (n != b.size()) return false;
-  const char* p = a.data();
-  const char* q = b.data();
-  std::size_t i = 0;
-  for (; i + 8 <= n; i += 8) {
-    uint64_t x, y;
-    std::memcpy(&x, p + i, 8);
-    std::memcpy(&y, q + i, 8);
-    if (x != y) return false;
-  }
-  for (; i < n; ++i)
-    if (p[i] != q[i]) return false;
-  return true;
-}
+namespace lcmloc::common {
 
 /// text as a terminal or a log line may show it: every control character (bytes below 0x20,
 /// 0x7f, and the C1 controls U+0080..U+009F, which some terminals take as escape sequences) and
@@ -65,4 +46,4 @@ inline std::string printable(const std::string& text) {
   return out;
 }
 
-}  // namespace lcmloc::core
+}  // namespace lcmloc::common
