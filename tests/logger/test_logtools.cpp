@@ -23,6 +23,7 @@
 #include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/logio/event_file.hpp"
 #include "lcmloc/logio/log_writer.hpp"
+#include "lcmloc/logtool/command.hpp"
 #include "lcmloc/logtool/log_tool.hpp"
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
@@ -462,6 +463,38 @@ TEST_F(LogTools, CutAsALibraryKeepsTheUtimeWindowAndReportsDamage) {
   int64_t n = 0;
   while (kept.readNextEvent()) ++n;
   EXPECT_EQ(n, 40);
+}
+
+// lcmloc-log's command as a library (its main is the command line): "cut" parsed into a
+// LogCommand and run in-process writes the window; an existing output is refused without
+// --overwrite and left as it was; a missing log is a bad argument.
+TEST_F(LogTools, TheCutCommandRunsInProcessAndRefusesAnExistingOutputWithoutOverwrite) {
+  const std::string log = path("ref.lcmlog"), out = path("cut.lcmlog");
+  writeReference(log);
+  auto count = [](const std::string& file) {
+    lcm::LogFile in(file, "r");
+    EXPECT_TRUE(in.good());
+    int64_t n = 0;
+    while (in.good() && in.readNextEvent()) ++n;
+    return n;
+  };
+  lcmloc::logtool::LogCommand c;
+  CLI::App app;
+  lcmloc::logtool::addLogOptions(app, c);
+  app.parse("cut " + log + " -o " + out + " --from 0.2 --to 0.5 -c ODOM.*", false);
+  ASSERT_EQ(c.subcommand, lcmloc::logtool::Subcommand::Cut);
+  ASSERT_EQ(lcmloc::logtool::runLogCommand(c), lcmloc::common::kExitOk);
+  EXPECT_EQ(count(out), 30);  // ODOMETRY seq 20 .. 50, 50 missing
+
+  c.cut = lcmloc::logtool::CutOptions{};  // the whole log
+  EXPECT_THROW(lcmloc::logtool::runLogCommand(c), lcmloc::common::UsageError);
+  EXPECT_EQ(count(out), 30);
+  c.overwrite = true;
+  ASSERT_EQ(lcmloc::logtool::runLogCommand(c), lcmloc::common::kExitOk);
+  EXPECT_EQ(count(out), 135);
+
+  c.log_path = path("missing.lcmlog");
+  EXPECT_THROW(lcmloc::logtool::runLogCommand(c), lcmloc::common::ConfigError);
 }
 
 // A CSV on stdout that cannot be written (a full disk behind a redirection, a closed pipe) was

@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "lcmloc/app/config.hpp"
+#include "lcmloc/app/process.hpp"
 #include "lcmloc/drivers/sim_convert.hpp"
 #include "lcmloc/gate_decision_t.hpp"
 #include "lcmloc/gps_fix_t.hpp"
@@ -21,6 +22,7 @@
 #include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/import/checks.hpp"
 #include "lcmloc/import/import.hpp"
+#include "lcmloc/import/import_command.hpp"
 #include "lcmloc/import/magnet_grid.hpp"
 #include "lcmloc/landmark_obs_t.hpp"
 #include "lcmloc/odometry_t.hpp"
@@ -669,6 +671,47 @@ TEST(Import, CommandExitsNonzeroWhenNothingIsUsable) {
   EXPECT_EQ(std::system((bin + " " + d.string() + " -o " + (d / "out").string() + " > " + log + " 2>&1").c_str()), 0);
   EXPECT_TRUE(fs::exists(d / "out" / "run.lcmlog"));
   EXPECT_TRUE(fs::exists(d / "out" / "config.yaml"));
+}
+
+// lcmloc-import's command as a library (its main is the command line): the options parsed into
+// an ImportCommand and run in-process write the log on the config's channel names, the map and a
+// config with the given initial pose; an existing output is refused without --overwrite and left
+// as it was; nothing usable is exit 1.
+TEST(Import, TheCommandRunsInProcessAndRefusesAnExistingOutputWithoutOverwrite) {
+  const auto d = tempDir("command");
+  writeCircleRun(d, 20);
+  const std::string out = (d / "out").string();
+  import::ImportCommand c;
+  CLI::App app;
+  import::addImportOptions(app, c);
+  app.parse(d.string() + " -o " + out + " --initial-pose 1 2 0.5 --show-refused 0", false);
+  common::SystemConfig cfg;
+  cfg.channels.odometry = "WHEELS";
+  ASSERT_EQ(import::runImport(cfg, c), common::kExitOk);
+  const auto n = channelCounts(out + "/run.lcmlog");
+  EXPECT_EQ(n.count("ODOMETRY"), 0u);
+  EXPECT_EQ(n.at("WHEELS"), 20);
+  EXPECT_EQ(n.at("LANDMARKS"), 20);
+  EXPECT_EQ(n.at("GROUND_TRUTH"), 21);
+  EXPECT_EQ(common::csv::loadMap(out + "/map.csv").size(), 4u);
+  const auto written = common::loadSystemConfig(out + "/config.yaml");
+  EXPECT_DOUBLE_EQ(written.fusion.filter.initial_pose[0], 1.0);
+  EXPECT_DOUBLE_EQ(written.fusion.filter.initial_pose[1], 2.0);
+  EXPECT_DOUBLE_EQ(written.fusion.filter.initial_pose[2], 0.5);
+
+  // Again without --overwrite: refused (exit 2) before anything is read or written.
+  write(d / "odometry.csv", "time,delta_s,delta_theta\n100.1,0.05,0.025\n");
+  EXPECT_THROW(import::runImport(cfg, c), common::UsageError);
+  EXPECT_EQ(channelCounts(out + "/run.lcmlog").at("WHEELS"), 20);
+  c.overwrite = true;
+  ASSERT_EQ(import::runImport(cfg, c), common::kExitOk);
+  EXPECT_EQ(channelCounts(out + "/run.lcmlog").at("WHEELS"), 1);
+
+  const auto bad = tempDir("command_bad");
+  write(bad / "odometry.csv", "time,delta_s,delta_theta\nx,1,2\n");
+  import::ImportCommand nothing;
+  nothing.io.dir = bad.string();
+  EXPECT_EQ(import::runImport(cfg, nothing), common::kExitRuntimeError);
 }
 
 TEST(Import, LandmarkAndBeaconMessagesAreValidatedOnTheWayIn) {
