@@ -1,4 +1,4 @@
-// lcmloc_common: YAML config, conversions, the typed LCM bus over memq://, process helpers.
+// lcmloc_app, lcmloc_bus, lcmloc_drivers: YAML config, conversions, the typed LCM bus over memq://, process helpers.
 #include <gtest/gtest.h>
 
 #include <chrono>
