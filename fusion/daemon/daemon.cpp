@@ -164,7 +164,7 @@ void FusionDaemon::warn(const std::string& event, const std::string& detail) {
 }
 
 void FusionDaemon::reportSeq(const IntakeItem& item) {
-  const common::SeqGap& gap = item.detail->gap;
+  const common::SeqGap& gap = item.gap;
   const std::string& ch = item.input.channel;
   gaps_ += gap.missing - gap.uncounted;  // (the tracker's count: a small jump is taken back when it was an outlier)
   if (gap.ignored) {  // a lone corrupt seq: neither a loss nor a restart (and maybe a gap too)
@@ -204,12 +204,12 @@ void FusionDaemon::apply(IntakeItem& item) {
     case IntakeItem::Kind::Input:
       return push(std::move(in));
     case IntakeItem::Kind::Rejected:
-      return reject(in.channel, in.seq, in.utime, item.detail->why);
+      return reject(in.channel, in.seq, in.utime, item.why);
     case IntakeItem::Kind::Refused:
-      spdlog::warn("{}", item.detail->note);
-      return publishStatus("refused", item.detail->why, in.utime);
+      spdlog::warn("{}", item.note);
+      return publishStatus("refused", item.why, in.utime);
     case IntakeItem::Kind::DecodeError:
-      return decodeError(in.channel, item.detail->why);
+      return decodeError(in.channel, item.why);
     case IntakeItem::Kind::Nothing:
       return;
   }
@@ -266,7 +266,7 @@ void DaemonIntake::tracked(IntakeItem& out, const std::string& ch, int64_t seq, 
   const common::SeqGap gap = gaps_.observe(ch, seq);
   if (gap.missing > 0 || gap.uncounted > 0 || gap.ignored || gap.restarted) {
     out.seq_event = true;
-    out.more().gap = gap;
+    out.gap = gap;
   }
 }
 
@@ -277,7 +277,7 @@ void DaemonIntake::convert(IntakeItem& out, std::optional<T>&& payload, std::str
     out.input.payload = std::move(*payload);
   } else {
     out.kind = IntakeItem::Kind::Rejected;
-    out.more().why = std::move(why);
+    out.why = std::move(why);
   }
 }
 
@@ -293,7 +293,7 @@ void DaemonIntake::odometry(const std::string& ch, const lcmloc::odometry_t& m, 
     out.kind = IntakeItem::Kind::Input;
   } else {
     out.kind = IntakeItem::Kind::Rejected;
-    out.more().why = std::move(why);
+    out.why = std::move(why);
   }
 }
 
@@ -337,14 +337,14 @@ void DaemonIntake::bearings(const std::string& ch, const lcmloc::landmark_bearin
 
 void DaemonIntake::decodeError(const std::string& ch, const std::string& why, IntakeItem& out) {
   start(out, IntakeItem::Kind::DecodeError, ch, 0, 0);
-  out.more().why = why;
+  out.why = why;
 }
 
 void DaemonIntake::control(const std::string& ch, const lcmloc::fusion_control_t& m, IntakeItem& out) {
   // Not seq-tracked: every lcmloc-ctl (and any other tool) sends on it, each with its own seq.
   start(out, IntakeItem::Kind::Rejected, ch, m.seq, m.utime);
   if (m.utime < 0) {
-    out.more().why = "utime is negative";
+    out.why = "utime is negative";
     return;
   }
   core::ControlCommand cmd;
@@ -357,8 +357,8 @@ void DaemonIntake::control(const std::string& ch, const lcmloc::fusion_control_t
         fc = common::parseFilterConfig(params, fc, ch, "parameters");
       } catch (const std::exception& e) {
         out.kind = IntakeItem::Kind::Refused;
-        out.more().note = "refused switch to '" + common::printable(m.filter) + "': " + common::printable(e.what());
-        out.more().why = ch + " seq " + std::to_string(m.seq) + ": switch to '" + m.filter + "': " + e.what();
+        out.note = "refused switch to '" + common::printable(m.filter) + "': " + common::printable(e.what());
+        out.why = ch + " seq " + std::to_string(m.seq) + ": switch to '" + m.filter + "': " + e.what();
         return;
       }
       cmd = core::SwitchFilter{fc};
@@ -372,7 +372,7 @@ void DaemonIntake::control(const std::string& ch, const lcmloc::fusion_control_t
                           core::Vec3(m.pose_std[0], m.pose_std[1], m.pose_std[2])};
       break;
     default:
-      out.more().why = "unknown command " + std::to_string(m.command);
+      out.why = "unknown command " + std::to_string(m.command);
       return;
   }
   out.kind = IntakeItem::Kind::Input;

@@ -12,7 +12,6 @@
 #include <string>
 #include <vector>
 
-#include "lcmloc/app/cache_line.hpp"
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/bus/geodesy.hpp"
 #include "lcmloc/app/process.hpp"
@@ -43,20 +42,11 @@ struct IntakeItem {
     Nothing,      ///< counted, nothing else (a ruler reading without a detection)
   };
   Kind kind = Kind::Nothing;
-  bool seq_event = false;   ///< the sequence tracker found a gap, a restart or an ignored seq (detail->gap)
+  bool seq_event = false;   ///< the sequence tracker found a gap, a restart or an ignored seq (gap)
   core::EngineInput input;  ///< channel, seq and utime always; the payload with Kind::Input
-  /// What only few items carry, out of the way of the others (the replay hands millions of them
-  /// from one thread to another): what the sequence tracker found (seq_event), the reasons of a
-  /// refusal (why, note).
-  struct Detail {
-    common::SeqGap gap;
-    std::string why, note;
-  };
-  std::unique_ptr<Detail> detail;
-  Detail& more() {
-    if (!detail) detail = std::make_unique<Detail>();
-    return *detail;
-  }
+  common::SeqGap gap;       ///< with seq_event: what the sequence tracker found
+  std::string why;          ///< Rejected, Refused, DecodeError: the reason
+  std::string note;         ///< Refused: the log line
 };
 
 /// The daemon's first stage: decodes (the bus does), validates and converts each message, and
@@ -183,11 +173,10 @@ class FusionDaemon {
   const common::SystemConfig& cfg_;
   common::MessageBus& bus_;
   std::unique_ptr<core::FusionEngine> engine_;
-  /// The intake and slot_ are the replay's reading thread's, the rest its applying thread's:
-  /// kept on cache lines of their own (common::kLinePair), message after message.
-  alignas(common::kLinePair) DaemonIntake intake_;
+  /// The intake and slot_ are the replay's reading thread's, the rest its applying thread's.
+  DaemonIntake intake_;
   std::function<IntakeItem&()> slot_;  ///< divert()
-  alignas(common::kLinePair) IntakeItem item_;  ///< the intake's item of the message being taken in (its storage reused)
+  IntakeItem item_;  ///< the intake's item of the message being taken in (its storage reused)
   int64_t gaps_ = 0;  ///< messages missing according to the intake's sequence checks
   std::map<std::string, int64_t> out_seq_;  ///< per output channel
   /// Per (filter, active): its POSE channel, that channel's seq counter (a node of out_seq_) and

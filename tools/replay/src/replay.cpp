@@ -33,7 +33,7 @@ namespace {
 /// per event, in file order, and one at the end (Record::end). What a record stands for, in this
 /// order: the damage met before it (`issues` of the block's issues), its copy (--with-inputs),
 /// what the daemon's intake made of it (`items` of the block's items, in order).
-struct alignas(common::kLinePair) Block {
+struct alignas(replay::kLinePair) Block {
   /// position and unreadable are the scanner's, after reading the event (at the end), apart in
   /// the record: side by side, the two would be read from the scanner in one wide load right
   /// after the scanner stored them one by one, a load the CPU cannot forward from its store
@@ -385,17 +385,17 @@ void replayInline(Reader& reader, Applier& applier, ReplayResult& r) {
 ReplayResult replayLog(const common::SystemConfig& cfg, const ReplayOptions& opts) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
-  // Each on cache lines of its own (common::kLinePair): the reader is the reading thread's, the
+  // Each on cache lines of its own (replay::kLinePair): the reader is the reading thread's, the
   // result and the applier the applying thread's, and the bus and the daemon keep their two
   // threads' parts apart inside.
-  alignas(common::kLinePair) ReplayResult r;
+  alignas(replay::kLinePair) ReplayResult r;
   if (!opts.output.empty()) common::refuseOutputOverInputs("--output", opts.output, {opts.input}, "input log");
-  alignas(common::kLinePair) Reader reader(opts.input, cfg, opts);
+  alignas(replay::kLinePair) Reader reader(opts.input, cfg, opts);
   r.file_size = reader.fileSize();
-  alignas(common::kLinePair) LogBus bus(opts.output);
-  alignas(common::kLinePair) fusion::FusionDaemon daemon(cfg, bus);
+  alignas(replay::kLinePair) LogBus bus(opts.output);
+  alignas(replay::kLinePair) fusion::FusionDaemon daemon(cfg, bus);
   reader.attach(bus, daemon);
-  alignas(common::kLinePair) Applier applier(bus, daemon, opts, r);
+  alignas(replay::kLinePair) Applier applier(bus, daemon, opts, r);
   if (opts.read_ahead)
     replayThreaded(reader, applier, r);
   else

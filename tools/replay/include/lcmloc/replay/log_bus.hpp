@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "lcmloc/app/cache_line.hpp"
+#include "lcmloc/replay/cache_line.hpp"
 #include "lcmloc/bus/transport.hpp"
 
 namespace lcmloc::replay {
@@ -68,8 +68,8 @@ class LogBus : public common::MessageBus {
   const std::string* last_channel_ = nullptr;
   const std::vector<std::size_t>* last_route_ = nullptr;
   // The above is read by the replay's reading thread for every event, what follows written by its
-  // applying thread for every output: on cache lines of their own (common::kLinePair).
-  alignas(common::kLinePair) std::unique_ptr<class LogWriter> writer_;
+  // applying thread for every output: on cache lines of their own (replay::kLinePair).
+  alignas(replay::kLinePair) std::unique_ptr<class LogWriter> writer_;
   int64_t written_ = 0;
   std::string write_error_;
   std::vector<std::pair<std::string, int64_t>> per_channel_;
