@@ -1,6 +1,5 @@
 // lcmloc-sim: drives the simulated vehicle along the scenario path and publishes GROUND_TRUTH,
-// paced against wall time by the real-time factor. Exits 0 after the final sample.
-// --write-map FILE: writes the world's markers as a fusion map file (id,x,y) instead.
+// paced by the real-time factor; exits 0 after the final sample (--write-map FILE: the world's markers instead).
 #include <spdlog/spdlog.h>
 
 #include "lcmloc/app/config.hpp"
@@ -20,10 +19,12 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(common::kRealtimeFactor.lo, common::kRealtimeFactor.hi));
   std::string map_out;
   app.add_option("--write-map", map_out, "write the scenario's markers as a map file (fusion.map_file) and exit");
-
   return common::runProcess(app, argc, argv, opts, "lcmloc-sim", [&] {
     const auto cfg = common::loadSystemConfig(opts.config);
-    if (!map_out.empty()) return common::writeScenarioMap(cfg, map_out), common::kExitOk;
+    if (!map_out.empty()) {
+      common::writeScenarioMap(cfg, map_out);
+      return common::kExitOk;
+    }
     const auto& sc = cfg.scenario;
     const double factor = rtf >= 0.0 ? rtf : sc.realtime_factor;
 
