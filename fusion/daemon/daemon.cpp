@@ -90,19 +90,21 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
   engine_ = std::make_unique<core::FusionEngine>(ec, map, out);
 
   const auto& ch = cfg.channels;
-  subscribe(ch.odometry, &DaemonIntake::odometry);
-  for (const auto& r : ch.magruler) subscribe(r, &DaemonIntake::ruler);
-  subscribe(ch.imu, &DaemonIntake::imu);
-  subscribe(ch.gps, &DaemonIntake::gps);
-  subscribe(ch.landmarks, &DaemonIntake::landmark);
-  subscribe(ch.beacons, &DaemonIntake::beacon);
-  subscribe(ch.vision, &DaemonIntake::bearings);
+  std::vector<std::string> inputs;
+  forEachSensorInput([&](const auto& kind) {
+    using Lcm = typename std::decay_t<decltype(kind)>::lcm_type;
+    for (const std::string& c : kind.channels(ch)) {
+      subscribe<Lcm>(c, &DaemonIntake::take<Lcm>);
+      inputs.push_back(c);
+    }
+  });
   subscribe(ch.control, &DaemonIntake::control);
+  inputs.push_back(ch.control);
 
-  spdlog::info("filter {} (shadow: {}), {} markers, reorder window {:.3f} s; in: {}, {}, {}, {}, {}, {}, {}, {}; out: {}, {}, {}",
+  spdlog::info("filter {} (shadow: {}), {} markers, reorder window {:.3f} s; in: {}; out: {}, {}, {}",
                cfg.fusion.filter.type, cfg.fusion.shadow.empty() ? "none" : fmt::format("{}", fmt::join(cfg.fusion.shadow, ", ")),
-               map.size(), cfg.fusion.reorder_window, ch.odometry, fmt::format("{}", fmt::join(ch.magruler, ", ")),
-               ch.imu, ch.gps, ch.landmarks, ch.beacons, ch.vision, ch.control, ch.pose, ch.gate, ch.status);
+               map.size(), cfg.fusion.reorder_window, fmt::format("{}", fmt::join(inputs, ", ")), ch.pose, ch.gate,
+               ch.status);
   if (!hold_) publishStatus("started", "filter " + engine_->activeFilter(), 0);
 }
 
@@ -270,78 +272,12 @@ void DaemonIntake::tracked(IntakeItem& out, const std::string& ch, int64_t seq, 
   }
 }
 
-template <typename T>
-void DaemonIntake::convert(IntakeItem& out, std::optional<T>&& payload, std::string&& why) {
-  if (payload) {
-    out.kind = IntakeItem::Kind::Input;
-    out.input.payload = std::move(*payload);
-  } else {
-    out.kind = IntakeItem::Kind::Rejected;
-    out.why = std::move(why);
-  }
-}
-
-void DaemonIntake::odometry(const std::string& ch, const lcmloc::odometry_t& m, IntakeItem& out) {
-  tracked(out, ch, m.seq, m.utime);
-  // Converted in place (into the odometry input a reused item nearly always holds already): a
-  // converted copy handed back and then moved in costs more than the conversion, as the copy's
-  // bytes are read back right after they were written, before the CPU can forward them.
-  auto* odo = std::get_if<core::OdometryInput>(&out.input.payload);
-  if (!odo) odo = &out.input.payload.emplace<core::OdometryInput>();
-  std::string why;
-  if (common::toCore(m, *odo, &why)) {
-    out.kind = IntakeItem::Kind::Input;
-  } else {
-    out.kind = IntakeItem::Kind::Rejected;
-    out.why = std::move(why);
-  }
-}
-
-void DaemonIntake::ruler(const std::string& ch, const lcmloc::magruler_t& m, IntakeItem& out) {
-  tracked(out, ch, m.seq, m.utime);
-  std::string why;
-  auto det = common::toCore(m, ch, &why);
-  if (!det && why.empty()) return;  // a raw reading without detection: nothing for the filter
-  convert(out, std::move(det), std::move(why));
-}
-
-void DaemonIntake::imu(const std::string& ch, const lcmloc::imu_t& m, IntakeItem& out) {
-  tracked(out, ch, m.seq, m.utime);
-  std::string why;
-  convert(out, common::toCore(m, ch, &why), std::move(why));
-}
-
-void DaemonIntake::gps(const std::string& ch, const lcmloc::gps_fix_t& m, IntakeItem& out) {
-  tracked(out, ch, m.seq, m.utime);
-  std::string why;
-  convert(out, common::toCore(m, ch, frame_, &why), std::move(why));
-}
-
-void DaemonIntake::landmark(const std::string& ch, const lcmloc::landmark_obs_t& m, IntakeItem& out) {
-  tracked(out, ch, m.seq, m.utime);
-  std::string why;
-  convert(out, common::toCore(m, ch, &why), std::move(why));
-}
-
-void DaemonIntake::beacon(const std::string& ch, const lcmloc::beacon_range_t& m, IntakeItem& out) {
-  tracked(out, ch, m.seq, m.utime);
-  std::string why;
-  convert(out, common::toCore(m, ch, &why), std::move(why));
-}
-
-void DaemonIntake::bearings(const std::string& ch, const lcmloc::landmark_bearings_t& m, IntakeItem& out) {
-  tracked(out, ch, m.seq, m.utime);
-  std::string why;
-  convert(out, common::toCore(m, ch, &why), std::move(why));
-}
-
 void DaemonIntake::decodeError(const std::string& ch, const std::string& why, IntakeItem& out) {
   start(out, IntakeItem::Kind::DecodeError, ch, 0, 0);
   out.why = why;
 }
 
 void DaemonIntake::control(const std::string& ch, const lcmloc::fusion_control_t& m, IntakeItem& out) {
-  // Not seq-tracked: every lcmloc-ctl (and any other tool) sends on it, each with its own seq.
   start(out, IntakeItem::Kind::Rejected, ch, m.seq, m.utime);
   if (m.utime < 0) {
     out.why = "utime is negative";

@@ -1,5 +1,5 @@
 #pragma once
-// The fusion daemon: LCM in (ODOMETRY, MAGRULER channels, FUSION_CONTROL), validation and
+// The fusion daemon: LCM in (the sensor inputs of inputs.hpp, FUSION_CONTROL), validation and
 // conversion, core::FusionEngine, LCM out (POSE, POSE_<TYPE>, GATE, FUSION_STATUS).
 // Bad input never stops it: each rejected message gets a log line (rate-limited) and a status
 // event, and is counted.
@@ -12,19 +12,14 @@
 #include <string>
 #include <vector>
 
+#include "inputs.hpp"
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/bus/geodesy.hpp"
 #include "lcmloc/app/process.hpp"
+#include "lcmloc/bus/convert.hpp"
+#include "lcmloc/bus/geodesy.hpp"
 #include "lcmloc/bus/transport.hpp"
 #include "lcmloc/core/engine.hpp"
 #include "lcmloc/fusion_control_t.hpp"
-#include "lcmloc/gps_fix_t.hpp"
-#include "lcmloc/imu_t.hpp"
-#include "lcmloc/landmark_obs_t.hpp"
-#include "lcmloc/beacon_range_t.hpp"
-#include "lcmloc/landmark_bearings_t.hpp"
-#include "lcmloc/magruler_t.hpp"
-#include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
 
 namespace lcmloc::fusion {
@@ -55,14 +50,25 @@ struct IntakeItem {
 class DaemonIntake {
  public:
   explicit DaemonIntake(const common::SystemConfig& cfg);
-  /// Each fills `out` (whatever it held before) with what the message is.
-  void odometry(const std::string& ch, const lcmloc::odometry_t& m, IntakeItem& out);
-  void ruler(const std::string& ch, const lcmloc::magruler_t& m, IntakeItem& out);
-  void imu(const std::string& ch, const lcmloc::imu_t& m, IntakeItem& out);
-  void gps(const std::string& ch, const lcmloc::gps_fix_t& m, IntakeItem& out);
-  void landmark(const std::string& ch, const lcmloc::landmark_obs_t& m, IntakeItem& out);
-  void beacon(const std::string& ch, const lcmloc::beacon_range_t& m, IntakeItem& out);
-  void bearings(const std::string& ch, const lcmloc::landmark_bearings_t& m, IntakeItem& out);
+  /// Fills `out` (whatever it held before) with what a sensor message is: its seq checked, then
+  /// converted by common::toInput (an input, nothing, or rejected with why). One for every kind
+  /// of sensor input (kSensorInputs).
+  template <typename Lcm>
+  void take(const std::string& ch, const Lcm& m, IntakeItem& out) {
+    tracked(out, ch, m.seq, m.utime);
+    out.why.clear();
+    switch (common::toInput(m, common::InputContext{ch, frame_}, out.input.payload, out.why)) {
+      case common::Converted::Input:
+        out.kind = IntakeItem::Kind::Input;
+        return;
+      case common::Converted::Refused:
+        out.kind = IntakeItem::Kind::Rejected;
+        return;
+      case common::Converted::Nothing:  // counted, nothing else
+        return;
+    }
+  }
+  /// A FUSION_CONTROL command (not seq-tracked: every lcmloc-ctl sends on it with its own seq).
   void control(const std::string& ch, const lcmloc::fusion_control_t& m, IntakeItem& out);
   void decodeError(const std::string& ch, const std::string& why, IntakeItem& out);
 
@@ -70,10 +76,6 @@ class DaemonIntake {
   /// out for message (ch, seq, utime) of `kind`, its seq checked when tracked.
   void start(IntakeItem& out, IntakeItem::Kind kind, const std::string& ch, int64_t seq, int64_t utime);
   void tracked(IntakeItem& out, const std::string& ch, int64_t seq, int64_t utime);
-  /// out an Input with the converted payload, or Rejected with why when the conversion refused it.
-  template <typename T>
-  static void convert(IntakeItem& out, std::optional<T>&& payload, std::string&& why);
-
   const common::SystemConfig& cfg_;
   common::SeqTracker gaps_;
   common::LocalFrame frame_;  ///< lat/lon of GPS fixes -> local metric frame (cfg.datum)

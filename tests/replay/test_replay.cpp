@@ -472,7 +472,7 @@ TEST(DaemonIntakeTest, ConvertsOdometryInPlaceIntoAnItemOfAnyKind) {
   r.detected = true;
   r.lateral_offset = 0.05;
   r.quality = 0.9;
-  intake.ruler(cfg.channels.magruler.front(), r, item);
+  intake.take(cfg.channels.magruler.front(), r, item);
   ASSERT_EQ(item.kind, fusion::IntakeItem::Kind::Input);
   ASSERT_TRUE(std::holds_alternative<core::RulerDetection>(item.input.payload));
 
@@ -483,7 +483,7 @@ TEST(DaemonIntakeTest, ConvertsOdometryInPlaceIntoAnItemOfAnyKind) {
   o.steering = 0.1;
   o.has_steering = true;
   o.delta_theta = 0.003;
-  intake.odometry(cfg.channels.odometry, o, item);
+  intake.take(cfg.channels.odometry, o, item);
   ASSERT_EQ(item.kind, fusion::IntakeItem::Kind::Input);
   ASSERT_TRUE(std::holds_alternative<core::OdometryInput>(item.input.payload));
   const auto expect = [&](const lcmloc::odometry_t& m) {
@@ -503,7 +503,7 @@ TEST(DaemonIntakeTest, ConvertsOdometryInPlaceIntoAnItemOfAnyKind) {
   bad.seq = 8;
   bad.utime = 3000;
   bad.delta_s = std::nan("");
-  intake.odometry(cfg.channels.odometry, bad, item);
+  intake.take(cfg.channels.odometry, bad, item);
   EXPECT_EQ(item.kind, fusion::IntakeItem::Kind::Rejected);
   EXPECT_NE(item.why.find("delta_s"), std::string::npos) << item.why;
   EXPECT_EQ(item.input.seq, 8);
@@ -514,9 +514,21 @@ TEST(DaemonIntakeTest, ConvertsOdometryInPlaceIntoAnItemOfAnyKind) {
   next.delta_s = -0.1;
   next.has_steering = false;
   next.delta_theta = -0.02;
-  intake.odometry(cfg.channels.odometry, next, item);
+  intake.take(cfg.channels.odometry, next, item);
   EXPECT_EQ(item.kind, fusion::IntakeItem::Kind::Input);
   expect(next);
+
+  lcmloc::magruler_t raw = r;  // a reading without a detection: counted, nothing for the filters
+  raw.seq = 5;
+  raw.detected = false;
+  intake.take(cfg.channels.magruler.front(), raw, item);
+  EXPECT_EQ(item.kind, fusion::IntakeItem::Kind::Nothing);
+  EXPECT_FALSE(item.seq_event);
+  raw.seq = 7;  // two lost on that channel: the item says so
+  intake.take(cfg.channels.magruler.front(), raw, item);
+  EXPECT_EQ(item.kind, fusion::IntakeItem::Kind::Nothing);
+  EXPECT_TRUE(item.seq_event);
+  EXPECT_EQ(item.gap.missing, 1);
 }
 
 TEST_F(ReplayTest, OutputOverTheInputIsRefusedAndTheInputKept) {

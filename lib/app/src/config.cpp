@@ -35,31 +35,24 @@ std::string describe(const std::string& file, const std::string& key, const std:
 
 constexpr double kPi = 3.14159265358979323846;
 
+/// Every single-channel key of `channels` (magruler, a list, is read apart).
+constexpr std::pair<const char*, std::string ChannelConfig::*> kChannelKeys[] = {
+    {"ground_truth", &ChannelConfig::ground_truth}, {"odometry", &ChannelConfig::odometry},
+    {"magruler_fault", &ChannelConfig::magruler_fault}, {"fault_events", &ChannelConfig::fault_events},
+    {"pose", &ChannelConfig::pose}, {"gate", &ChannelConfig::gate}, {"control", &ChannelConfig::control},
+    {"status", &ChannelConfig::status}, {"heartbeat", &ChannelConfig::heartbeat}, {"imu", &ChannelConfig::imu},
+    {"gps", &ChannelConfig::gps}, {"landmarks", &ChannelConfig::landmarks}, {"beacons", &ChannelConfig::beacons},
+    {"vision", &ChannelConfig::vision}};
+
 void parseChannels(KeyReader& root, ChannelConfig& c) {
   KeyReader r(root.child("channels"), root.file(), "channels");
-  r.get("ground_truth", c.ground_truth);
-  r.get("odometry", c.odometry);
+  for (const auto& [key, member] : kChannelKeys) r.get(key, c.*member);
   r.getStrings("magruler", c.magruler);
-  r.get("magruler_fault", c.magruler_fault);
-  r.get("fault_events", c.fault_events);
-  r.get("pose", c.pose);
-  r.get("gate", c.gate);
-  r.get("control", c.control);
-  r.get("status", c.status);
-  r.get("heartbeat", c.heartbeat);
-  r.get("imu", c.imu);
-  r.get("gps", c.gps);
-  r.get("landmarks", c.landmarks);
-  r.get("beacons", c.beacons);
-  r.get("vision", c.vision);
   r.finish();
   // Every name non-empty and without blanks; the daemon's outputs and its control channel apart
   // from every input (a POSE published on ODOMETRY would be read back as odometry).
-  std::vector<std::pair<std::string, std::string>> named{
-      {"ground_truth", c.ground_truth}, {"odometry", c.odometry}, {"magruler_fault", c.magruler_fault},
-      {"fault_events", c.fault_events}, {"pose", c.pose}, {"gate", c.gate}, {"control", c.control},
-      {"status", c.status}, {"heartbeat", c.heartbeat}, {"imu", c.imu}, {"gps", c.gps},
-      {"landmarks", c.landmarks}, {"beacons", c.beacons}, {"vision", c.vision}};
+  std::vector<std::pair<std::string, std::string>> named;
+  for (const auto& [key, member] : kChannelKeys) named.push_back({key, c.*member});
   for (std::size_t i = 0; i < c.magruler.size(); ++i) named.push_back({"magruler[" + std::to_string(i) + "]", c.magruler[i]});
   for (const auto& [key, name] : named)
     if (name.empty() || name.find_first_of(" \t\n") != std::string::npos)

@@ -351,4 +351,49 @@ std::optional<core::BearingsInput> toCore(const lcmloc::landmark_bearings_t& m, 
 }
 
 
+namespace {
+/// A converted measurement into out, or Refused (why set by the conversion).
+template <typename T>
+Converted into(std::optional<T>&& v, core::InputPayload& out, std::string& why) {
+  if (!v) {
+    if (why.empty()) why = "refused";
+    return Converted::Refused;
+  }
+  out = std::move(*v);
+  return Converted::Input;
+}
+}  // namespace
+
+Converted toInput(const lcmloc::odometry_t& m, const InputContext&, core::InputPayload& out, std::string& why) {
+  // Converted in place (into the odometry input a reused item nearly always holds already): a
+  // converted copy handed back and then moved in costs more than the conversion, as the copy's
+  // bytes are read back right after they were written, before the CPU can forward them.
+  auto* odo = std::get_if<core::OdometryInput>(&out);
+  if (!odo) odo = &out.emplace<core::OdometryInput>();
+  return toCore(m, *odo, &why) ? Converted::Input : Converted::Refused;
+}
+Converted toInput(const lcmloc::magruler_t& m, const InputContext& ctx, core::InputPayload& out, std::string& why) {
+  auto det = toCore(m, ctx.channel, &why);
+  if (!det && why.empty()) return Converted::Nothing;  // a raw reading without detection
+  return into(std::move(det), out, why);
+}
+Converted toInput(const lcmloc::imu_t& m, const InputContext& ctx, core::InputPayload& out, std::string& why) {
+  return into(toCore(m, ctx.channel, &why), out, why);
+}
+Converted toInput(const lcmloc::gps_fix_t& m, const InputContext& ctx, core::InputPayload& out, std::string& why) {
+  return into(toCore(m, ctx.channel, ctx.frame, &why), out, why);
+}
+Converted toInput(const lcmloc::landmark_obs_t& m, const InputContext& ctx, core::InputPayload& out,
+                  std::string& why) {
+  return into(toCore(m, ctx.channel, &why), out, why);
+}
+Converted toInput(const lcmloc::beacon_range_t& m, const InputContext& ctx, core::InputPayload& out,
+                  std::string& why) {
+  return into(toCore(m, ctx.channel, &why), out, why);
+}
+Converted toInput(const lcmloc::landmark_bearings_t& m, const InputContext& ctx, core::InputPayload& out,
+                  std::string& why) {
+  return into(toCore(m, ctx.channel, &why), out, why);
+}
+
 }  // namespace lcmloc::common

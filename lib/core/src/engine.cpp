@@ -17,18 +17,6 @@
 namespace lcmloc::core {
 namespace {
 
-bool isFinite(const OdometryInput& o) {
-  return std::isfinite(o.delta_s) && std::isfinite(o.steering) && std::isfinite(o.delta_theta);
-}
-bool isFinite(const ImuInput& m) { return m.accel.allFinite() && m.gyro.allFinite() && m.mag.allFinite(); }
-/// A fix without a fix carries no position: it is handed on (the filter reports "no_fix").
-bool isFinite(const GpsInput& g) { return !g.has_fix || (std::isfinite(g.x) && std::isfinite(g.y)); }
-bool isFinite(const LandmarkObservation& m) {
-  return std::isfinite(m.range) && std::isfinite(m.bearing) && std::isfinite(m.range_std) &&
-         std::isfinite(m.bearing_std);
-}
-bool isFinite(const BeaconRange& m) { return std::isfinite(m.range) && std::isfinite(m.range_std); }
-
 /// [m] The smallest distance between two markers of the map (+inf: fewer than two): after a gap
 /// whose spread exceeds half of it, the marker taken may be a neighbour ("ambiguous").
 double closestMarkers(const MarkerMap& m) {
@@ -164,7 +152,7 @@ struct FusionEngine::Impl final : InputOrder::Client {
   }
 
   void handle(const EngineInput& in, const OdometryInput& odo) {
-    if (!isFinite(odo)) return badInput(in, "odometry");
+    if (!odo.finite()) return badInput(in, "odometry");
     gaps.odometry(in, odo);
     if (decimation.batching()) return decimation.odometry(odo);
     bank.forEach([&](Filter& f, bool is_active) {
@@ -190,13 +178,15 @@ struct FusionEngine::Impl final : InputOrder::Client {
     });
   }
 
-  /// IMU samples, GPS fixes, landmark observations, beacon ranges: only filters that use them see
-  /// them; a decision (and the state after it) is published only when the filter used it.
+  /// A measurement with no special handling here (GPS fixes, landmark observations, beacon
+  /// ranges, and IMU samples before their saturation watch): only filters that use its kind
+  /// (InputKind<M>::measurement) see it; a decision (and the state after it) is published only
+  /// when the filter used it.
   template <typename M>
-  void handleAbsolute(const EngineInput& in, const M& m, Measurement kind, const char* what) {
-    if (!isFinite(m)) return badInput(in, what);
+  void handle(const EngineInput& in, const M& m) {
+    if (!m.finite()) return badInput(in, InputKind<M>::what);
     bank.forEach([&](Filter& f, bool is_active) {
-      if (!f.uses(kind)) return;
+      if (!f.uses(InputKind<M>::measurement)) return;
       const std::optional<GateDecision> d = f.update(m);
       if (!d) return;
       if (is_active) ++(d->accepted ? counters.accepted : counters.rejected);
@@ -205,19 +195,12 @@ struct FusionEngine::Impl final : InputOrder::Client {
     });
   }
   void handle(const EngineInput& in, const ImuInput& m) {
-    handleAbsolute(in, m, Measurement::Imu, "IMU sample");
+    handle<ImuInput>(in, m);
     const Filter& active = bank.active();
     const int64_t n = active.saturatedImuSamples();
     if (imu.began(n))
       out.event(EventKind::ImuSaturated, in.utime,
                 events::ImuSaturated{refOf(in), m.accel[0], bank.activeConfig().gnss.accel_saturation, active.name(), n});
-  }
-  void handle(const EngineInput& in, const GpsInput& m) { handleAbsolute(in, m, Measurement::Gps, "GPS fix"); }
-  void handle(const EngineInput& in, const LandmarkObservation& m) {
-    handleAbsolute(in, m, Measurement::Landmark, "landmark observation");
-  }
-  void handle(const EngineInput& in, const BeaconRange& m) {
-    handleAbsolute(in, m, Measurement::Beacon, "beacon range");
   }
   void handle(const EngineInput& in, const BearingsInput& b) { fixes.process(in, b); }
   void handle(const EngineInput& in, const ControlCommand& c) { commands.apply(in, c); }

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "lcmloc/bus/geodesy.hpp"
+#include "lcmloc/core/engine_input.hpp"
 #include "lcmloc/core/types.hpp"
 #include "lcmloc/fault_event_t.hpp"
 #include "lcmloc/gate_decision_t.hpp"
@@ -57,5 +58,28 @@ std::optional<core::BeaconRange> toCore(const lcmloc::beacon_range_t& m, const s
 /// match the arrays or a bearing is NaN/Inf. Unknown ids are the engine's to refuse.
 std::optional<core::BearingsInput> toCore(const lcmloc::landmark_bearings_t& m, const std::string& channel,
                                           std::string* why = nullptr);
+
+/// What a sensor message is for the fusion (toInput): an input for the engine, nothing (a
+/// message that carries nothing for the filters: a ruler reading without a detection), or refused
+/// (why says what is wrong with it).
+enum class Converted { Input, Nothing, Refused };
+/// What a conversion may need besides the message: its channel (the sensor name a gate decision
+/// carries) and the local frame GPS fixes are converted into.
+struct InputContext {
+  const std::string& channel;
+  const LocalFrame& frame;
+};
+/// The converter of each sensor input kind, one overload per lcm type, with one signature: the
+/// fusion daemon's intake calls it for every kind alike (fusion/daemon/inputs.hpp). The
+/// conversion goes into out (whatever it held: an odometry increment is converted in place when
+/// out holds one already, with no copy in between); why is set when refused.
+Converted toInput(const lcmloc::odometry_t& m, const InputContext& ctx, core::InputPayload& out, std::string& why);
+Converted toInput(const lcmloc::magruler_t& m, const InputContext& ctx, core::InputPayload& out, std::string& why);
+Converted toInput(const lcmloc::imu_t& m, const InputContext& ctx, core::InputPayload& out, std::string& why);
+Converted toInput(const lcmloc::gps_fix_t& m, const InputContext& ctx, core::InputPayload& out, std::string& why);
+Converted toInput(const lcmloc::landmark_obs_t& m, const InputContext& ctx, core::InputPayload& out, std::string& why);
+Converted toInput(const lcmloc::beacon_range_t& m, const InputContext& ctx, core::InputPayload& out, std::string& why);
+Converted toInput(const lcmloc::landmark_bearings_t& m, const InputContext& ctx, core::InputPayload& out,
+                  std::string& why);
 
 }  // namespace lcmloc::common

@@ -17,33 +17,66 @@ struct ResetFilter {};                                   ///< back to the config
 struct SetPose { Pose pose; Vec3 stddev; };              ///< re-initialise x, y, theta
 using ControlCommand = std::variant<SwitchFilter, ResetFilter, SetPose>;
 
+/// What an input carries: a command or a sensor's message (each alternative has an InputKind).
+using InputPayload = std::variant<OdometryInput, RulerDetection, ControlCommand, ImuInput, GpsInput,
+                                  LandmarkObservation, BeaconRange, BearingsInput>;
+
 /// One input message, already converted and validated.
 struct EngineInput {
   std::string channel;
   int64_t seq = 0;
   int64_t utime = 0;
-  std::variant<OdometryInput, RulerDetection, ControlCommand, ImuInput, GpsInput, LandmarkObservation, BeaconRange,
-               BearingsInput>
-      payload;
+  InputPayload payload;
 };
 
 /// The input an event is about.
 inline InputRef refOf(const EngineInput& in) { return InputRef{in.channel, in.seq, in.utime}; }
 
-/// The canonical tie-break at equal utime, a property of each kind of input: a command first
-/// (it applies to what comes at its time), then the odometry (a measurement sees the motion up
-/// to its time), then the measurements. Inputs of one kind on different channels are ordered by
-/// a stable hash of the channel name, then by seq (canonicalKey).
+/// The engine's descriptor of each kind of input (one specialization per alternative of
+/// EngineInput::payload; adding a sensor adds its line here, its core type, its converter in the
+/// bus and the filters that use it: docs/architecture.md, "Adding an input kind"):
+/// - rank: the canonical tie-break at equal utime. A command first (it applies to what comes at
+///   its time), then the odometry (a measurement sees the motion up to its time), then the
+///   measurements. Inputs of one kind on different channels are ordered by a stable hash of the
+///   channel name, then by seq (canonicalKey).
+/// - measurement (a measurement a filter takes or not, Filter::uses): the kind the engine asks
+///   each filter about; `what` names it in events (a NaN field: "beacon range").
+/// A measurement kind with no special handling in the engine reaches every filter that uses it
+/// through Filter::update(const T&) (FusionEngine's generic measurement path).
 template <typename T>
-inline constexpr int kCanonicalRank = -1;
-template <> inline constexpr int kCanonicalRank<ControlCommand> = 0;
-template <> inline constexpr int kCanonicalRank<OdometryInput> = 1;
-template <> inline constexpr int kCanonicalRank<RulerDetection> = 2;
-template <> inline constexpr int kCanonicalRank<ImuInput> = 3;
-template <> inline constexpr int kCanonicalRank<GpsInput> = 4;
-template <> inline constexpr int kCanonicalRank<LandmarkObservation> = 5;
-template <> inline constexpr int kCanonicalRank<BeaconRange> = 6;
-template <> inline constexpr int kCanonicalRank<BearingsInput> = 7;
+struct InputKind;  // undefined: the static_assert below names a kind without a descriptor
+template <> struct InputKind<ControlCommand> { static constexpr int rank = 0; };
+template <> struct InputKind<OdometryInput> { static constexpr int rank = 1; };
+template <> struct InputKind<RulerDetection> {
+  static constexpr int rank = 2;
+  static constexpr Measurement measurement = Measurement::Ruler;
+  static constexpr const char* what = "ruler detection";
+};
+template <> struct InputKind<ImuInput> {
+  static constexpr int rank = 3;
+  static constexpr Measurement measurement = Measurement::Imu;
+  static constexpr const char* what = "IMU sample";
+};
+template <> struct InputKind<GpsInput> {
+  static constexpr int rank = 4;
+  static constexpr Measurement measurement = Measurement::Gps;
+  static constexpr const char* what = "GPS fix";
+};
+template <> struct InputKind<LandmarkObservation> {
+  static constexpr int rank = 5;
+  static constexpr Measurement measurement = Measurement::Landmark;
+  static constexpr const char* what = "landmark observation";
+};
+template <> struct InputKind<BeaconRange> {
+  static constexpr int rank = 6;
+  static constexpr Measurement measurement = Measurement::Beacon;
+  static constexpr const char* what = "beacon range";
+};
+template <> struct InputKind<BearingsInput> { static constexpr int rank = 7; };
+
+/// The canonical rank of a kind of input (InputKind<T>::rank).
+template <typename T>
+inline constexpr int kCanonicalRank = InputKind<T>::rank;
 
 namespace detail {
 template <typename Variant>
@@ -53,10 +86,10 @@ struct EveryInputRanked<std::variant<T...>> {
   static constexpr bool value = ((kCanonicalRank<T> >= 0) && ...);
 };
 }  // namespace detail
-static_assert(detail::EveryInputRanked<decltype(EngineInput::payload)>::value,
-              "every kind of EngineInput needs a kCanonicalRank");
+static_assert(detail::EveryInputRanked<InputPayload>::value,
+              "every kind of EngineInput needs an InputKind with a rank");
 
-/// The canonical rank of in's kind (kCanonicalRank).
+/// The canonical rank of in's kind (InputKind<T>::rank).
 inline int canonicalRank(const EngineInput& in) {
   return std::visit([](const auto& p) { return kCanonicalRank<std::decay_t<decltype(p)>>; }, in.payload);
 }

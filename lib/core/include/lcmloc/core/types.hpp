@@ -2,6 +2,7 @@
 // Plain data types of the fusion core. No middleware: these are what the LCM adapter
 // converts lcmtypes to and from (lib/bus/include/lcmloc/bus/convert.hpp).
 #include <Eigen/Core>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -23,6 +24,8 @@ struct OdometryInput {
   double steering = 0.0;      ///< measured steering angle psi [rad] (valid if has_steering)
   bool has_steering = false;  ///< car-like source: delta_theta follows eq. 2 from steering
   double delta_theta = 0.0;   ///< heading increment [rad] (used as is when !has_steering)
+  /// No NaN or Inf in a field the filters read (the engine skips the input otherwise).
+  bool finite() const { return std::isfinite(delta_s) && std::isfinite(steering) && std::isfinite(delta_theta); }
 };
 
 /// A magnetic-ruler marker detection.
@@ -43,6 +46,7 @@ struct ImuInput {
   Vec3 mag = Vec3::Zero();    ///< magnetic field [gauss]
   std::string sensor = "IMU"; ///< input channel (for gate decisions)
   int64_t seq = 0;
+  bool finite() const { return accel.allFinite() && gyro.allFinite() && mag.allFinite(); }
 };
 
 /// A GNSS fix already converted to the local metric frame (x east, y north) by the adapter.
@@ -53,6 +57,8 @@ struct GpsInput {
   double position_std = 0.0;   ///< 1-sigma horizontal error [m]; <= 0 or NaN: use the filter's default
   std::string sensor = "GPS";
   int64_t seq = 0;
+  /// A fix without a fix carries no position: it is handed on (the filter reports "no_fix").
+  bool finite() const { return !has_fix || (std::isfinite(x) && std::isfinite(y)); }
 };
 
 /// A range-bearing observation of a map landmark (channel LANDMARKS), measured from the
@@ -66,6 +72,9 @@ struct LandmarkObservation {
   double bearing_std = 0.0;     ///< 1 sigma [rad]; <= 0: the filter's landmark.bearing_std
   std::string sensor = "LANDMARKS";
   int64_t seq = 0;
+  bool finite() const {
+    return std::isfinite(range) && std::isfinite(bearing) && std::isfinite(range_std) && std::isfinite(bearing_std);
+  }
 };
 
 /// A range-only measurement to a beacon of the map (channel BEACONS), from M.
@@ -76,6 +85,7 @@ struct BeaconRange {
   double range_std = 0.0;       ///< 1 sigma [m]; <= 0: the filter's landmark.beacon_std
   std::string sensor = "BEACONS";
   int64_t seq = 0;
+  bool finite() const { return std::isfinite(range) && std::isfinite(range_std); }
 };
 
 /// A magnetic marker of the map.
