@@ -50,8 +50,10 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
   out.on_state = [this](const std::string& f, bool active, const core::FilterState& s) { publishState(f, active, s); };
   out.on_decision = [this](const std::string& f, bool, const core::GateDecision& d) {
     bus_.publish(cfg_.channels.gate, common::toLcm(d, f, out_seq_[cfg_.channels.gate]++));
+    // Every decision is on the GATE channel; a rejection is a debug line (a replay of a real
+    // recording rejects thousands), a lock-out an event.
     if (!d.accepted && d.reason == "gate")
-      spdlog::info("{}: {} seq {} rejected by the gate (tau = {:.2f} > {:.3f})", f, common::printable(d.sensor),
+      spdlog::debug("{}: {} seq {} rejected by the gate (tau = {:.2f} > {:.3f})", f, common::printable(d.sensor),
                    d.measurement_seq, d.mahalanobis, d.gate);
   };
   out.on_event = [this](const core::EngineEvent& e) {
