@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/gps_experiment/experiment.hpp"
+#include "lcmloc/gps_experiment/monte_carlo.hpp"
 
 using namespace lcmloc;
 
@@ -57,5 +57,78 @@ TEST(GpsExperiment, DeadReckoningNeverConvergesAndHasNoSteadyStateInTheReport) {
   EXPECT_FALSE(dr.at("converged").get<bool>());
   for (const char* k : {"convergence_s", "steady_rmse_m", "steady_max_m", "gps_rmse_same_period_m", "ratio_to_gps"})
     EXPECT_TRUE(dr.at(k).is_null()) << k;  // not a zero error
+  std::filesystem::remove_all(dir);
+}
+
+TEST(GpsExperiment, ExtendedPathRepeatsTheSegmentsUntilTheDriveIsLongEnough) {
+  auto cfg = common::loadSystemConfig(LCMLOC_GPS_PAPER_YAML);
+  const auto& sc = cfg.scenario;
+  double lap = 0;
+  for (const auto& s : sc.path.segments) lap += s.length;
+  const auto p = gps_experiment::extendedPath(sc, 240.0);
+  double length = 0;
+  for (const auto& s : p.segments) length += s.length;
+  EXPECT_GE(length / sc.vehicle.speed, 240.0);
+  EXPECT_LT((length - lap) / sc.vehicle.speed, 240.0);  // not one lap more than needed
+  EXPECT_EQ(p.segments.size() % sc.path.segments.size(), 0u);
+  EXPECT_EQ(gps_experiment::extendedPath(sc, 0.0).segments.size(), sc.path.segments.size());
+}
+
+// A small version of the steady-state Monte Carlo (the command runs 100 seeds over 240 s).
+TEST(GpsExperiment, MonteCarloScoresEverySeedAtEveryRateAfterSettling) {
+  auto cfg = common::loadSystemConfig(LCMLOC_GPS_PAPER_YAML);
+  std::vector<core::FilterConfig> filters;
+  for (const char* t : {"ukf_gps", "dead_reckoning"}) {
+    core::FilterConfig f = cfg.fusion.filter;
+    f.type = t;
+    filters.push_back(f);
+  }
+  gps_experiment::MonteCarloOptions opt;
+  opt.runs = 3;
+  opt.min_drive_s = 60.0;
+  int calls = 0;
+  const auto m = gps_experiment::monteCarlo(cfg.scenario, filters, opt, [&](int done, int total) {
+    EXPECT_EQ(done, ++calls);
+    EXPECT_EQ(total, 6);
+  });
+  EXPECT_EQ(calls, 6);
+  EXPECT_GE(m.drive_s, 60.0);
+  ASSERT_EQ(m.groups.size(), 4u);  // rate-major: (1 Hz, ukf_gps), (1 Hz, dr), (10 Hz, ukf_gps), (10 Hz, dr)
+  for (std::size_t g = 0; g < 4; ++g) {
+    ASSERT_EQ(m.groups[g].runs.size(), 3u);
+    EXPECT_EQ(m.groups[g].rate_hz, g < 2 ? 1.0 : 10.0);
+    for (int i = 0; i < 3; ++i) EXPECT_EQ(m.groups[g].runs[i].seed, cfg.scenario.seed + static_cast<uint64_t>(i));
+  }
+  const auto& ukf1 = m.groups[0];
+  const auto& ukf10 = m.groups[2];
+  EXPECT_EQ(ukf1.filter, "ukf_gps");
+  EXPECT_EQ(ukf1.converged, 3);
+  EXPECT_EQ(ukf10.converged, 3);
+  EXPECT_EQ(m.groups[1].converged, 0);  // dead reckoning starts 158 m off and never sees a fix
+  for (const auto& r : ukf1.runs) {
+    EXPECT_GT(r.rmse_m, 0.0);
+    EXPECT_LT(r.rmse_m, 5.0);  // after settling the error stays about the 5 m threshold or below
+    EXPECT_GT(r.nees_mean, 0.0);
+  }
+  // The seeds differ: three runs do not give one result.
+  EXPECT_NE(ukf1.runs[0].rmse_m, ukf1.runs[1].rmse_m);
+  // Ten times the fixes: a smaller error at the median.
+  EXPECT_LT(ukf10.rmse_median, ukf1.rmse_median);
+  EXPECT_LE(ukf1.rmse_median, ukf1.rmse_p95);
+
+  // Deterministic: the same seeds give the same figures.
+  const auto again = gps_experiment::monteCarlo(cfg.scenario, filters, opt);
+  EXPECT_EQ(again.groups[0].rmse_median, ukf1.rmse_median);
+  EXPECT_EQ(again.groups[2].nees_mean, ukf10.nees_mean);
+
+  const std::string dir = (std::filesystem::temp_directory_path() / "lcmloc_gps_experiment_mc").string();
+  std::filesystem::create_directories(dir);
+  gps_experiment::writeMonteCarlo(m, opt, dir);
+  std::ifstream in(dir + "/montecarlo.json");
+  const auto j = nlohmann::json::parse(in);
+  ASSERT_EQ(j.at("groups").size(), 4u);
+  EXPECT_EQ(j.at("groups")[0].at("runs").size(), 3u);
+  EXPECT_DOUBLE_EQ(j.at("groups")[0].at("rmse_median_m").get<double>(), ukf1.rmse_median);
+  EXPECT_TRUE(j.at("groups")[1].at("rmse_median_m").is_null());  // no run of dead reckoning settled
   std::filesystem::remove_all(dir);
 }

@@ -28,6 +28,20 @@ const models::TruthState* truthAt(const std::vector<models::TruthState>& truth, 
 
 }  // namespace
 
+int64_t settledFrom(const std::vector<scenario::TrackPoint>& track, const Options& opt) {
+  int64_t start = -1;
+  for (const auto& p : track) {
+    const double e = std::hypot(p.estimate.x[0] - p.truth.x(), p.estimate.x[1] - p.truth.y());
+    if (e >= opt.converged_m) {
+      start = -1;
+      continue;
+    }
+    if (start < 0) start = p.utime;
+    if (static_cast<double>(p.utime - start) * 1e-6 >= opt.hold_s) break;
+  }
+  return start;
+}
+
 Result run(const models::ScenarioConfig& sc, const std::vector<core::FilterConfig>& filters,
            const Options& opt) {
   Result r;
@@ -50,16 +64,8 @@ Result run(const models::ScenarioConfig& sc, const std::vector<core::FilterConfi
     s.lockouts = f.lockout_events;
     for (const auto& d : f.decisions)
       if (d.sensor == "GPS") (d.accepted ? s.gps_accepted : s.gps_rejected)++;
-    // convergence: the start of the first stretch of >= hold_s with error < converged_m that
-    // lasts to the end of the run or for hold_s, whichever the run allows.
     const auto& tr = f.track;
-    int64_t start = -1;
-    for (const auto& p : tr) {
-      const double e = std::hypot(p.estimate.x[0] - p.truth.x(), p.estimate.x[1] - p.truth.y());
-      if (e >= opt.converged_m) { start = -1; continue; }
-      if (start < 0) start = p.utime;
-      if (static_cast<double>(p.utime - start) * 1e-6 >= opt.hold_s) break;
-    }
+    const int64_t start = settledFrom(tr, opt);
     if (start >= 0) s.convergence_s = static_cast<double>(start - t0) * 1e-6;
     if (start >= 0) {
       std::vector<double> steady, gps;

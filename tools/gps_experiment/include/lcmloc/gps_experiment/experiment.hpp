@@ -3,6 +3,7 @@
 // starts at (0, 0) while the truth starts at (150, 50). Runs the scenario in process (the same
 // models the driver processes wrap) and measures convergence time and steady-state error
 // against the raw GPS error.
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,11 @@ struct Result {
   std::vector<FilterSummary> filters;
   double gps_rmse_all_m = 0;  ///< raw GPS RMSE over the whole run
 };
+
+/// The settling time of a track: the start of the first stretch of at least opt.hold_s with
+/// the position error below opt.converged_m, or of such a stretch that lasts to the end of the
+/// run (-1: none).
+int64_t settledFrom(const std::vector<scenario::TrackPoint>& track, const Options& opt);
 
 Result run(const models::ScenarioConfig& sc, const std::vector<core::FilterConfig>& filters,
            const Options& opt);
