@@ -24,6 +24,7 @@
 #include "lcmloc/gate_decision_t.hpp"
 #include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"
+#include "lcmloc/landmark_obs_t.hpp"
 #include "lcmloc/pose_t.hpp"
 #include "test_log_writer.hpp"
 
@@ -470,6 +471,48 @@ TEST_F(EvaluateTest, CommandLineReportsEverything) {
   ASSERT_EQ(evaluate(file("run.lcmlog") + " --pose-channel POSE_DEAD_RECKONING --no-plots -o " + file("out2")), 0);
   EXPECT_EQ(report(file("out2"))["tracks"].size(), 1u);
   EXPECT_NEAR(report(file("out2"))["tracks"][0]["position_error_m"]["rmse"].get<double>(), 1.0, 1e-9);
+}
+
+// Observations without identity (landmark_id -1: other robots in a recording) are counted apart
+// from known ones: which of them each filter accepted.
+TEST_F(EvaluateTest, AcceptedObservationsWithoutIdentityAreCountedApart) {
+  {
+    LogWriter w(file("run.lcmlog"));
+    for (int i = 0; i <= 200; ++i) {
+      const int64_t t = kT0 + i * 10000;
+      w.add("GROUND_TRUTH", truthMsg(t, 0.01 * i, 0.0, 0.0), t);
+      w.add("POSE", poseMsg(t, 0.01 * i, 0.0, 0.0, Eigen::Matrix3d::Identity() * 0.01, "ukf_landmarks"), t);
+      if (i % 10 != 0) continue;
+      const int seq = i / 10;  // 21 observations, every third (seq 0, 3, ..., 18) without identity
+      landmark_obs_t o{};
+      o.utime = t;
+      o.seq = seq;
+      o.landmark_id = seq % 3 == 0 ? -1 : 5;
+      o.range = 2.0;
+      w.add("LANDMARKS", o, t);
+      // The filter accepts every known one but seq 1, and the unknown ones with seq 0 and 9.
+      const bool accepted = o.landmark_id >= 0 ? seq != 1 : (seq == 0 || seq == 9);
+      gate_decision_t d = gateMsg("ukf_landmarks", "LANDMARKS", 2, 1.0, accepted, accepted ? "accepted" : "gate");
+      d.measurement_seq = seq;
+      w.add("GATE", d, t);
+      gate_decision_t other = gateMsg("ukf_landmarks", "BEACONS", 1, 1.0, true, "accepted");
+      other.measurement_seq = seq;  // another sensor's seq: not a landmark observation
+      w.add("GATE", other, t);
+    }
+  }
+  ASSERT_EQ(evaluate(file("run.lcmlog") + " --no-plots -o " + file("out")), 0) << output_;
+  const auto u = report(file("out")).at("unknown_identity");
+  EXPECT_EQ(u.at("landmark_observations"), 21);
+  EXPECT_EQ(u.at("without_identity"), 7);
+  ASSERT_EQ(u.at("by_filter").size(), 1u);
+  const auto& f = u["by_filter"][0];
+  EXPECT_EQ(f.at("filter"), "ukf_landmarks");
+  EXPECT_EQ(f.at("known_decided"), 14);
+  EXPECT_EQ(f.at("known_accepted"), 13);
+  EXPECT_EQ(f.at("unknown_decided"), 7);
+  EXPECT_EQ(f.at("unknown_accepted"), 2);
+  EXPECT_NE(output_.find("7 of 21 landmark observation(s) without identity"), std::string::npos) << output_;
+  EXPECT_NE(output_.find("2 of 7"), std::string::npos) << output_;
 }
 
 TEST_F(EvaluateTest, GpsFixTruthNeedsADatum) {

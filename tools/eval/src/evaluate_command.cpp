@@ -106,6 +106,7 @@ int runEvaluate(EvaluateCommand c) {
       if (!o_truth->count()) lo.truth_channel = cfg.channels.ground_truth;
       if (!o_gate->count()) lo.gate_channel = cfg.channels.gate;
       lo.fault_channel = cfg.channels.fault_events;
+      lo.landmark_channel = cfg.channels.landmarks;
       lo.datum = cfg.datum;
     }
     if (!datum.empty()) {

@@ -153,6 +153,29 @@ std::vector<FaultGroup> faultStatistics(const std::vector<GateRecord>& gates,
   return out;
 }
 
+std::vector<IdentityGroup> identityStatistics(const std::vector<GateRecord>& gates, const std::string& landmark_channel,
+                                              const std::vector<std::pair<std::string, int64_t>>& unknown) {
+  const std::set<std::pair<std::string, int64_t>> keys(unknown.begin(), unknown.end());
+  std::map<std::string, IdentityGroup> by_filter;
+  for (const auto& g : gates) {
+    if (g.sensor != landmark_channel || core::isIgnoredDecision(g.reason)) continue;
+    IdentityGroup& c = by_filter[g.filter];
+    if (keys.count({g.sensor, g.measurement_seq})) {
+      ++c.unknown_decided;
+      c.unknown_accepted += g.accepted;
+    } else {
+      ++c.known_decided;
+      c.known_accepted += g.accepted;
+    }
+  }
+  std::vector<IdentityGroup> out;
+  for (auto& [filter, c] : by_filter) {
+    c.filter = filter;
+    out.push_back(c);
+  }
+  return out;
+}
+
 ReplayComparison compareTracks(const EstimateTrack& recorded, const EstimateTrack& replayed) {
   ReplayComparison c;
   if (!recorded.filters.empty()) c.filter = recorded.filters.back();

@@ -9,6 +9,7 @@
 #include "lcmloc/fault_event_t.hpp"
 #include "lcmloc/gate_decision_t.hpp"
 #include "lcmloc/gps_fix_t.hpp"
+#include "lcmloc/landmark_obs_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/pose_t.hpp"
 
@@ -21,6 +22,7 @@ class TrajectoryDecoder {
  public:
   TrajectoryDecoder(const TrajectoryLogOptions& opt, TrajectoryLog& out) : opt_(opt), out_(out) {
     out_.tracks.push_back({opt.pose_channel, {}, {}});
+    out_.landmark_channel = opt.landmark_channel;
   }
 
   void handle(const lcm::LogEvent& ev, int64_t index, int64_t offset) {
@@ -32,6 +34,7 @@ class TrajectoryDecoder {
     else if (opt_.all_pose_channels && c.size() > 5 && c.compare(0, 5, "POSE_") == 0) pose(ev, trackIndex(c));
     else if (c == opt_.gate_channel) gate(ev);
     else if (c == opt_.fault_channel) fault(ev);
+    else if (!opt_.landmark_channel.empty() && c == opt_.landmark_channel) landmark(ev);
   }
 
   /// Sorts every track and the truth by utime; extra tracks by channel name.
@@ -166,6 +169,13 @@ class TrajectoryDecoder {
     lcmloc::fault_event_t m{};
     if (!decode(ev, m) || !usable(ev, m.utime)) return;
     out_.faults.push_back({m.utime, m.kind, m.channel, m.measurement_seq});
+  }
+
+  void landmark(const lcm::LogEvent& ev) {
+    lcmloc::landmark_obs_t m{};
+    if (!decode(ev, m) || !usable(ev, m.utime)) return;
+    ++out_.landmark_observations;
+    if (m.landmark_id < 0) out_.unknown_identity.emplace_back(ev.channel, m.seq);
   }
 
   const TrajectoryLogOptions& opt_;

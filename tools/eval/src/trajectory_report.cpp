@@ -161,6 +161,14 @@ json makeTrajectoryReport(const TrajectoryLog& log, const std::vector<TrackScore
     }
     j["faults"] = {{"announced", log.faults.size()}, {"by_filter", by}};
   }
+  if (!log.unknown_identity.empty()) {
+    json by = json::array();
+    for (const auto& g : identityStatistics(log.gates, log.landmark_channel, log.unknown_identity))
+      by.push_back({{"filter", g.filter}, {"known_decided", g.known_decided}, {"known_accepted", g.known_accepted},
+                    {"unknown_decided", g.unknown_decided}, {"unknown_accepted", g.unknown_accepted}});
+    j["unknown_identity"] = {{"landmark_observations", log.landmark_observations},
+                             {"without_identity", log.unknown_identity.size()}, {"by_filter", by}};
+  }
   if (const auto& c = meta.live_vs_replay)
     j["live_vs_replay"] = {{"filter", c->filter},
                            {"matched_poses", c->matched},
@@ -238,6 +246,16 @@ void printTrajectorySummary(std::ostream& os, const TrajectoryLog& log, const st
       os << std::left << std::setw(22) << withoutControlCharacters(g.filter) << std::right << std::setw(16)
          << g.counts.faults_rejected << std::setw(16) << g.counts.faults_accepted << std::setw(16)
          << g.counts.valid_rejected << "\n";
+  }
+  if (!log.unknown_identity.empty()) {
+    os << log.unknown_identity.size() << " of " << log.landmark_observations
+       << " landmark observation(s) without identity (landmark_id -1)\n"
+       << std::left << std::setw(22) << "identity filter" << std::right << std::setw(18) << "known accepted"
+       << std::setw(22) << "unknown accepted" << "\n";
+    for (const auto& g : identityStatistics(log.gates, log.landmark_channel, log.unknown_identity))
+      os << std::left << std::setw(22) << withoutControlCharacters(g.filter) << std::right << std::setw(18)
+         << (std::to_string(g.known_accepted) + " of " + std::to_string(g.known_decided)) << std::setw(22)
+         << (std::to_string(g.unknown_accepted) + " of " + std::to_string(g.unknown_decided)) << "\n";
   }
   if (live_vs_replay) {
     os << "recorded " << withoutControlCharacters(live_vs_replay->filter) << " against its replay: ";

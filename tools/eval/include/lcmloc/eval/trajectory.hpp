@@ -66,6 +66,9 @@ struct TrajectoryLogOptions {
   std::string truth_channel = "GROUND_TRUTH";
   std::string gate_channel = "GATE";
   std::string fault_channel = "FAULT_EVENTS";  ///< fault_event_t: measurements known to be faults
+  /// landmark_obs_t: which observations carry no identity (landmark_id -1: the filter associates
+  /// them with the nearest landmark; in a recording, e.g. other robots seen) ("" = none).
+  std::string landmark_channel = "LANDMARKS";
   /// Needed only when the truth channel holds gps_fix_t (lat/lon -> local x east, y north).
   std::optional<common::Datum> datum;
 };
@@ -88,6 +91,11 @@ struct TrajectoryLog {
   std::string truth_type;            ///< "ground_truth_t", "gps_fix_t" or "" (none decoded)
   std::vector<GateRecord> gates;     ///< in log order
   std::vector<AnnouncedFault> faults;  ///< in log order
+  /// Observations on the landmark channel: their count, and the (channel, seq) of those without
+  /// an identity (landmark_id < 0).
+  std::string landmark_channel;      ///< TrajectoryLogOptions::landmark_channel
+  int64_t landmark_observations = 0;
+  std::vector<std::pair<std::string, int64_t>> unknown_identity;
   std::vector<LogIssue> issues;      ///< damage and undecodable/invalid messages, in file order
   int64_t bad_utime = 0;             ///< messages skipped for |utime| >= kUtimeLimit (also in issues)
 };
@@ -174,6 +182,22 @@ struct FaultGroup {
 /// measurement_seq).
 std::vector<FaultGroup> faultStatistics(const std::vector<GateRecord>& gates,
                                         const std::vector<AnnouncedFault>& faults);
+
+/// The decisions of one filter on landmark observations, those of known identity apart from
+/// those without one (landmark_id -1). An accepted observation without identity was associated
+/// with a landmark by the filter: where the recording's unknown observations are distractors
+/// (other robots, say), each one accepted is a wrong update.
+struct IdentityGroup {
+  std::string filter;
+  int known_decided = 0, known_accepted = 0;
+  int unknown_decided = 0, unknown_accepted = 0;
+};
+
+/// Per filter (sorted by name): a decision is on an observation without identity when its
+/// (sensor, measurement_seq) is one of unknown; decisions on other sensors are not counted. Only
+/// filters that decided on the landmark channel are listed.
+std::vector<IdentityGroup> identityStatistics(const std::vector<GateRecord>& gates, const std::string& landmark_channel,
+                                              const std::vector<std::pair<std::string, int64_t>>& unknown);
 
 /// The recorded estimates against the replay of the same filter (lcmloc-evaluate --filters).
 struct ReplayComparison {
