@@ -84,7 +84,7 @@ Classified classify(const std::vector<std::string>& h) {
   for (std::size_t i = 0; i < cols.size(); ++i) {
     if (cols[i] == "time" || cols[i] == "time_s" || cols[i] == "time_us")
       c.problem = "a second time column '" + cols[i] + "'";
-    else if (std::find(cols.begin(), cols.begin() + static_cast<std::ptrdiff_t>(i), cols[i]) != cols.begin() + static_cast<std::ptrdiff_t>(i))
+    else if (has(std::vector<std::string>(cols.begin(), cols.begin() + static_cast<std::ptrdiff_t>(i)), cols[i]))
       c.problem = "column '" + cols[i] + "' twice";
     if (!c.problem.empty()) return c;
   }
@@ -120,7 +120,7 @@ Classified classify(const std::vector<std::string>& h) {
   } else if (has(cols, "range") && !has(cols, "bearing") && !has(cols, "landmark_id")) {
     c.problem = "ranges without a beacon_id column: beacons without an id are not supported (the filters take a "
                 "range to the map beacon of its id; ranges of unknown identity are not associated); give each row "
-                "its beacon's map id (" + signature(formats()[4]) + ")";
+                "its beacon's map id (time,beacon_id,range[,range_std])";
   } else {
     // the format that has most of its required columns: what is missing from it
     std::size_t most = 0;
