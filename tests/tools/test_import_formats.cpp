@@ -92,7 +92,7 @@ TEST(ImportFormats, AFileThatIsNoneOfTheFormatsIsAnErrorNamingItTheFormatsAndIts
                         "time,landmark_id,range,bearing[,range_std][,bearing_std]", "time,beacon_id,range[,range_std]",
                         "time,x,y[,position_std]", "time,latitude,longitude[,position_std]", "time,x,y,heading",
                         "time,truth_x,truth_y[,truth_heading]",
-                        "time,accel_x,accel_y,accel_z,gyro_x,gyro_y,gyro_z[,mag_x][,mag_y][,mag_z]", "id,x,y"})
+                        "time,accel_x,accel_y,accel_z,gyro_x,gyro_y,gyro_z[,mag_x,mag_y,mag_z]", "id,x,y"})
     EXPECT_HAS(what, f);
   EXPECT_FALSE(fs::exists(d / "out"));  // nothing written
   // An empty file and a header of no format with a time column: both named, in one message.

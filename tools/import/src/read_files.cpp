@@ -46,6 +46,11 @@ bool has(const std::vector<std::string>& v, const std::string& x) { return std::
 std::string signature(const FormatInfo& fi) {
   std::string s = "time";
   for (const auto& c : fi.required) s += "," + c;
+  if (fi.format == Format::Imu) {  // the magnetometer: its three columns or none
+    std::string mag;
+    for (const auto& c : fi.optional) mag += "," + c;
+    return s + "[" + mag + "]";
+  }
   for (const auto& c : fi.optional) s += "[," + c + "]";
   return s;
 }
