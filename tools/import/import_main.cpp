@@ -8,10 +8,11 @@ using namespace lcmloc;
 
 int main(int argc, char** argv) {
   CLI::App app{
-      "lcmloc-import: imports a directory of CSV files (odometry, landmarks, beacons, gps, ground truth, map; one "
-      "header row each, recognised by the header, see docs/import_formats.md) into OUT/run.lcmlog (ODOMETRY, "
-      "LANDMARKS, BEACONS, GPS, GROUND_TRUTH), OUT/map.csv and OUT/config.yaml for lcmloc-replay. Refused rows are "
-      "listed with file, line and reason. Exit 1 when nothing usable was read."};
+      "lcmloc-import: imports a directory of CSV files (odometry, landmarks, beacons, gps, ground truth, imu, map; "
+      "one header row each, recognised by its column names, see docs/import_formats.md) into OUT/run.lcmlog "
+      "(ODOMETRY, LANDMARKS, BEACONS, GPS, GROUND_TRUTH, IMU), OUT/map.csv and OUT/config.yaml for lcmloc-replay. "
+      "Refused rows are listed with file, line and reason. Exit 2 when a *.csv file is none of the formats (the "
+      "formats are listed), 1 when nothing usable was read."};
   common::CommonOptions opts;
   common::addCommonOptions(app, opts);
   import::ImportCommand command;

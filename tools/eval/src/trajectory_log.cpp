@@ -119,10 +119,12 @@ class TrajectoryDecoder {
     lcmloc::ground_truth_t g{};
     if (decode(ev, g, false)) {
       if (!usable(ev, g.utime)) return;
-      if (!finite(g.x) || !finite(g.y) || !finite(g.heading))
+      if (!finite(g.x) || !finite(g.y) || std::isinf(g.heading))
         return issue("truth seq " + std::to_string(g.seq) + ": non-finite pose");
       noteTruthType("ground_truth_t");
-      out_.truth.push_back({g.utime, g.x, g.y, g.heading, true});
+      // a NaN heading: a truth of position only (lcmloc-import's ground truth without heading)
+      const bool has_heading = !std::isnan(g.heading);
+      out_.truth.push_back({g.utime, g.x, g.y, has_heading ? g.heading : 0.0, has_heading});
       return;
     }
     lcmloc::gps_fix_t f{};

@@ -1,5 +1,5 @@
 // Pass 2 of lcmloc-import (import_files.hpp): the rows of each file converted into our messages
-// (odometry, landmark and beacon observations, GPS fixes, ground truth), with the range checks
+// (odometry, landmark and beacon observations, GPS fixes, ground truth, IMU samples), with the range checks
 // that refuse a row.
 #include <algorithm>
 #include <cmath>
@@ -12,10 +12,12 @@
 #include "import_files.hpp"
 #include "lcmloc/app/csv.hpp"
 #include "lcmloc/beacon_range_t.hpp"
+#include "lcmloc/bus/convert.hpp"
 #include "lcmloc/bus/geodesy.hpp"
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"
+#include "lcmloc/imu_t.hpp"
 #include "lcmloc/landmark_obs_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 
@@ -33,25 +35,47 @@ void addMsg(EventLog& log, FileReport& rep, int order, const std::string& ch, co
   ++rep.written;
 }
 
-bool parseId(const std::string& s, int& id, bool allow_unknown, std::string& why) {
+/// The id column (landmark_id, beacon_id; column number c): an integer >= 0, or (landmarks)
+/// "unknown" = -1.
+bool parseId(const std::string& s, std::size_t c, bool landmark, int& id, std::string& why) {
   std::string low = s;
-  std::transform(low.begin(), low.end(), low.begin(), [](unsigned char c) { return std::tolower(c); });
-  if (allow_unknown && low == "unknown") {
-    id = -1;
-    return true;
+  std::transform(low.begin(), low.end(), low.begin(), [](unsigned char ch) { return std::tolower(ch); });
+  if (low == "unknown") {
+    if (landmark) {
+      id = -1;
+      return true;
+    }
+    why = fmt::format("column {}: beacon id 'unknown': beacons without an id are not supported (the filters take a "
+                      "range to the map beacon of its id)", c);
+    return false;
   }
   double v = 0;
-  if (!common::csv::parseNumber(s, 2, v, why)) {
-    if (allow_unknown) why += " (an integer id >= 0 or \"unknown\")";
+  if (!common::csv::parseNumber(s, c, v, why)) {
+    if (landmark) why += " (an integer id >= 0 or \"unknown\")";
     return false;
   }
   if (v < 0 || v != std::floor(v) || v > 2e9) {
-    why = fmt::format("column 2: id must be an integer >= 0, got '{}'", s);
+    why = fmt::format("column {}: id must be an integer >= 0, got '{}'", c, s);
     return false;
   }
   id = static_cast<int>(v);
   return true;
 }
+
+/// A per-row 1-sigma column (its name ends in _std): finite (parseNumber) and > 0.
+bool checkStd(const std::string& name, std::size_t c, double v, std::string& why) {
+  if (v > 0) return true;
+  why = fmt::format("column {}: {} must be > 0, got {} (a column of sigmas holds one for every row; leave the column "
+                    "out for the config's default)", c, name, v);
+  return false;
+}
+
+/// Ground truth, position only: the initial heading is the direction of travel from the first
+/// row to the first row at least this far from it [m].
+constexpr double kTravelForHeading = 1.0;
+/// A ground-truth position further from the origin than this is refused [m] (the bound of
+/// fusion.filter.initial_pose, where the first one goes).
+constexpr double kMaxPosition = 1e7;
 
 }  // namespace
 
@@ -70,7 +94,6 @@ Converted convertRows(std::vector<DataFile>& files, const std::vector<const Data
   bool& have_beacons = out.have_beacons;
   bool& have_gps = out.have_gps;
   std::optional<core::Vec3>& first_truth = out.first_truth;
-  int64_t first_truth_utime = 0;
   std::map<std::string, int64_t> seq;
   // Landmarks, beacons and gps may come from several files at once: numbered per channel in
   // time order once all are read (the daemon counts a jump in seq as lost messages).
@@ -90,6 +113,11 @@ Converted convertRows(std::vector<DataFile>& files, const std::vector<const Data
     double a_prev = 0, b_prev = 0, dist = 0, x_prev = 0, y_prev = 0;
     std::string why;
     std::vector<double> v;
+    // a named column's value in v (all but the id column), or `otherwise` when the file has none
+    auto at = [&](const char* name, double otherwise = 0.0) {
+      const std::size_t i = df.col(name);
+      return i == std::string::npos ? otherwise : v[i];
+    };
     for (auto& row : df.rows) {
       row.utime -= shift;
       const int64_t ln = row.line;
@@ -98,10 +126,12 @@ Converted convertRows(std::vector<DataFile>& files, const std::vector<const Data
       bool ok = true;
       int id = -1;
       for (std::size_t i = 1; i < row.fields.size() && ok; ++i) {
-        if ((df.format == Format::Landmarks || df.format == Format::Beacons) && i == 1)
-          ok = parseId(row.fields[1], id, df.format == Format::Landmarks, why);
+        const std::string& name = df.names[i];
+        if (name == "landmark_id" || name == "beacon_id")
+          ok = parseId(row.fields[i], i + 1, df.format == Format::Landmarks, id, why);
         else
-          ok = common::csv::parseNumber(row.fields[i], i + 1, v[i], why);
+          ok = common::csv::parseNumber(row.fields[i], i + 1, v[i], why) &&
+               (name.size() < 4 || name.compare(name.size() - 4, 4, "_std") != 0 || checkStd(name, i + 1, v[i], why));
       }
       if (!row.time_refusal.empty()) { refuse(rep, ln, row.time_refusal); continue; }
       if (!ok) { refuse(rep, ln, why); continue; }
@@ -114,19 +144,22 @@ Converted convertRows(std::vector<DataFile>& files, const std::vector<const Data
           m.utime = row.utime;
           m.ticks = 0;
           if (df.format == Format::OdoDelta) {
-            if (std::abs(v[1]) > 100.0) { refuse(rep, ln, fmt::format("|delta_s| {} m above 100 m", v[1])); continue; }
-            if (std::abs(v[2]) > kPi) { refuse(rep, ln, fmt::format("|delta_theta| {} rad above pi", v[2])); continue; }
-            m.delta_s = v[1];
-            m.delta_theta = v[2];
+            const double ds = at("delta_s"), dth = at("delta_theta");
+            if (std::abs(ds) > 100.0) { refuse(rep, ln, fmt::format("|delta_s| {} m above 100 m", ds)); continue; }
+            if (std::abs(dth) > kPi) { refuse(rep, ln, fmt::format("|delta_theta| {} rad above pi", dth)); continue; }
+            m.delta_s = ds;
+            m.delta_theta = dth;
             m.has_steering = false;
           } else {
-            if (std::abs(v[1]) > 100.0) { refuse(rep, ln, fmt::format("|speed| {} m/s above 100 m/s", v[1])); continue; }
-            if (df.format == Format::OdoSteering && std::abs(v[2]) >= kPi / 2) {
-              refuse(rep, ln, fmt::format("|steering| {} rad not below pi/2", v[2]));
+            const double speed = at("speed");
+            const double turn = df.format == Format::OdoYawRate ? at("yaw_rate") : at("steering");
+            if (std::abs(speed) > 100.0) { refuse(rep, ln, fmt::format("|speed| {} m/s above 100 m/s", speed)); continue; }
+            if (df.format == Format::OdoSteering && std::abs(turn) >= kPi / 2) {
+              refuse(rep, ln, fmt::format("|steering| {} rad not below pi/2", turn));
               continue;
             }
-            if (df.format == Format::OdoYawRate && std::abs(v[2]) > 100.0) {
-              refuse(rep, ln, fmt::format("|yaw_rate| {} rad/s above 100 rad/s", v[2]));
+            if (df.format == Format::OdoYawRate && std::abs(turn) > 100.0) {
+              refuse(rep, ln, fmt::format("|yaw_rate| {} rad/s above 100 rad/s", turn));
               continue;
             }
             // the speed and rate of a row hold until the next row (the first row starts the interval)
@@ -136,15 +169,15 @@ Converted convertRows(std::vector<DataFile>& files, const std::vector<const Data
               m.has_steering = false;
             } else {
               m.has_steering = true;
-              m.steering = have_prev ? b_prev : v[2];
+              m.steering = have_prev ? b_prev : turn;
               m.delta_theta = m.delta_s * std::tan(m.steering) / opt.wheelbase;
             }
             if (std::abs(m.delta_theta) > kPi) {
               refuse(rep, ln, fmt::format("heading increment {} rad over {} s above pi", m.delta_theta, dt));
               continue;
             }
-            a_prev = v[1];
-            b_prev = v[2];
+            a_prev = speed;
+            b_prev = turn;
           }
           m.seq = seq[opt.channels.odometry]++;
           addMsg(log, rep, 1, opt.channels.odometry, m);
@@ -156,13 +189,16 @@ Converted convertRows(std::vector<DataFile>& files, const std::vector<const Data
                                         : fmt::format("landmark id {} not in the map", id));
             continue;
           }
-          if (v[2] < 0) { refuse(rep, ln, fmt::format("negative range {}", v[2])); continue; }
-          if (std::abs(v[3]) > kPi) { refuse(rep, ln, fmt::format("bearing {} outside [-pi, pi] (radians expected)", v[3])); continue; }
+          const double range = at("range"), bearing = at("bearing");
+          if (range < 0) { refuse(rep, ln, fmt::format("negative range {}", range)); continue; }
+          if (std::abs(bearing) > kPi) { refuse(rep, ln, fmt::format("bearing {} outside [-pi, pi] (radians expected)", bearing)); continue; }
           lcmloc::landmark_obs_t m{};
           m.utime = row.utime;
           m.landmark_id = id;
-          m.range = v[2];
-          m.bearing = core::wrapAngle(v[3]);
+          m.range = range;
+          m.bearing = core::wrapAngle(bearing);
+          m.range_std = at("range_std");      // 0: the filter's default
+          m.bearing_std = at("bearing_std");
           landmark_msgs.emplace_back(m, &rep);
           have_landmarks = true;
           break;
@@ -173,11 +209,13 @@ Converted convertRows(std::vector<DataFile>& files, const std::vector<const Data
                                         : fmt::format("beacon id {} not in the map", id));
             continue;
           }
-          if (v[2] < 0) { refuse(rep, ln, fmt::format("negative range {}", v[2])); continue; }
+          const double range = at("range");
+          if (range < 0) { refuse(rep, ln, fmt::format("negative range {}", range)); continue; }
           lcmloc::beacon_range_t m{};
           m.utime = row.utime;
           m.beacon_id = id;
-          m.range = v[2];
+          m.range = range;
+          m.range_std = at("range_std");      // 0: the filter's default
           beacon_msgs.emplace_back(m, &rep);
           have_beacons = true;
           break;
@@ -188,21 +226,22 @@ Converted convertRows(std::vector<DataFile>& files, const std::vector<const Data
           m.utime = row.utime;
           m.fix_type = 2;
           m.hdop = NAN;
-          m.position_std = v.size() > 3 ? v[3] : 0.0;
-          if (m.position_std < 0) { refuse(rep, ln, "negative position_std"); continue; }
+          m.position_std = at("position_std");  // 0: the filter's default
           if (df.format == Format::GpsLocal) {
-            if (std::abs(v[1]) > 1e5 || std::abs(v[2]) > 1e5) {
-              refuse(rep, ln, fmt::format("position ({}, {}) m more than 100 km from the origin", v[1], v[2]));
+            const double x = at("x"), y = at("y");
+            if (std::abs(x) > 1e5 || std::abs(y) > 1e5) {
+              refuse(rep, ln, fmt::format("position ({}, {}) m more than 100 km from the origin", x, y));
               continue;
             }
-            frame.toGeodetic(v[1], v[2], 0.0, m.latitude, m.longitude, m.altitude);
+            frame.toGeodetic(x, y, 0.0, m.latitude, m.longitude, m.altitude);
           } else {
-            if (std::abs(v[1]) > 90 || std::abs(v[2]) > 180) {
-              refuse(rep, ln, fmt::format("latitude/longitude ({}, {}) out of range", v[1], v[2]));
+            const double lat = at("latitude"), lon = at("longitude");
+            if (std::abs(lat) > 90 || std::abs(lon) > 180) {
+              refuse(rep, ln, fmt::format("latitude/longitude ({}, {}) out of range", lat, lon));
               continue;
             }
-            m.latitude = v[1];
-            m.longitude = v[2];
+            m.latitude = lat;
+            m.longitude = lon;
             m.altitude = opt.datum.altitude;
           }
           gps_msgs.emplace_back(m, &rep);
@@ -210,24 +249,57 @@ Converted convertRows(std::vector<DataFile>& files, const std::vector<const Data
           break;
         }
         case Format::Truth: {
+          const bool pose = df.col("heading") != std::string::npos || df.col("truth_heading") != std::string::npos;
+          const double x = df.col("x") != std::string::npos ? at("x") : at("truth_x");
+          const double y = df.col("y") != std::string::npos ? at("y") : at("truth_y");
+          if (std::abs(x) > kMaxPosition || std::abs(y) > kMaxPosition) {
+            refuse(rep, ln, fmt::format("position ({}, {}) m more than {} km from the origin", x, y, kMaxPosition / 1e3));
+            continue;
+          }
           lcmloc::ground_truth_t m{};
           m.utime = row.utime;
-          m.x = v[1];
-          m.y = v[2];
-          m.heading = core::wrapAngle(v[3]);
-          const double step = have_prev ? std::hypot(v[1] - x_prev, v[2] - y_prev) : 0.0;
+          m.x = x;
+          m.y = y;
+          // position only: NaN (lcmloc-evaluate then scores the position alone)
+          m.heading = pose ? core::wrapAngle(df.col("heading") != std::string::npos ? at("heading") : at("truth_heading"))
+                           : NAN;
+          const double step = have_prev ? std::hypot(x - x_prev, y - y_prev) : 0.0;
           dist += step;
           m.speed = dt > 0 ? step / dt : 0.0;
           m.steering = 0;
           m.distance = dist;
-          x_prev = v[1];
-          y_prev = v[2];
-          if (!first_truth || m.utime < first_truth_utime) {
-            first_truth = core::Vec3(m.x, m.y, m.heading);
-            first_truth_utime = m.utime;
+          x_prev = x;
+          y_prev = y;
+          if (!first_truth) {  // truth files are one stream in time order: the first row is the earliest
+            first_truth = core::Vec3(x, y, pose ? m.heading : 0.0);
+            out.truth_heading = pose ? "row" : "none";
+          } else if (out.truth_heading == "none" &&
+                     std::hypot(x - (*first_truth)[0], y - (*first_truth)[1]) >= kTravelForHeading) {
+            (*first_truth)[2] = std::atan2(y - (*first_truth)[1], x - (*first_truth)[0]);
+            out.truth_heading = "travel";
           }
           m.seq = seq[opt.channels.ground_truth]++;
           addMsg(log, rep, 0, opt.channels.ground_truth, m);
+          break;
+        }
+        case Format::Imu: {
+          static const char* const kAccel[] = {"accel_x", "accel_y", "accel_z"};
+          static const char* const kGyro[] = {"gyro_x", "gyro_y", "gyro_z"};
+          static const char* const kMag[] = {"mag_x", "mag_y", "mag_z"};
+          const bool with_mag = df.col("mag_x") != std::string::npos;
+          lcmloc::imu_t m{};
+          m.utime = row.utime;
+          for (int k = 0; k < 3; ++k) {
+            m.accel[k] = at(kAccel[k]);
+            m.gyro[k] = at(kGyro[k]);
+            m.mag[k] = at(kMag[k]);  // 0 without a magnetometer (config.yaml then turns it off)
+          }
+          std::string bad;  // what the fusion would refuse (lcmloc/bus/convert.hpp), refused here
+          if (!common::toCore(m, opt.channels.imu, &bad)) { refuse(rep, ln, bad); continue; }
+          out.imu_without_mag = out.imu_without_mag || !with_mag;
+          out.have_imu = true;
+          m.seq = seq[opt.channels.imu]++;
+          addMsg(log, rep, 1, opt.channels.imu, m);
           break;
         }
         case Format::Map: break;

@@ -7,12 +7,14 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 #include <fmt/format.h>
 
 #include "import_files.hpp"
 #include "lcmloc/app/csv.hpp"
+#include "lcmloc/core/angles.hpp"
 #include "lcmloc/import/checks.hpp"
 
 namespace lcmloc::import {
@@ -29,37 +31,61 @@ void checkOptions(const ImportOptions& opt) {
   if (!opt.filter.empty()) checkFilterValue("--filter", "type", opt.filter);
 }
 
-/// The config.yaml for lcmloc-replay at path: the filter `filter` from the initial pose of
+/// A number as config.yaml gets it: the shortest text that reads back to the same double, so
+/// that a value inside a bound the config checks stays inside it (3.141593 for pi did not).
+std::string num(double v) { return fmt::format("{}", v); }
+
+/// The text of config.yaml for lcmloc-replay: the filter `filter` from the initial pose of
 /// --initial-pose, else the first ground-truth pose, else 0; map.csv when there is a map.
-void writeConfig(const std::string& path, const ImportOptions& opt, const std::string& filter, bool with_map,
-                 const std::optional<core::Vec3>& first_truth) {
-  const core::Vec3 pose = opt.initial_pose ? *opt.initial_pose : first_truth ? *first_truth : core::Vec3::Zero();
+std::string configText(const ImportOptions& opt, const std::string& filter, bool with_map,
+                       const detail::Converted& conv) {
+  const auto& first_truth = conv.first_truth;
+  core::Vec3 pose = opt.initial_pose ? *opt.initial_pose : first_truth ? *first_truth : core::Vec3::Zero();
+  pose[2] = core::wrapAngle(pose[2]);  // (-pi, pi]
+  std::string source = " (no ground truth)";
+  if (opt.initial_pose) source = "";
+  else if (conv.truth_heading == "row") source = " (first ground-truth row)";
+  else if (conv.truth_heading == "travel")
+    source = " (first ground-truth position; heading: its direction of travel, the truth has none)";
+  else if (first_truth) source = " (first ground-truth position; the truth has no heading and does not move: 0)";
   const core::FilterConfig d;
-  std::ofstream c(path);
+  std::ostringstream c;
   c << "# Written by lcmloc-import from " << opt.dir << " (docs/import_formats.md).\n"
     << "# Replay: lcmloc-replay run.lcmlog --config config.yaml --with-inputs -o estimates.lcmlog\n"
     << "scenario: {name: import, seed: 1, realtime_factor: 0.0}\n"
     << "markers: {count: 0}            # the map is fusion.map_file\n"
-    << fmt::format("datum: {{latitude: {:.9f}, longitude: {:.9f}, altitude: {:.3f}}}\n", opt.datum.latitude,
-                   opt.datum.longitude, opt.datum.altitude)
+    << fmt::format("datum: {{latitude: {}, longitude: {}, altitude: {}}}\n", num(opt.datum.latitude),
+                   num(opt.datum.longitude), num(opt.datum.altitude))
     << "fusion:\n"
     << "  shadow: []\n";
   if (with_map) c << "  map_file: map.csv              # id,x,y [m]\n";
   c << "  filter:\n"
     << "    type: " << filter << "\n"
-    << fmt::format("    initial_pose: [{:.6f}, {:.6f}, {:.6f}]   # x [m], y [m], theta [rad]{}\n", pose[0], pose[1],
-                   pose[2], opt.initial_pose ? "" : first_truth ? " (first ground-truth row)" : " (no ground truth)")
-    << fmt::format("    p0_diag: [{}, {}, {}]        # initial variances [m^2, m^2, rad^2]\n", d.p0_diag[0],
-                   d.p0_diag[1], d.p0_diag[2]);
-  if (opt.wheelbase > 0) c << fmt::format("    wheelbase: {}\n", opt.wheelbase);
+    << fmt::format("    initial_pose: [{}, {}, {}]   # x [m], y [m], theta [rad]{}\n", num(pose[0]), num(pose[1]),
+                   num(pose[2]), source)
+    << fmt::format("    p0_diag: [{}, {}, {}]        # initial variances [m^2, m^2, rad^2]\n", num(d.p0_diag[0]),
+                   num(d.p0_diag[1]), num(d.p0_diag[2]));
+  if (opt.wheelbase > 0) c << fmt::format("    wheelbase: {}\n", num(opt.wheelbase));
   c << fmt::format("    pw_diag: [{}, {}, {}]     # process noise accumulated over pw_distance of travel\n",
-                   d.pw_diag[0], d.pw_diag[1], d.pw_diag[2])
-    << fmt::format("    pw_distance: {}                # [m]\n", d.pw_distance)
-    << fmt::format("    pw_turn: {}                   # heading variance per radian turned [rad^2/rad]\n", d.pw_turn)
+                   num(d.pw_diag[0]), num(d.pw_diag[1]), num(d.pw_diag[2]))
+    << fmt::format("    pw_distance: {}                # [m]\n", num(d.pw_distance))
+    << fmt::format("    pw_turn: {}                   # heading variance per radian turned [rad^2/rad]\n", num(d.pw_turn))
     << fmt::format("    landmarks: {{range_std: {}, bearing_std: {}, beacon_std: {}}}  # [m], [rad], [m]\n",
-                   d.landmarks.range_std, d.landmarks.bearing_std, d.landmarks.beacon_std)
-    << "    gate: {enabled: true, probability: 0.99}\n";
-  if (!c) throw std::runtime_error("cannot write '" + path + "'");
+                   num(d.landmarks.range_std), num(d.landmarks.bearing_std), num(d.landmarks.beacon_std));
+  if (conv.imu_without_mag) c << "    gnss: {use_magnetometer: false}   # the IMU rows have no magnetometer\n";
+  c << "    gate: {enabled: true, probability: 0.99}\n";
+  return c.str();
+}
+
+/// Every value of the config text read back by the loader lcmloc-replay uses: a value it would
+/// refuse is an error before anything is written.
+void checkConfigText(const std::string& text, const std::string& path) {
+  try {
+    common::parseSystemConfig(text, path);
+  } catch (const common::ConfigError& e) {
+    throw std::runtime_error(std::string("the config.yaml made for this import is one lcmloc-replay would refuse, so "
+                                         "nothing is written (give the value with an option): ") + e.what());
+  }
 }
 
 }  // namespace
@@ -135,6 +161,9 @@ ImportResult importDirectory(const ImportOptions& opt) {
   else r.filter = "dead_reckoning";
 
   if (!opt.out_dir.empty() && r.usable()) {
+    r.config_path = (fs::path(opt.out_dir) / "config.yaml").string();
+    const std::string config = configText(opt, r.filter, !map.empty(), conv);
+    checkConfigText(config, r.config_path);
     fs::create_directories(opt.out_dir, ec);
     if (ec) throw std::runtime_error("cannot create '" + opt.out_dir + "': " + ec.message());
     r.log_path = (fs::path(opt.out_dir) / "run.lcmlog").string();
@@ -143,8 +172,9 @@ ImportResult importDirectory(const ImportOptions& opt) {
       r.map_path = (fs::path(opt.out_dir) / "map.csv").string();
       common::csv::writeMap(r.map_path, map);
     }
-    r.config_path = (fs::path(opt.out_dir) / "config.yaml").string();
-    writeConfig(r.config_path, opt, r.filter, !map.empty(), conv.first_truth);
+    std::ofstream out(r.config_path);
+    out << config;
+    if (!out.flush()) throw std::runtime_error("cannot write '" + r.config_path + "'");
   }
   return r;
 }

@@ -10,6 +10,7 @@
 
 #include "import_files.hpp"
 #include "lcmloc/app/csv.hpp"
+#include "lcmloc/app/process.hpp"
 #include "lcmloc/import/checks.hpp"
 
 namespace lcmloc::import::detail {
@@ -19,49 +20,139 @@ namespace {
 struct FormatInfo {
   Format format;
   const char* kind;
-  std::vector<std::string> columns;  ///< after the time column
-  bool optional_last = false;        ///< the last column may be left out
+  std::vector<std::string> required;  ///< after the time column, in any order
+  std::vector<std::string> optional;  ///< may be there too
 };
 
 const std::vector<FormatInfo>& formats() {
   static const std::vector<FormatInfo> f{
-      {Format::OdoDelta, "odometry", {"delta_s", "delta_theta"}},
-      {Format::OdoYawRate, "odometry", {"speed", "yaw_rate"}},
-      {Format::OdoSteering, "odometry", {"speed", "steering"}},
-      {Format::Landmarks, "landmarks", {"landmark_id", "range", "bearing"}},
-      {Format::Beacons, "beacons", {"beacon_id", "range"}},
-      {Format::Truth, "ground_truth", {"x", "y", "heading"}},
-      {Format::GpsLocal, "gps", {"x", "y", "position_std"}, true},
-      {Format::GpsGeo, "gps", {"latitude", "longitude", "position_std"}, true},
+      {Format::OdoDelta, "odometry", {"delta_s", "delta_theta"}, {}},
+      {Format::OdoYawRate, "odometry", {"speed", "yaw_rate"}, {}},
+      {Format::OdoSteering, "odometry", {"speed", "steering"}, {}},
+      {Format::Landmarks, "landmarks", {"landmark_id", "range", "bearing"}, {"range_std", "bearing_std"}},
+      {Format::Beacons, "beacons", {"beacon_id", "range"}, {"range_std"}},
+      {Format::GpsLocal, "gps", {"x", "y"}, {"position_std"}},
+      {Format::GpsGeo, "gps", {"latitude", "longitude"}, {"position_std"}},
+      {Format::Truth, "ground_truth", {"x", "y", "heading"}, {}},
+      {Format::Truth, "ground_truth", {"truth_x", "truth_y"}, {"truth_heading"}},
+      {Format::Imu, "imu", {"accel_x", "accel_y", "accel_z", "gyro_x", "gyro_y", "gyro_z"}, {"mag_x", "mag_y", "mag_z"}},
   };
   return f;
 }
 
-/// Header -> format; forced unit from time_s / time_us. False when not recognised.
-bool classify(const std::vector<std::string>& h, Format& f, std::size_t& ncol, TimeUnit& forced) {
-  if (h.size() == 3 && h[0] == "id" && h[1] == "x" && h[2] == "y") {
-    f = Format::Map;
-    ncol = 3;
-    return true;
+bool has(const std::vector<std::string>& v, const std::string& x) { return std::find(v.begin(), v.end(), x) != v.end(); }
+
+/// "time,landmark_id,range,bearing[,range_std][,bearing_std]"
+std::string signature(const FormatInfo& fi) {
+  std::string s = "time";
+  for (const auto& c : fi.required) s += "," + c;
+  if (fi.format == Format::Imu) {  // the magnetometer: its three columns or none
+    std::string mag;
+    for (const auto& c : fi.optional) mag += "," + c;
+    return s + "[" + mag + "]";
   }
-  if (h.empty()) return false;
-  if (h[0] == "time") forced = TimeUnit::Auto;
-  else if (h[0] == "time_s") forced = TimeUnit::Seconds;
-  else if (h[0] == "time_us") forced = TimeUnit::Microseconds;
-  else return false;
+  for (const auto& c : fi.optional) s += "[," + c + "]";
+  return s;
+}
+
+std::string quoted(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "'" : ", '") + n + "'";
+  return s;
+}
+
+/// What a header is: a format, or why it is none.
+struct Classified {
+  std::optional<Format> format;
+  TimeUnit forced = TimeUnit::Auto;  ///< from time_s / time_us
+  std::string problem;               ///< why it is none of the formats
+};
+
+Classified classify(const std::vector<std::string>& h) {
+  Classified c;
+  if (h.size() == 3 && h[0] == "id" && h[1] == "x" && h[2] == "y") {
+    c.format = Format::Map;
+    return c;
+  }
+  if (h.empty()) {
+    c.problem = "no header row (an empty file)";
+    return c;
+  }
+  if (h[0] == "time") c.forced = TimeUnit::Auto;
+  else if (h[0] == "time_s") c.forced = TimeUnit::Seconds;
+  else if (h[0] == "time_us") c.forced = TimeUnit::Microseconds;
+  else {
+    c.problem = "the first column is '" + h[0] + "', not time, time_s or time_us (nor a map: id,x,y)";
+    return c;
+  }
+  const std::vector<std::string> cols(h.begin() + 1, h.end());
+  for (std::size_t i = 0; i < cols.size(); ++i) {
+    if (cols[i] == "time" || cols[i] == "time_s" || cols[i] == "time_us")
+      c.problem = "a second time column '" + cols[i] + "'";
+    else if (has(std::vector<std::string>(cols.begin(), cols.begin() + static_cast<std::ptrdiff_t>(i)), cols[i]))
+      c.problem = "column '" + cols[i] + "' twice";
+    if (!c.problem.empty()) return c;
+  }
+  // A format whose required columns are all there: the one with the fewest other columns.
+  const FormatInfo* best = nullptr;
+  std::vector<std::string> best_unknown;
   for (const auto& fi : formats()) {
-    const std::size_t full = fi.columns.size() + 1;
-    const bool sizes = h.size() == full || (fi.optional_last && h.size() == full - 1);
-    if (!sizes) continue;
-    bool same = true;
-    for (std::size_t i = 1; i < h.size(); ++i) same = same && h[i] == fi.columns[i - 1];
-    if (same) {
-      f = fi.format;
-      ncol = h.size();
-      return true;
+    bool all = true;
+    for (const auto& r : fi.required) all = all && has(cols, r);
+    if (!all) continue;
+    std::vector<std::string> unknown;
+    for (const auto& col : cols)
+      if (!has(fi.required, col) && !has(fi.optional, col)) unknown.push_back(col);
+    if (!best || unknown.size() < best_unknown.size()) {
+      best = &fi;
+      best_unknown = unknown;
     }
   }
-  return false;
+  if (best && best_unknown.empty()) {
+    if (best->format == Format::Imu) {
+      const int mags = has(cols, "mag_x") + has(cols, "mag_y") + has(cols, "mag_z");
+      if (mags != 0 && mags != 3) {
+        c.problem = "imu: mag_x, mag_y, mag_z are all three there or none";
+        return c;
+      }
+    }
+    c.format = best->format;
+    return c;
+  }
+  if (best) {
+    c.problem = fmt::format("unknown column{} {} for {} ({})", best_unknown.size() > 1 ? "s" : "", quoted(best_unknown),
+                            best->kind, signature(*best));
+  } else if (has(cols, "range") && !has(cols, "bearing") && !has(cols, "landmark_id")) {
+    c.problem = "ranges without a beacon_id column: beacons without an id are not supported (the filters take a "
+                "range to the map beacon of its id; ranges of unknown identity are not associated); give each row "
+                "its beacon's map id (time,beacon_id,range[,range_std])";
+  } else {
+    // the format that has most of its required columns: what is missing from it
+    std::size_t most = 0;
+    for (const auto& fi : formats()) {
+      std::size_t n = 0;
+      for (const auto& r : fi.required) n += has(cols, r);
+      if (n > most) {
+        most = n;
+        best = &fi;
+      }
+    }
+    c.problem = "none of the formats";
+    if (best) {
+      std::vector<std::string> missing;
+      for (const auto& r : best->required)
+        if (!has(cols, r)) missing.push_back(r);
+      c.problem += fmt::format(" (closest: {} {}, without {})", best->kind, signature(*best), quoted(missing));
+    }
+  }
+  return c;
+}
+
+std::string formatList() {
+  std::string s;
+  for (const auto& fi : formats()) s += fmt::format("  {:<13} {}\n", fi.kind, signature(fi));
+  s += fmt::format("  {:<13} {}\n", "map", "id,x,y");
+  return s;
 }
 
 }  // namespace
@@ -71,27 +162,51 @@ std::vector<DataFile> readDataFiles(const std::vector<fs::path>& paths, const Im
   auto refuse = [&r](FileReport& f, int64_t line, const std::string& why) { detail::refuse(r, f, line, why); };
   std::string map_source;
   std::vector<DataFile> files;
+  // Every file's header first: a file that is none of the formats is an error before any is read.
+  struct Header {
+    fs::path path;
+    std::string text;
+    std::vector<std::string> columns;
+    Classified what;
+  };
+  std::vector<Header> headers;
+  std::vector<std::string> unknown;  // "'path': header ...: why"
   for (const auto& p : paths) {
-    std::string header;
-    std::ifstream in;
-    try {
-      in = common::csv::openCsv(p.string(), header);
-    } catch (const std::runtime_error& e) {
-      r.skipped.push_back(e.what());
+    std::error_code ec;
+    if (fs::is_directory(p, ec)) {  // not a file: listed, not read
+      r.skipped.push_back("'" + p.string() + "': is a directory");
       continue;
     }
-    if (!in) {
-      r.skipped.push_back(p.string() + ": empty");
-      continue;
-    }
-    const auto h = common::csv::split(header);
-    Format f{};
-    std::size_t ncol = 0;
-    TimeUnit forced = TimeUnit::Auto;
-    if (!classify(h, f, ncol, forced)) {
-      r.skipped.push_back(p.string() + ": header '" + header + "' is none of the formats (docs/import_formats.md)");
-      continue;
-    }
+    Header hd{p, {}, {}, {}};
+    common::csv::openCsv(p.string(), hd.text);  // throws for a file that cannot be read
+    hd.columns = common::csv::split(hd.text);
+    hd.what = classify(hd.columns);
+    if (!hd.what.format)
+      unknown.push_back(fmt::format("'{}': {}: {}", p.string(),
+                                    hd.columns.empty() ? std::string("no columns")
+                                                       : fmt::format("header '{}' ({} column{}: {})", hd.text,
+                                                                     hd.columns.size(), hd.columns.size() > 1 ? "s" : "",
+                                                                     quoted(hd.columns)),
+                                    hd.what.problem));
+    headers.push_back(std::move(hd));
+  }
+  if (!unknown.empty()) {
+    std::string what = fmt::format("{} of the *.csv files {} none of the import formats (docs/import_formats.md):\n",
+                                   unknown.size(), unknown.size() > 1 ? "are" : "is");
+    for (const auto& u : unknown) what += "  " + u + "\n";
+    what += "The formats (the first column time, time_s or time_us; the others named, in any order; [optional]):\n" +
+            formatList() +
+            "Every *.csv file in the directory is read (no other file is): fix the header, or move the file out or "
+            "rename it (e.g. to .txt).";
+    throw common::UsageError(what);
+  }
+  for (const auto& hd : headers) {
+    const fs::path& p = hd.path;
+    const auto& h = hd.columns;
+    const std::string& header = hd.text;
+    std::string again;
+    std::ifstream in = common::csv::openCsv(p.string(), again);
+    const Format f = *hd.what.format;
     if (f == Format::Map) {
       if (!map_source.empty())
         throw std::runtime_error("two map files: '" + map_source + "' and '" + p.string() + "'");
@@ -99,9 +214,12 @@ std::vector<DataFile> readDataFiles(const std::vector<fs::path>& paths, const Im
       map_source = p.string();
       continue;
     }
+    const std::size_t ncol = h.size();
+    const TimeUnit forced = hd.what.forced;
     DataFile df;
     df.format = f;
     df.columns = ncol;
+    df.names = h;
     df.report.path = p.string();
     df.report.header = header;
     for (const auto& fi : formats())
@@ -178,9 +296,9 @@ std::vector<const DataFile*> inTimeOrder(const std::vector<DataFile>& files) {
         "'{}' has absolute (epoch) times, '{}' relative ones: they do not share a clock (force one with "
         "--time-base, and check --time-unit)",
         abs_file->report.path, rel_file->report.path));
-  // One motion source, one truth: files of odometry or ground truth are pieces of one stream,
-  // one after the other; two that overlap in time would be merged into one channel (the motion
-  // counted twice, two truths interleaved). Measurements (landmarks, beacons, gps) may come
+  // One motion source, one IMU, one truth: files of odometry, IMU or ground truth are pieces of
+  // one stream, one after the other; two that overlap in time would be merged into one channel
+  // (the motion counted twice, two truths interleaved). Measurements (landmarks, beacons, gps) may come
   // from several files at once (several sensors).
   std::vector<const DataFile*> in_time;  // files in the order of their first kept time
   for (const auto& f : files) in_time.push_back(&f);
@@ -190,7 +308,7 @@ std::vector<const DataFile*> inTimeOrder(const std::vector<DataFile>& files) {
   });
   std::map<std::string, const DataFile*> last_of_kind;
   for (const DataFile* f : in_time) {
-    const bool stream = f->report.kind == "odometry" || f->report.kind == "ground_truth";
+    const bool stream = f->report.kind == "odometry" || f->report.kind == "ground_truth" || f->report.kind == "imu";
     if (!f->first_kept || !stream) continue;
     const DataFile*& before = last_of_kind[f->report.kind];
     if (before && *f->first_kept <= *before->last_kept)

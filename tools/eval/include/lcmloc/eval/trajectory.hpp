@@ -50,7 +50,8 @@ struct EstimateTrack {
   std::vector<Estimate> poses;
 };
 
-/// One reference sample. gps_fix_t truth has no heading.
+/// One reference sample. gps_fix_t truth has no heading, nor has ground_truth_t truth with a NaN
+/// heading (a truth of position only).
 struct TruthPose {
   int64_t utime = 0;
   double x = 0, y = 0, heading = 0;

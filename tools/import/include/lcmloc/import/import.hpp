@@ -38,7 +38,7 @@ struct Refusal {
 /// One recognised file.
 struct FileReport {
   std::string path;
-  std::string kind;     ///< odometry, landmarks, beacons, gps, ground_truth, map
+  std::string kind;     ///< odometry, landmarks, beacons, gps, ground_truth, imu
   std::string header;   ///< as read
   TimeUnit unit = TimeUnit::Auto;     ///< as detected or forced (not for map)
   TimeBase base = TimeBase::Auto;
@@ -48,7 +48,7 @@ struct FileReport {
 
 struct ImportResult {
   std::vector<FileReport> files;
-  std::vector<std::string> skipped;   ///< files not recognised (name: why)
+  std::vector<std::string> skipped;   ///< directories named *.csv (not read; "'path': is a directory")
   std::vector<Refusal> refusals;
   int64_t messages = 0;
   int64_t first_utime = 0, last_utime = 0;
@@ -66,13 +66,18 @@ TimeUnit detectTimeUnit(const std::vector<double>& times);
 /// Absolute (Unix epoch) when the first time is at least 1e9 s (2001-09-09), else relative.
 TimeBase detectTimeBase(int64_t first_utime);
 
-/// Imports opt.dir. Throws std::runtime_error for an unreadable directory, a bad map file, two
-/// map files, two odometry or two ground-truth files that overlap in time (files that do not
-/// are joined one after the other; gps, landmarks and beacons may come from several), a missing
-/// --wheelbase for speed,steering odometry or files whose clocks disagree (absolute and
-/// relative); common::ConfigError (naming the flag) for an option config.yaml would not accept
-/// or an output file that is one of the input files. Bad rows are refused and listed, never
-/// fatal; the time column follows the time-order rule of checkTimeOrder (import/checks.hpp).
+/// Imports opt.dir (every *.csv file in it). Throws common::UsageError, before anything is
+/// written, naming every *.csv file that is none of the formats (an unknown column, beacons
+/// without an id, no time column, ...) with its columns and the formats it could have been;
+/// std::runtime_error for an unreadable directory or file, a bad map file, two map files, two
+/// odometry, IMU or ground-truth files that overlap in time (files that do not are joined one
+/// after the other; gps, landmarks and beacons may come from several), a missing --wheelbase
+/// for speed,steering odometry, files whose clocks disagree (absolute and relative) or a
+/// config.yaml that the replay's loader (common::parseSystemConfig) would refuse (checked before
+/// anything is written); common::ConfigError (naming the flag) for an option config.yaml would
+/// not accept or an output file that is one of the input files. Bad rows (a bad sigma among
+/// them) are refused and listed, never fatal; the time column follows the time-order rule of
+/// checkTimeOrder (import/checks.hpp).
 ImportResult importDirectory(const ImportOptions& opt);
 
 /// Human report: per file rows read / refused / written and time span, the first max_refusals
