@@ -187,7 +187,7 @@ INSTANTIATE_TEST_SUITE_P(
         WriteCase{"lcmloc-log", "to-csv {est} -c POSE -o {out}", false, ""},
         WriteCase{"lcmloc-log", "cut {est} --to 1 -o {out}", false, ""},
         WriteCase{"lcmloc-montecarlo", "--runs 1 -o {out}", false, ""},
-        WriteCase{"lcmloc-gps-experiment", "--filters dead_reckoning -o {out}", true, ""},
+        WriteCase{"lcmloc-gps-experiment", "--filters dead_reckoning --runs 2 -o {out}", true, ""},
         WriteCase{"lcmloc-ins-experiment", "--starts hard --duration 20 -o {out}", true, ""},
         WriteCase{"lcmloc-landmark-experiment", "--runs 20 -o {out}", true, ""},
         WriteCase{"lcmloc-magnet-grid", "--data {grid} --run line1magnet --import-only -o {out}", true, "{grid}"},
