@@ -14,7 +14,9 @@
 
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/bus/geodesy.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/heartbeat.hpp"
+#include "lcmloc/app/log_throttle.hpp"
+#include "lcmloc/bus/seq_tracker.hpp"
 #include "lcmloc/bus/transport.hpp"
 #include "lcmloc/core/engine.hpp"
 #include "lcmloc/fusion_control_t.hpp"
