@@ -3,7 +3,10 @@
 #include <spdlog/spdlog.h>
 
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
+#include "lcmloc/app/exit_codes.hpp"
+#include "lcmloc/app/signals.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "lcmloc/magruler_t.hpp"
 
 using namespace lcmloc;

@@ -8,7 +8,9 @@
 #include <csignal>
 
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
+#include "lcmloc/app/signals.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "recorder.hpp"
 
 using namespace lcmloc;

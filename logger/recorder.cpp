@@ -9,6 +9,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "lcmloc/app/exit_codes.hpp"
 #include "lcmloc/app/text.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/logio/types.hpp"

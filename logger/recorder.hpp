@@ -18,7 +18,9 @@
 #include <CLI/CLI.hpp>
 
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/heartbeat.hpp"
+#include "lcmloc/app/log_throttle.hpp"
+#include "lcmloc/bus/seq_tracker.hpp"
 #include "lcmloc/bus/transport.hpp"
 #include "lcmloc/logio/log_writer.hpp"
 

@@ -1,7 +1,8 @@
 // lcmloc-gps: GNSS fixes on the GPS channel, simulated from GROUND_TRUTH or from gpsd
 // (gps_driver.hpp).
 #include "gps_driver.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
+#include "lcmloc/bus/transport.hpp"
 
 using namespace lcmloc;
 

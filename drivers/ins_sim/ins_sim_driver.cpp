@@ -4,7 +4,10 @@
 #include <spdlog/spdlog.h>
 
 #include "lcmloc/drivers/sim_convert.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/exit_codes.hpp"
+#include "lcmloc/app/heartbeat.hpp"
+#include "lcmloc/app/pacer.hpp"
+#include "lcmloc/app/signals.hpp"
 #include "lcmloc/sim/ins_sim.hpp"
 
 namespace lcmloc::ins_sim {

@@ -1,7 +1,8 @@
 // lcmloc-ins-sim: the §II simulation of the odometry/INS method (seeds/004), publishing
 // GROUND_TRUTH, IMU and ODOMETRY paced by the real-time factor (ins_sim_driver.hpp).
 #include "ins_sim_driver.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
+#include "lcmloc/bus/transport.hpp"
 
 using namespace lcmloc;
 

@@ -4,8 +4,9 @@
 #include <optional>
 
 #include "lcmloc/app/config.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "lcmloc/drivers/sim_convert.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
 #include "lcmloc/drivers/truth_driver.hpp"
 #include "lcmloc/sim/world.hpp"
 

@@ -3,9 +3,14 @@
 #include <spdlog/spdlog.h>
 
 #include "lcmloc/app/config.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "lcmloc/drivers/scenario_map.hpp"
 #include "lcmloc/drivers/sim_convert.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
+#include "lcmloc/app/exit_codes.hpp"
+#include "lcmloc/app/heartbeat.hpp"
+#include "lcmloc/app/pacer.hpp"
+#include "lcmloc/app/signals.hpp"
 #include "lcmloc/sim/world.hpp"
 
 using namespace lcmloc;

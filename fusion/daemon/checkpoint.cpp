@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "lcmloc/bus/convert.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/files.hpp"
 #include "lcmloc/core/filter.hpp"
 #include "lcmloc/pose_t.hpp"
 

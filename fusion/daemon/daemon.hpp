@@ -14,9 +14,11 @@
 
 #include "inputs.hpp"
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/heartbeat.hpp"
+#include "lcmloc/app/log_throttle.hpp"
 #include "lcmloc/bus/convert.hpp"
 #include "lcmloc/bus/geodesy.hpp"
+#include "lcmloc/bus/seq_tracker.hpp"
 #include "lcmloc/bus/transport.hpp"
 #include "lcmloc/core/engine.hpp"
 #include "lcmloc/fusion_control_t.hpp"

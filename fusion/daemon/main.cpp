@@ -1,5 +1,7 @@
 // lcmloc-fusion: the fusion daemon (see daemon.hpp; its process: runner.hpp).
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
+#include "lcmloc/app/signals.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "runner.hpp"
 
 using namespace lcmloc;

@@ -2,6 +2,9 @@
 
 #include <spdlog/spdlog.h>
 
+#include "lcmloc/app/cli.hpp"
+#include "lcmloc/app/exit_codes.hpp"
+#include "lcmloc/app/signals.hpp"
 #include "lcmloc/bus/convert.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/pose_t.hpp"

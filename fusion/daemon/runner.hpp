@@ -13,6 +13,8 @@
 
 #include "checkpoint.hpp"
 #include "daemon.hpp"
+#include "lcmloc/app/heartbeat.hpp"
+#include "lcmloc/bus/transport.hpp"
 
 namespace lcmloc::fusion {
 

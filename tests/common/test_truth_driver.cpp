@@ -12,8 +12,10 @@
 #include <vector>
 
 #include "lcmloc/app/config.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "lcmloc/drivers/sim_convert.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/exit_codes.hpp"
+#include "lcmloc/app/signals.hpp"
 #include "lcmloc/drivers/truth_driver.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/heartbeat_t.hpp"

@@ -10,6 +10,7 @@
 
 #include "daemon/checkpoint.hpp"
 #include "daemon/daemon.hpp"
+#include "lcmloc/app/exit_codes.hpp"
 #include "lcmloc/bus/memory_bus.hpp"
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/heartbeat_t.hpp"

@@ -14,11 +14,12 @@
 #include <set>
 #include <sstream>
 
+#include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
 #include <lcm/lcm_coretypes.h>
 
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/exit_codes.hpp"
 #include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/logio/event_file.hpp"

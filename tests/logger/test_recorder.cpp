@@ -11,6 +11,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "lcmloc/app/exit_codes.hpp"
 #include "lcmloc/bus/memory_bus.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/logger_status_t.hpp"

@@ -7,11 +7,12 @@
 #include <fstream>
 #include <string>
 
+#include <CLI/CLI.hpp>
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/exit_codes.hpp"
 #include "lcmloc/ctl/control.hpp"
 #include "lcmloc/ins_experiment/command.hpp"
 #include "lcmloc/landmark_experiment/command.hpp"

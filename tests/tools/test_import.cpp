@@ -10,10 +10,11 @@
 #include <sstream>
 #include <optional>
 
+#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/exit_codes.hpp"
 #include "lcmloc/drivers/sim_convert.hpp"
 #include "lcmloc/gate_decision_t.hpp"
 #include "lcmloc/gps_fix_t.hpp"

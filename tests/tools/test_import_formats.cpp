@@ -16,7 +16,7 @@
 #include <fmt/format.h>
 
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/exit_codes.hpp"
 #include "lcmloc/beacon_range_t.hpp"
 #include "lcmloc/eval/trajectory.hpp"
 #include "lcmloc/gate_decision_t.hpp"

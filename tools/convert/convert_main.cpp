@@ -1,7 +1,11 @@
 // lcmloc-convert: other people's recordings -> the import format (CSV directory for lcmloc-import).
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/app/process.hpp"
+#include <filesystem>
+
+#include "lcmloc/app/cli.hpp"
+#include "lcmloc/app/exit_codes.hpp"
+#include "lcmloc/app/files.hpp"
 #include "lcmloc/convert/convert.hpp"
 
 using namespace lcmloc;

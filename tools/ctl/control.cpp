@@ -13,7 +13,8 @@
 #include <yaml-cpp/yaml.h>
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/exit_codes.hpp"
+#include "lcmloc/app/signals.hpp"
 #include "lcmloc/bus/transport.hpp"
 #include "lcmloc/app/text.hpp"
 #include "lcmloc/fusion_status_t.hpp"

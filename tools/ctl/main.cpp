@@ -1,6 +1,6 @@
 // lcmloc-ctl: sends one FUSION_CONTROL command to the fusion daemon and prints its answer
 // (lcmloc/ctl/control.hpp).
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
 #include "lcmloc/core/filter.hpp"
 #include "lcmloc/ctl/control.hpp"
 

@@ -4,7 +4,7 @@
 // request, TUM trajectory files for the evo tools (lcmloc/eval/evaluate_command.hpp).
 #include <CLI/CLI.hpp>
 
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
 #include "lcmloc/eval/evaluate_command.hpp"
 
 int main(int argc, char** argv) {

@@ -4,7 +4,9 @@
 #include <spdlog/spdlog.h>
 
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
+#include "lcmloc/app/exit_codes.hpp"
+#include "lcmloc/app/files.hpp"
 #include "lcmloc/gps_experiment/monte_carlo.hpp"
 #include "lcmloc/gps_experiment/printing.hpp"
 

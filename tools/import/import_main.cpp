@@ -1,7 +1,7 @@
 // lcmloc-import: a directory of CSV files -> an LCM log, the map and a config for lcmloc-replay
 // (lcmloc/import/import_command.hpp).
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
 #include "lcmloc/import/import_command.hpp"
 
 using namespace lcmloc;

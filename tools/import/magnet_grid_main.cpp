@@ -2,7 +2,7 @@
 // with the gated ruler UKF: gate and innovation statistics, track over the grid
 // (lcmloc/import/magnet_grid_command.hpp).
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
 #include "lcmloc/import/magnet_grid_command.hpp"
 
 using namespace lcmloc;

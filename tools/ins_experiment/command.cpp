@@ -9,7 +9,8 @@
 #include <spdlog/spdlog.h>
 
 #include "lcmloc/drivers/sim_convert.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/exit_codes.hpp"
+#include "lcmloc/app/files.hpp"
 
 namespace lcmloc::ins_experiment {
 

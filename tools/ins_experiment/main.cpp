@@ -3,7 +3,8 @@
 // time (Fig. 1) and position error of the calibrated odometry/INS against the traditional
 // integration (Fig. 2), for a hard start and a gentle start. Optionally writes the sensor log of
 // the first run (GROUND_TRUTH, IMU, ODOMETRY) for lcmloc-replay (lcmloc/ins_experiment/command.hpp).
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
+#include "lcmloc/app/files.hpp"
 #include "lcmloc/ins_experiment/command.hpp"
 
 using namespace lcmloc;

@@ -10,7 +10,9 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/exit_codes.hpp"
+#include "lcmloc/app/files.hpp"
+#include "lcmloc/app/signals.hpp"
 #include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/landmark_bearings_t.hpp"

@@ -2,7 +2,8 @@
 // (error triangle and damped least squares) with bearings from the vision model of lcmloc-vision,
 // both readings of "1000 m", vehicle at the centre and off centre, against the Cramér-Rao bound
 // (lcmloc/landmark_experiment/command.hpp).
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
+#include "lcmloc/app/files.hpp"
 #include "lcmloc/landmark_experiment/command.hpp"
 
 using namespace lcmloc;

@@ -3,7 +3,7 @@
 #include <string>
 #include <vector>
 
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/heartbeat.hpp"
 
 namespace lcmloc::launcher {
 

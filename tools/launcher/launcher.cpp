@@ -16,7 +16,11 @@
 #include <spdlog/spdlog.h>
 
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/exit_codes.hpp"
+#include "lcmloc/app/files.hpp"
+#include "lcmloc/app/heartbeat.hpp"
+#include "lcmloc/app/signals.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 
 namespace lcmloc::launcher {

@@ -1,6 +1,8 @@
 // lcmloc-launcher: starts, watches and stops the processes of a system file (launcher.hpp).
 #include "launcher.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
+#include "lcmloc/app/files.hpp"
+#include "lcmloc/app/signals.hpp"
 
 using namespace lcmloc;
 

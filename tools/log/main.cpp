@@ -5,7 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
 #include "lcmloc/logtool/command.hpp"
 
 using namespace lcmloc;

@@ -5,7 +5,8 @@
 
 #include <CLI/CLI.hpp>
 
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
+#include "lcmloc/app/files.hpp"
 #include "lcmloc/montecarlo/montecarlo.hpp"
 
 int main(int argc, char** argv) {

@@ -1,6 +1,6 @@
 // lcmloc-replay: offline replay of an LCM log through the fusion daemon's code (replay.hpp,
 // command.hpp), or (--bench) the replay throughput benchmark on a long synthetic log (bench.hpp).
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
 #include "lcmloc/replay/command.hpp"
 
 using namespace lcmloc;

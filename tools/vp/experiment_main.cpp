@@ -5,7 +5,10 @@
 #include <spdlog/spdlog.h>
 
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
+#include "lcmloc/app/exit_codes.hpp"
+#include "lcmloc/app/files.hpp"
+#include "lcmloc/app/signals.hpp"
 #include "lcmloc/vp/vp.hpp"
 
 using namespace lcmloc;

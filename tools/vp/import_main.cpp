@@ -1,7 +1,8 @@
 // lcmloc-import-vp: Victoria Park CSV files (odometry + GPS) -> an LCM log of lcmloc types.
 
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
+#include "lcmloc/app/files.hpp"
 #include "lcmloc/vp/vp.hpp"
 
 using namespace lcmloc;

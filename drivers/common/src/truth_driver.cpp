@@ -1,3 +1,5 @@
+#include "lcmloc/app/exit_codes.hpp"
+#include "lcmloc/app/signals.hpp"
 #include "lcmloc/drivers/truth_driver.hpp"
 
 #include <cmath>

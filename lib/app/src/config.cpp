@@ -15,7 +15,7 @@
 
 #include <fmt/format.h>
 
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/files.hpp"
 #include "lcmloc/app/yaml_reader.hpp"
 #include "config_ins.hpp"
 #include "config_scenario.hpp"

@@ -10,7 +10,7 @@
 
 #include <fmt/format.h>
 
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/files.hpp"
 
 namespace lcmloc::common::csv {
 

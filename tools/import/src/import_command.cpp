@@ -5,7 +5,9 @@
 
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
+#include "lcmloc/app/exit_codes.hpp"
+#include "lcmloc/app/files.hpp"
 
 namespace lcmloc::import {
 

@@ -8,7 +8,8 @@
 #include <nlohmann/json.hpp>
 
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/exit_codes.hpp"
+#include "lcmloc/app/files.hpp"
 #include "lcmloc/eval/report.hpp"
 
 namespace lcmloc::import {

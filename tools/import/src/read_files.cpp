@@ -10,7 +10,7 @@
 
 #include "import_files.hpp"
 #include "lcmloc/app/csv.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/exit_codes.hpp"
 #include "lcmloc/import/checks.hpp"
 
 namespace lcmloc::import::detail {

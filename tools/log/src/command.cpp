@@ -2,7 +2,8 @@
 #include "lcmloc/logtool/command.hpp"
 
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/cli.hpp"
+#include "lcmloc/app/files.hpp"
 
 namespace lcmloc::logtool {
 

@@ -21,7 +21,9 @@
 #include <spdlog/spdlog.h>
 
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/exit_codes.hpp"
+#include "lcmloc/app/signals.hpp"
+#include "lcmloc/bus/seq_tracker.hpp"
 #include "lcmloc/app/text.hpp"
 #include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/logio/event_file.hpp"

@@ -18,7 +18,8 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/exit_codes.hpp"
+#include "lcmloc/app/signals.hpp"
 #include "lcmloc/bus/transport.hpp"
 #include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/magruler_t.hpp"

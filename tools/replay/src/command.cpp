@@ -5,7 +5,9 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/exit_codes.hpp"
+#include "lcmloc/app/files.hpp"
+#include "lcmloc/app/signals.hpp"
 #include "lcmloc/replay/replay.hpp"
 
 namespace lcmloc::replay {

@@ -16,7 +16,10 @@
 #include <string>
 
 #include "lcmloc/app/config.hpp"
-#include "lcmloc/app/process.hpp"
+#include "lcmloc/app/heartbeat.hpp"
+#include "lcmloc/app/log_throttle.hpp"
+#include "lcmloc/bus/seq_tracker.hpp"
+#include "lcmloc/bus/transport.hpp"
 #include "lcmloc/core/time_guard.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 

@@ -1,0 +1,35 @@
+#pragma once
+// The HEARTBEAT publisher of every process on the bus.
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "lcmloc/bus/transport.hpp"
+
+namespace lcmloc::common {
+
+/// Publishes heartbeat_t on the heartbeat channel once per wall second (and at the first tick).
+class Heartbeat {
+ public:
+  using Counters = std::vector<std::pair<std::string, int64_t>>;
+  /// [s] between two heartbeats (lcmloc-launcher's heartbeat_timeout is at least twice this).
+  static constexpr double kPeriodSeconds = 1.0;
+  Heartbeat(MessageBus& bus, std::string channel, std::string process,
+            std::function<Counters()> counters = nullptr);
+  /// Publishes if a second of wall time has passed since the last heartbeat (or none was sent).
+  void tick();
+  /// Publishes now with the given state ("starting", "running", "stopping").
+  void publish(const std::string& state);
+ private:
+  MessageBus& bus_;
+  std::string channel_, process_;
+  std::function<Counters()> counters_;
+  int64_t seq_ = 0;
+  std::chrono::steady_clock::time_point last_{};
+  bool sent_ = false;
+};
+
+}  // namespace lcmloc::common

@@ -1,0 +1,10 @@
+#pragma once
+// The spdlog set-up of every lcmloc program (runProcess calls it).
+#include <string>
+
+namespace lcmloc::common {
+
+/// Sets the default spdlog logger (stderr, "[name] " prefix) at level ("trace".."off").
+void setupLogging(const std::string& process_name, const std::string& level);
+
+}  // namespace lcmloc::common
