@@ -1,0 +1,66 @@
+#pragma once
+// Noise learned from a recording with ground truth (lcmloc-fit-noise, and lcmloc-import when
+// its data has a truth): each sensor's residuals against what the truth says it should have
+// measured, and the odometry's error growth against the truth's motion, give the filter's
+// measurement and process noise. No middleware: the log is read in fit_log.cpp.
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "lcmloc/core/types.hpp"
+
+namespace lcmloc::fit {
+
+/// One truth sample (heading NaN: position only).
+struct TruthSample {
+  int64_t utime = 0;
+  double x = 0, y = 0, heading = 0;
+};
+
+/// What the fit reads: the truth, the odometry and the measurements, in time order.
+struct Recording {
+  std::vector<TruthSample> truth;
+  std::vector<core::OdometryInput> odometry;
+  std::vector<core::LandmarkObservation> landmarks;
+  std::vector<core::BeaconRange> beacons;
+  std::vector<core::GpsInput> gps;
+  core::MarkerMap map;
+  double wheelbase = 2.5;      ///< for odometry with a steering angle
+  double pw_distance = 2.0;    ///< the filter's Pw accumulates over this travel [m]
+};
+
+struct FitOptions {
+  double max_truth_gap_s = 0.5;   ///< a residual between truth samples further apart is not used
+  double max_window_s = 5.0;      ///< an odometry window ends after this long or pw_distance of travel
+  double max_odometry_gap_s = 0.5;  ///< a window with odometry further apart is dropped
+};
+
+/// Residuals of one quantity: robust spread (1.4826 MAD about the median), mean and RMS.
+struct Residuals {
+  int64_t n = 0;
+  double median = 0, mean = 0, sigma = 0, rms = 0;
+};
+Residuals residualStats(std::vector<double> v);
+
+struct NoiseFit {
+  std::optional<Residuals> landmark_range, landmark_bearing, beacon_range, gps;  ///< gps: per axis
+  std::map<int, Residuals> beacon_range_by_id;  ///< a beacon's median residual is its range bias
+  /// Odometry process noise: pw_diag (x, y, theta) per pw_distance of travel and pw_turn (heading
+  /// variance per radian turned), from the windows' errors.
+  std::optional<core::Vec3> pw_diag;
+  std::optional<double> pw_turn;
+  int64_t odometry_windows = 0;
+  std::vector<std::string> notes;  ///< what could not be fitted and why
+};
+
+/// Fits what the recording allows (a measurement kind needs rows of known identity inside the
+/// truth's span; the bearing and the odometry's heading need a truth heading).
+NoiseFit fitAgainstTruth(const Recording& r, const FitOptions& opt = {});
+
+/// The fit as a YAML fragment of `fusion.filter` keys (only the fitted ones), with comments
+/// saying where each value comes from; merge it into a config or read it with --config.
+std::string configFragment(const NoiseFit& f, double pw_distance);
+
+}  // namespace lcmloc::fit

@@ -1,0 +1,235 @@
+#include "lcmloc/fit/noise_fit.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+#include <spdlog/fmt/fmt.h>
+
+#include "lcmloc/core/angles.hpp"
+#include "lcmloc/core/scoring.hpp"
+#include "lcmloc/core/vehicle_model.hpp"
+
+namespace lcmloc::fit {
+namespace {
+
+/// The truth at utime (linear; heading along the shortest angle, NaN when either has none), or
+/// nullopt outside the truth or between samples more than max_gap_us apart.
+std::optional<TruthSample> truthAt(const std::vector<TruthSample>& t, int64_t utime, int64_t max_gap_us) {
+  auto hi = std::lower_bound(t.begin(), t.end(), utime, [](const TruthSample& s, int64_t u) { return s.utime < u; });
+  if (hi == t.end()) return std::nullopt;
+  if (hi->utime == utime) return *hi;
+  if (hi == t.begin()) return std::nullopt;
+  const auto lo = hi - 1;
+  if (hi->utime - lo->utime > max_gap_us) return std::nullopt;
+  const double a = static_cast<double>(utime - lo->utime) / static_cast<double>(hi->utime - lo->utime);
+  TruthSample s;
+  s.utime = utime;
+  s.x = lo->x + a * (hi->x - lo->x);
+  s.y = lo->y + a * (hi->y - lo->y);
+  s.heading = lo->heading + a * core::wrapAngle(hi->heading - lo->heading);  // NaN stays NaN
+  return s;
+}
+
+const core::Marker* find(const core::MarkerMap& map, int id) {
+  for (const auto& m : map)
+    if (m.id == id) return &m;
+  return nullptr;
+}
+
+/// Range and bearing from the truth pose to (x, y).
+void rangeBearing(const TruthSample& p, double x, double y, double& range, double& bearing) {
+  const double dx = x - p.x, dy = y - p.y;
+  range = std::hypot(dx, dy);
+  bearing = core::wrapAngle(std::atan2(dy, dx) - p.heading);
+}
+
+/// Least squares of e2 ~ a s + b r with a, b >= 0 (the heading's error growth per distance and
+/// per radian turned).
+std::pair<double, double> fitTwo(const std::vector<double>& e2, const std::vector<double>& s, const std::vector<double>& r) {
+  double ss = 0, sr = 0, rr = 0, se = 0, re = 0;
+  for (std::size_t i = 0; i < e2.size(); ++i) {
+    ss += s[i] * s[i];
+    sr += s[i] * r[i];
+    rr += r[i] * r[i];
+    se += s[i] * e2[i];
+    re += r[i] * e2[i];
+  }
+  const double det = ss * rr - sr * sr;
+  double a = det > 0 ? (se * rr - re * sr) / det : -1, b = det > 0 ? (re * ss - se * sr) / det : -1;
+  if (a < 0 || b < 0) {  // one term alone: the better of the two
+    const double a1 = ss > 0 ? std::max(0.0, se / ss) : 0, b1 = rr > 0 ? std::max(0.0, re / rr) : 0;
+    double ra = 0, rb = 0;
+    for (std::size_t i = 0; i < e2.size(); ++i) {
+      ra += std::pow(e2[i] - a1 * s[i], 2);
+      rb += std::pow(e2[i] - b1 * r[i], 2);
+    }
+    a = ra <= rb ? a1 : 0;
+    b = ra <= rb ? 0 : b1;
+  }
+  return {a, b};
+}
+
+void fitOdometry(const Recording& r, const FitOptions& opt, NoiseFit& f) {
+  const int64_t max_gap = static_cast<int64_t>(opt.max_truth_gap_s * 1e6);
+  const int64_t max_odo_gap = static_cast<int64_t>(opt.max_odometry_gap_s * 1e6);
+  const int64_t max_window = static_cast<int64_t>(opt.max_window_s * 1e6);
+  std::vector<double> pos2, heading2, dist, turn;
+  std::size_t i = 0;
+  while (i + 1 < r.odometry.size()) {
+    const auto start = truthAt(r.truth, r.odometry[i].utime, max_gap);
+    if (!start || !std::isfinite(start->heading)) {
+      ++i;
+      continue;
+    }
+    core::Pose p(start->x, start->y, start->heading);
+    double s = 0, turned = 0;
+    std::size_t j = i + 1;
+    bool broken = false;
+    for (; j < r.odometry.size(); ++j) {
+      const auto& o = r.odometry[j];
+      if (o.utime - r.odometry[j - 1].utime > max_odo_gap) {
+        broken = true;
+        break;
+      }
+      const double dth = core::headingIncrement(o, r.wheelbase);
+      p = core::propagatePose(p, o.delta_s, dth);
+      s += std::fabs(o.delta_s);
+      turned += std::fabs(dth);
+      if (s >= r.pw_distance || o.utime - r.odometry[i].utime >= max_window) break;
+    }
+    if (broken || j >= r.odometry.size()) {
+      i = j;
+      continue;
+    }
+    const auto end = truthAt(r.truth, r.odometry[j].utime, max_gap);
+    if (end && std::isfinite(end->heading) && (s > 0 || turned > 0)) {
+      pos2.push_back(0.5 * (std::pow(end->x - p.x(), 2) + std::pow(end->y - p.y(), 2)));
+      heading2.push_back(std::pow(core::wrapAngle(end->heading - p.z()), 2));
+      dist.push_back(s / r.pw_distance);
+      turn.push_back(turned);
+    }
+    i = j;
+  }
+  f.odometry_windows = static_cast<int64_t>(pos2.size());
+  if (pos2.size() < 10) {
+    f.notes.push_back("odometry: " + std::to_string(pos2.size()) +
+                      " windows with a truth heading at both ends (10 needed): process noise not fitted");
+    return;
+  }
+  // Position: variance proportional to the distance (per pw_distance), fitted where the vehicle
+  // moved; heading: per distance and per radian turned.
+  double sum_e = 0, sum_s = 0;
+  for (std::size_t k = 0; k < pos2.size(); ++k) {
+    sum_e += pos2[k];
+    sum_s += dist[k];
+  }
+  const double q_pos = sum_s > 0 ? sum_e / sum_s : 0;
+  const auto [q_heading, q_turn] = fitTwo(heading2, dist, turn);
+  f.pw_diag = core::Vec3(q_pos, q_pos, q_heading);
+  f.pw_turn = q_turn;
+}
+
+}  // namespace
+
+Residuals residualStats(std::vector<double> v) {
+  Residuals r;
+  r.n = static_cast<int64_t>(v.size());
+  if (v.empty()) return r;
+  r.median = core::percentile(v, 0.5);
+  r.mean = std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+  r.rms = core::rms(v);
+  std::vector<double> dev;
+  dev.reserve(v.size());
+  for (double x : v) dev.push_back(std::fabs(x - r.median));
+  r.sigma = 1.4826 * core::percentile(dev, 0.5);
+  return r;
+}
+
+NoiseFit fitAgainstTruth(const Recording& r, const FitOptions& opt) {
+  NoiseFit f;
+  const int64_t max_gap = static_cast<int64_t>(opt.max_truth_gap_s * 1e6);
+  if (r.truth.size() < 2) {
+    f.notes.push_back("no ground truth: nothing fitted");
+    return f;
+  }
+  std::vector<double> range, bearing;
+  int64_t unknown = 0, not_in_map = 0;
+  for (const auto& o : r.landmarks) {
+    if (o.landmark_id < 0) {
+      ++unknown;
+      continue;
+    }
+    const core::Marker* m = find(r.map, o.landmark_id);
+    const auto p = m ? truthAt(r.truth, o.utime, max_gap) : std::nullopt;
+    if (!m) ++not_in_map;
+    if (!p) continue;
+    double rg, br;
+    rangeBearing(*p, m->x, m->y, rg, br);
+    range.push_back(o.range - rg);
+    if (std::isfinite(p->heading)) bearing.push_back(core::wrapAngle(o.bearing - br));
+  }
+  if (!range.empty()) f.landmark_range = residualStats(range);
+  if (!bearing.empty()) f.landmark_bearing = residualStats(bearing);
+  if (unknown) f.notes.push_back(std::to_string(unknown) + " landmark observations without identity not used");
+  if (not_in_map) f.notes.push_back(std::to_string(not_in_map) + " landmark observations of an id not in the map not used");
+  if (!r.landmarks.empty() && bearing.empty() && !range.empty())
+    f.notes.push_back("landmark bearing: the truth has no heading: not fitted");
+
+  std::vector<double> beacon;
+  std::map<int, std::vector<double>> by_id;
+  for (const auto& b : r.beacons) {
+    const core::Marker* m = find(r.map, b.beacon_id);
+    const auto p = m ? truthAt(r.truth, b.utime, max_gap) : std::nullopt;
+    if (!p) continue;
+    const double e = b.range - std::hypot(m->x - p->x, m->y - p->y);
+    beacon.push_back(e);
+    by_id[b.beacon_id].push_back(e);
+  }
+  if (!beacon.empty()) f.beacon_range = residualStats(beacon);
+  for (auto& [id, v] : by_id) f.beacon_range_by_id[id] = residualStats(std::move(v));
+
+  std::vector<double> gps;
+  for (const auto& g : r.gps) {
+    if (!g.has_fix) continue;
+    const auto p = truthAt(r.truth, g.utime, max_gap);
+    if (!p) continue;
+    gps.push_back(g.x - p->x);
+    gps.push_back(g.y - p->y);
+  }
+  if (!gps.empty()) f.gps = residualStats(gps);
+
+  if (!r.odometry.empty()) fitOdometry(r, opt, f);
+  return f;
+}
+
+std::string configFragment(const NoiseFit& f, double pw_distance) {
+  std::ostringstream y;
+  y << "# Noise fitted against the ground truth (lcmloc-fit-noise): the robust spread (1.4826 MAD)\n"
+       "# of each sensor's residuals; the odometry's error growth per " << fmt::format("{}", pw_distance)
+    << " m of travel and per radian turned.\n";
+  y << "fusion:\n  filter:\n";
+  if (f.pw_diag) {
+    y << fmt::format("    pw_diag: [{:.6g}, {:.6g}, {:.6g}]   # {} odometry windows\n", (*f.pw_diag)[0],
+                     (*f.pw_diag)[1], (*f.pw_diag)[2], f.odometry_windows);
+    y << fmt::format("    pw_distance: {}\n", pw_distance);
+    y << fmt::format("    pw_turn: {:.6g}\n", *f.pw_turn);
+  }
+  if (f.landmark_range || f.landmark_bearing || f.beacon_range) {
+    y << "    landmarks:\n";
+    if (f.landmark_range)
+      y << fmt::format("      range_std: {:.6g}     # {} residuals, median {:.4g} m\n", f.landmark_range->sigma,
+                       f.landmark_range->n, f.landmark_range->median);
+    if (f.landmark_bearing)
+      y << fmt::format("      bearing_std: {:.6g}   # {} residuals, median {:.4g} rad\n", f.landmark_bearing->sigma,
+                       f.landmark_bearing->n, f.landmark_bearing->median);
+    if (f.beacon_range)
+      y << fmt::format("      beacon_std: {:.6g}    # {} residuals of every beacon together (each one's median, its range bias, in the report)\n",
+                       f.beacon_range->sigma, f.beacon_range->n);
+  }
+  if (f.gps) y << fmt::format("    gnss:\n      gps_std: {:.6g}   # {} axis residuals\n", f.gps->sigma, f.gps->n);
+  return y.str();
+}
+
+}  // namespace lcmloc::fit

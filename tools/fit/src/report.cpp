@@ -1,0 +1,33 @@
+#include "lcmloc/fit/report.hpp"
+
+#include <cstdio>
+
+namespace lcmloc::fit {
+
+void printFit(const NoiseFit& f, const LogRead& read) {
+  const Recording& r = read.recording;
+  std::printf("read: %zu truth, %zu odometry, %zu landmark, %zu beacon, %zu gps messages (%lld refused)%s\n",
+              r.truth.size(), r.odometry.size(), r.landmarks.size(), r.beacons.size(), r.gps.size(),
+              static_cast<long long>(read.refused), read.damaged ? "; the log is damaged" : "");
+  std::printf("%-22s %8s %12s %12s %12s %12s\n", "residual", "n", "median", "mean", "sigma", "rms");
+  auto row = [](const char* what, const std::optional<Residuals>& v) {
+    if (v)
+      std::printf("%-22s %8lld %12.5g %12.5g %12.5g %12.5g\n", what, static_cast<long long>(v->n), v->median, v->mean,
+                  v->sigma, v->rms);
+  };
+  row("landmark range [m]", f.landmark_range);
+  row("landmark bearing [rad]", f.landmark_bearing);
+  row("beacon range [m]", f.beacon_range);
+  for (const auto& [id, v] : f.beacon_range_by_id) {
+    const std::string what = "  beacon " + std::to_string(id);
+    row(what.c_str(), v);
+  }
+  row("gps per axis [m]", f.gps);
+  if (f.pw_diag)
+    std::printf("odometry: %lld windows: pw_diag [%.4g, %.4g, %.4g] per %g m, pw_turn %.4g rad^2/rad\n",
+                static_cast<long long>(f.odometry_windows), (*f.pw_diag)[0], (*f.pw_diag)[1], (*f.pw_diag)[2],
+                r.pw_distance, *f.pw_turn);
+  for (const auto& n : f.notes) std::printf("note: %s\n", n.c_str());
+}
+
+}  // namespace lcmloc::fit
