@@ -9,11 +9,13 @@
 #include <map>
 #include <sstream>
 #include <optional>
+#include <random>
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
 #include "lcmloc/app/config.hpp"
+#include "lcmloc/core/angles.hpp"
 #include "lcmloc/app/exit_codes.hpp"
 #include "lcmloc/drivers/sim_convert.hpp"
 #include "lcmloc/gate_decision_t.hpp"
@@ -808,4 +810,47 @@ TEST(Import, TheDocumentedExampleDirectoryImportsAndScores) {
   // innovations as their chi-square distributions say (2 and 1 dof): measured 1.78 and 1.05
   EXPECT_NEAR(nis_landmarks / landmarks, 2.0, 0.6);
   EXPECT_NEAR(nis_beacons / beacons, 1.0, 0.4);
+}
+
+// With a ground truth, config.yaml gets the noise fitted against it: a robot on a circle seeing
+// two landmarks with a range noise of 0.3 m and a bearing noise of 0.05 rad (far from the
+// filter's defaults of 0.1 m and 0.02 rad) gets those back; --no-noise-fit keeps the defaults.
+TEST(Import, TheConfigGetsTheNoiseFittedAgainstTheTruth) {
+  const auto d = tempDir("noisefit");
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::string odo = "time,speed,yaw_rate\n", truth = "time,x,y,heading\n", obs = "time,landmark_id,range,bearing\n";
+  const double lx[2] = {6.0, -6.0}, ly[2] = {0.0, 0.0};
+  for (int k = 0; k <= 3000; ++k) {  // 300 s at 10 Hz, radius 3 m at 0.3 m/s
+    const double t = 100.0 + 0.1 * k, th = 0.1 * 0.1 * k;
+    const double x = 3.0 * std::sin(th), y = 3.0 - 3.0 * std::cos(th);
+    odo += fmt::format("{:.1f},0.3,0.1\n", t);
+    truth += fmt::format("{:.1f},{},{},{}\n", t, x, y, core::wrapAngle(th));
+    if (k % 2) continue;
+    for (int i = 0; i < 2; ++i)
+      obs += fmt::format("{:.1f},{},{},{}\n", t, i + 1, std::hypot(lx[i] - x, ly[i] - y) + 0.3 * n(rng),
+                         core::wrapAngle(std::atan2(ly[i] - y, lx[i] - x) - th + 0.05 * n(rng)));
+  }
+  write(d / "odometry.csv", odo);
+  write(d / "truth.csv", truth);
+  write(d / "landmarks.csv", obs);
+  write(d / "map.csv", "id,x,y\n1,6,0\n2,-6,0\n");
+  import::ImportOptions o;
+  o.dir = d.string();
+  o.out_dir = (d / "out").string();
+  const auto r = import::importDirectory(o);
+  ASSERT_FALSE(r.noise_fit.empty());
+  EXPECT_NE(r.noise_fit[0].find("landmark range"), std::string::npos) << r.noise_fit[0];
+  const auto cfg = common::loadSystemConfig(r.config_path);
+  EXPECT_NEAR(cfg.fusion.filter.landmarks.range_std, 0.3, 0.03);
+  EXPECT_NEAR(cfg.fusion.filter.landmarks.bearing_std, 0.05, 0.005);
+  EXPECT_NE(import::importSummary(r, 0).find("noise fit: landmark bearing"), std::string::npos);
+
+  o.out_dir = (d / "plain").string();
+  o.fit_noise = false;
+  const auto plain = import::importDirectory(o);
+  EXPECT_TRUE(plain.noise_fit.empty());
+  const auto defaults = common::loadSystemConfig(plain.config_path);
+  EXPECT_EQ(defaults.fusion.filter.landmarks.range_std, core::FilterConfig{}.landmarks.range_std);
+  EXPECT_EQ(defaults.fusion.filter.pw_diag, core::FilterConfig{}.pw_diag);
 }

@@ -14,6 +14,7 @@
 
 #include "import_files.hpp"
 #include "lcmloc/app/csv.hpp"
+#include "lcmloc/fit/fit_log.hpp"
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/import/checks.hpp"
 
@@ -35,10 +36,31 @@ void checkOptions(const ImportOptions& opt) {
 /// that a value inside a bound the config checks stays inside it (3.141593 for pi did not).
 std::string num(double v) { return fmt::format("{}", v); }
 
+/// The fitted values that d takes (a sigma of 0, from data quantized coarser than its noise, is
+/// not taken), and the comment lines that say so.
+std::string applyFit(const fit::NoiseFit* f, core::FilterConfig& d) {
+  if (!f) return "";
+  std::string said = "    # Noise fitted against the ground truth (lcmloc-fit-noise; docs/import_formats.md):";
+  auto take = [&said](const char* key, double v, double& into) {
+    if (!(v > 0)) return;
+    into = v;
+    said += std::string(" ") + key;
+  };
+  if (f->pw_diag) {
+    d.pw_diag = *f->pw_diag;
+    d.pw_turn = *f->pw_turn;
+    said += " pw_diag pw_turn";
+  }
+  if (f->landmark_range) take("range_std", f->landmark_range->sigma, d.landmarks.range_std);
+  if (f->landmark_bearing) take("bearing_std", f->landmark_bearing->sigma, d.landmarks.bearing_std);
+  if (f->beacon_range) take("beacon_std", f->beacon_range->sigma, d.landmarks.beacon_std);
+  return said + "\n";
+}
+
 /// The text of config.yaml for lcmloc-replay: the filter `filter` from the initial pose of
 /// --initial-pose, else the first ground-truth pose, else 0; map.csv when there is a map.
 std::string configText(const ImportOptions& opt, const std::string& filter, bool with_map,
-                       const detail::Converted& conv) {
+                       const detail::Converted& conv, const fit::NoiseFit* fitted = nullptr) {
   const auto& first_truth = conv.first_truth;
   core::Vec3 pose = opt.initial_pose ? *opt.initial_pose : first_truth ? *first_truth : core::Vec3::Zero();
   pose[2] = core::wrapAngle(pose[2]);  // (-pi, pi]
@@ -48,7 +70,8 @@ std::string configText(const ImportOptions& opt, const std::string& filter, bool
   else if (conv.truth_heading == "travel")
     source = " (first ground-truth position; heading: its direction of travel, the truth has none)";
   else if (first_truth) source = " (first ground-truth position; the truth has no heading and does not move: 0)";
-  const core::FilterConfig d;
+  core::FilterConfig d;
+  const std::string noise = applyFit(fitted, d);
   std::ostringstream c;
   c << "# Written by lcmloc-import from " << opt.dir << " (docs/import_formats.md).\n"
     << "# Replay: lcmloc-replay run.lcmlog --config config.yaml --with-inputs -o estimates.lcmlog\n"
@@ -66,6 +89,7 @@ std::string configText(const ImportOptions& opt, const std::string& filter, bool
     << fmt::format("    p0_diag: [{}, {}, {}]        # initial variances [m^2, m^2, rad^2]\n", num(d.p0_diag[0]),
                    num(d.p0_diag[1]), num(d.p0_diag[2]));
   if (opt.wheelbase > 0) c << fmt::format("    wheelbase: {}\n", num(opt.wheelbase));
+  c << noise;
   c << fmt::format("    pw_diag: [{}, {}, {}]     # process noise accumulated over pw_distance of travel\n",
                    num(d.pw_diag[0]), num(d.pw_diag[1]), num(d.pw_diag[2]))
     << fmt::format("    pw_distance: {}                # [m]\n", num(d.pw_distance))
@@ -86,6 +110,34 @@ void checkConfigText(const std::string& text, const std::string& path) {
     throw std::runtime_error(std::string("the config.yaml made for this import is one lcmloc-replay would refuse, so "
                                          "nothing is written (give the value with an option): ") + e.what());
   }
+}
+
+/// The config with the noise fitted against the truth of the log just written (read back as the
+/// replay reads it); the fit's lines into r.noise_fit. A fitted config the loader would refuse
+/// is not used (the defaults stay, and a line says why).
+std::string fittedConfig(const ImportOptions& opt, ImportResult& r, bool with_map, const detail::Converted& conv,
+                         const std::string& plain) {
+  const fit::LogRead read = fit::readRecording(r.log_path, common::parseSystemConfig(plain, r.config_path));
+  const fit::NoiseFit f = fit::fitAgainstTruth(read.recording);
+  const std::string text = configText(opt, r.filter, with_map, conv, &f);
+  try {
+    common::parseSystemConfig(text, r.config_path);
+  } catch (const common::ConfigError& e) {
+    r.noise_fit.push_back(std::string("noise fit not used (the filter's defaults kept): ") + e.what());
+    return plain;
+  }
+  auto line = [&r](const char* what, const std::optional<fit::Residuals>& v) {
+    if (v) r.noise_fit.push_back(fmt::format("noise fit: {} sigma {:.4g} (median {:.4g}, {} residuals)", what, v->sigma, v->median, v->n));
+  };
+  line("landmark range [m]", f.landmark_range);
+  line("landmark bearing [rad]", f.landmark_bearing);
+  line("beacon range [m]", f.beacon_range);
+  if (f.pw_diag)
+    r.noise_fit.push_back(fmt::format("noise fit: odometry pw_diag [{:.4g}, {:.4g}, {:.4g}] per {} m, pw_turn {:.4g} ({} windows)",
+                                      (*f.pw_diag)[0], (*f.pw_diag)[1], (*f.pw_diag)[2], read.recording.pw_distance,
+                                      *f.pw_turn, f.odometry_windows));
+  for (const auto& n : f.notes) r.noise_fit.push_back("noise fit: " + n);
+  return text;
 }
 
 }  // namespace
@@ -172,8 +224,10 @@ ImportResult importDirectory(const ImportOptions& opt) {
       r.map_path = (fs::path(opt.out_dir) / "map.csv").string();
       common::csv::writeMap(r.map_path, map);
     }
+    std::string text = config;
+    if (opt.fit_noise && conv.first_truth) text = fittedConfig(opt, r, !map.empty(), conv, config);
     std::ofstream out(r.config_path);
-    out << config;
+    out << text;
     if (!out.flush()) throw std::runtime_error("cannot write '" + r.config_path + "'");
   }
   return r;
@@ -194,6 +248,7 @@ std::string importSummary(const ImportResult& r, int max_refusals) {
   for (std::size_t i = 0; i < shown; ++i)
     s += fmt::format("refused {}:{}: {}\n", r.refusals[i].file, r.refusals[i].line, r.refusals[i].reason);
   if (shown < r.refusals.size()) s += fmt::format("... and {} more refused rows\n", r.refusals.size() - shown);
+  for (const auto& n : r.noise_fit) s += n + "\n";
   if (!r.log_path.empty())
     s += fmt::format("wrote {}{}, {} (filter {})\n", r.log_path, r.map_path.empty() ? "" : ", " + r.map_path,
                      r.config_path, r.filter);

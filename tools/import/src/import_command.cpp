@@ -20,6 +20,8 @@ void addImportOptions(CLI::App& app, ImportCommand& c) {
   app.add_option("--time-base", c.base, "absolute (Unix epoch) or relative times: auto, absolute, relative")
       ->capture_default_str()->check(CLI::IsMember({"auto", "absolute", "relative"}));
   app.add_flag("--start-at-zero", c.io.start_at_zero, "shift every time so that the earliest row is at 0");
+  app.add_flag("--no-noise-fit{false}", c.io.fit_noise,
+               "keep the filter's default noise (default: fitted against the ground truth when there is one)");
   app.add_option("--wheelbase", c.io.wheelbase, "L [m]: needed for speed,steering odometry (eq. 2)")
       ->check(common::positive());
   app.add_option("--filter", c.io.filter, "filter type written into config.yaml (default: from the data)");

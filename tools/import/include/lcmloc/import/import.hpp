@@ -19,6 +19,9 @@ enum class TimeBase { Auto, Absolute, Relative };
 struct ImportOptions {
   std::string dir;                       ///< directory of *.csv files
   std::string out_dir;                   ///< writes run.lcmlog, map.csv (if any), config.yaml; "" = check only
+  /// With a ground truth, the measurement and process noise of config.yaml are fitted against
+  /// it (fit::fitAgainstTruth on the log written); without one, or off, the filter's defaults.
+  bool fit_noise = true;
   TimeUnit unit = TimeUnit::Auto;
   TimeBase base = TimeBase::Auto;
   bool start_at_zero = false;            ///< shift every time so that the earliest is 0
@@ -55,6 +58,9 @@ struct ImportResult {
   int64_t map_size = 0;
   std::string filter;                 ///< filter type written into config.yaml
   std::string log_path, map_path, config_path;
+  /// With a ground truth: the noise fitted against it (lcmloc-fit-noise) that config.yaml got,
+  /// one line per value, and what could not be fitted (ImportOptions::fit_noise).
+  std::vector<std::string> noise_fit;
   bool usable() const { return messages > 0; }
 };
 
