@@ -10,11 +10,12 @@
 
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/gps_experiment/experiment.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
 
 TEST(GpsExperiment, ConvergesFromOriginAndBeatsRawGps) {
-  auto cfg = common::loadSystemConfig(LCMLOC_GPS_PAPER_YAML);
+  auto cfg = common::loadSimSystemConfig(LCMLOC_GPS_PAPER_YAML);
   ASSERT_NEAR(cfg.scenario.path.x0, 150.0, 1e-9);
   ASSERT_NEAR(cfg.fusion.filter.initial_pose[0], 0.0, 1e-9);
   std::vector<core::FilterConfig> filters;
@@ -42,7 +43,7 @@ TEST(GpsExperiment, ConvergesFromOriginAndBeatsRawGps) {
 }
 
 TEST(GpsExperiment, DeadReckoningNeverConvergesAndHasNoSteadyStateInTheReport) {
-  auto cfg = common::loadSystemConfig(LCMLOC_GPS_PAPER_YAML);
+  auto cfg = common::loadSimSystemConfig(LCMLOC_GPS_PAPER_YAML);
   core::FilterConfig f = cfg.fusion.filter;
   f.type = "dead_reckoning";  // starts 158 m off and never sees a fix
   gps_experiment::Options opt;

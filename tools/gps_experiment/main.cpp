@@ -8,6 +8,7 @@
 #include "lcmloc/app/exit_codes.hpp"
 #include "lcmloc/app/files.hpp"
 #include "lcmloc/gps_experiment/experiment.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
 
@@ -30,7 +31,7 @@ int main(int argc, char** argv) {
   app.add_option("--hold", eo.hold_s, "time the error must stay below it [s]")->capture_default_str()->check(lcmloc::common::nonNegative());
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-gps-experiment", [&] {
-    auto cfg = common::loadSystemConfig(opts.config);
+    auto cfg = common::loadSimSystemConfig(opts.config);
     common::prepareOutputDir(out, overwrite);
     if (seed) cfg.scenario.seed = seed;
     std::vector<core::FilterConfig> filters;
