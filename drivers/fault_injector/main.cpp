@@ -10,6 +10,7 @@
 #include "lcmloc/app/cli.hpp"
 #include "lcmloc/drivers/truth_driver.hpp"
 #include "lcmloc/sim/world.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
 
@@ -19,7 +20,7 @@ int main(int argc, char** argv) {
   common::addCommonOptions(app, opts);
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-fault-injector", [&] {
-    const auto cfg = common::loadSystemConfig(opts.config);
+    const auto cfg = common::loadSimSystemConfig(opts.config);
     const auto& sc = cfg.scenario;
     const auto& ch = cfg.channels;
     std::optional<models::FaultInjector> injector;

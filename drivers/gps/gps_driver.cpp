@@ -17,7 +17,7 @@
 
 namespace lcmloc::gps {
 
-int runSim(const common::SystemConfig& cfg, common::Bus& bus) {
+int runSim(const common::SimSystemConfig& cfg, common::Bus& bus) {
   const auto& sc = cfg.scenario;
   std::optional<models::GpsSensor> sensor;
   auto start = [&] { sensor.emplace(sc.gps, models::componentSeed(sc.seed, "gps")); };
@@ -39,7 +39,7 @@ int runSim(const common::SystemConfig& cfg, common::Bus& bus) {
   return driver.run([&] { return fmt::format("{} fixes out ({} without a fix)", driver.published(), no_fix); });
 }
 
-int runGpsd(const common::SystemConfig& cfg, common::Bus& bus) {
+int runGpsd(const common::SimSystemConfig& cfg, common::Bus& bus) {
   const auto& g = cfg.gps_driver;
   GpsdSource src(g.gpsd_host, g.gpsd_port, g.time_source == "fix");
   int64_t seq = 0, no_fix = 0;
@@ -63,7 +63,7 @@ int runGpsd(const common::SystemConfig& cfg, common::Bus& bus) {
   return common::kExitOk;
 }
 
-int run(const common::SystemConfig& cfg, common::Bus& bus) {
+int run(const common::SimSystemConfig& cfg, common::Bus& bus) {
   return cfg.gps_driver.source == "gpsd" ? runGpsd(cfg, bus) : runSim(cfg, bus);
 }
 

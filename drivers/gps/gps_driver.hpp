@@ -3,16 +3,16 @@
 //   sim   GROUND_TRUTH -> GpsSensor (drivers/models: error, outages, jumps) -> lat/lon about
 //         the datum (GeographicLib LocalCartesian) -> GPS
 //   gpsd  a real receiver (or gpsfake) through libgps -> GPS
-#include "lcmloc/app/config.hpp"
 #include "lcmloc/bus/transport.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 namespace lcmloc::gps {
 
 /// The simulated receiver: a fix per GROUND_TRUTH sample due, until a stop is requested.
-int runSim(const common::SystemConfig& cfg, common::Bus& bus);
+int runSim(const common::SimSystemConfig& cfg, common::Bus& bus);
 /// gpsd's reports as they come, until a stop is requested. Throws GpsdError.
-int runGpsd(const common::SystemConfig& cfg, common::Bus& bus);
+int runGpsd(const common::SimSystemConfig& cfg, common::Bus& bus);
 /// runGpsd or runSim, as cfg.gps_driver.source says. Returns common::kExitOk.
-int run(const common::SystemConfig& cfg, common::Bus& bus);
+int run(const common::SimSystemConfig& cfg, common::Bus& bus);
 
 }  // namespace lcmloc::gps

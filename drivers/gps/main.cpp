@@ -3,6 +3,7 @@
 #include "gps_driver.hpp"
 #include "lcmloc/app/cli.hpp"
 #include "lcmloc/bus/transport.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
 
@@ -16,7 +17,7 @@ int main(int argc, char** argv) {
   app.add_option("--gpsd-port", port, "override gps.gpsd_port");
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-gps", [&] {
-    auto cfg = common::loadSystemConfig(opts.config);
+    auto cfg = common::loadSimSystemConfig(opts.config);
     if (!source.empty()) cfg.gps_driver.source = source;
     if (!host.empty()) cfg.gps_driver.gpsd_host = host;
     if (!port.empty()) cfg.gps_driver.gpsd_port = port;

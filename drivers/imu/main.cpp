@@ -13,6 +13,7 @@
 #include "lcmloc/drivers/truth_driver.hpp"
 #include "lcmloc/sim/gnss_sensors.hpp"
 #include "lcmloc/sim/world.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
 
@@ -24,7 +25,7 @@ int main(int argc, char** argv) {
   app.add_option("--rate", rate, "override imu.rate_hz [Hz]")->check(CLI::Range(common::kImuRateHz.lo, common::kImuRateHz.hi));
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-imu", [&] {
-    auto cfg = common::loadSystemConfig(opts.config);
+    auto cfg = common::loadSimSystemConfig(opts.config);
     auto& sc = cfg.scenario;
     if (rate > 0) {
       sc.imu.rate_hz = rate;

@@ -12,7 +12,7 @@
 
 namespace lcmloc::ins_sim {
 
-int run(const common::SystemConfig& cfg, const models::InsSimConfig& ic, double factor, common::Bus& bus) {
+int run(const common::SimSystemConfig& cfg, const models::InsSimConfig& ic, double factor, common::Bus& bus) {
   models::InsSim sim(ic, cfg.scenario.vehicle.start_utime);
   int64_t truth_seq = 0, imu_seq = 0, odo_seq = 0;
   common::Heartbeat hb(bus, cfg.channels.heartbeat, "lcmloc-ins-sim", [&] {

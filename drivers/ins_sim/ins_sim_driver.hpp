@@ -3,14 +3,14 @@
 // vehicle along the configured motion profile on the WGS-84 ellipsoid and publishes GROUND_TRUTH,
 // IMU (the paper's sensor grade) and ODOMETRY (distance increments with the scale error), paced
 // by the real-time factor. Models: drivers/models (InsSim), shared with lcmloc-ins-experiment.
-#include "lcmloc/app/config.hpp"
 #include "lcmloc/bus/transport.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 namespace lcmloc::ins_sim {
 
 /// Runs the simulation ic (start time from cfg.scenario.vehicle, channels from cfg) on bus at the
 /// real-time factor (0 = as fast as possible) until it is over or a stop is requested. Returns
 /// common::kExitOk.
-int run(const common::SystemConfig& cfg, const models::InsSimConfig& ic, double factor, common::Bus& bus);
+int run(const common::SimSystemConfig& cfg, const models::InsSimConfig& ic, double factor, common::Bus& bus);
 
 }  // namespace lcmloc::ins_sim

@@ -3,6 +3,7 @@
 #include "ins_sim_driver.hpp"
 #include "lcmloc/app/cli.hpp"
 #include "lcmloc/bus/transport.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
 
@@ -19,7 +20,7 @@ int main(int argc, char** argv) {
   app.add_option("--seed", seed, "override ins_sim.seed")->check(common::seed());
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-ins-sim", [&] {
-    const auto cfg = common::loadSystemConfig(opts.config);
+    const auto cfg = common::loadSimSystemConfig(opts.config);
     auto ic = cfg.ins_sim;
     if (duration > 0) ic.duration = duration;
     if (seed) ic.seed = seed;

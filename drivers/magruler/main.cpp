@@ -11,6 +11,7 @@
 #include "lcmloc/app/heartbeat.hpp"
 #include "lcmloc/drivers/truth_driver.hpp"
 #include "lcmloc/sim/world.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
 
@@ -20,7 +21,7 @@ int main(int argc, char** argv) {
   common::addCommonOptions(app, opts);
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-magruler", [&] {
-    const auto cfg = common::loadSystemConfig(opts.config);
+    const auto cfg = common::loadSimSystemConfig(opts.config);
     const auto& sc = cfg.scenario;
     const std::string out = cfg.channels.magruler.empty() ? "MAGRULER" : cfg.channels.magruler.front();
     const auto map = models::makeMarkerMap(models::Path(sc.path), sc.markers);

@@ -9,6 +9,7 @@
 #include "lcmloc/app/cli.hpp"
 #include "lcmloc/drivers/truth_driver.hpp"
 #include "lcmloc/sim/world.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
 
@@ -18,7 +19,7 @@ int main(int argc, char** argv) {
   common::addCommonOptions(app, opts);
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-odometry", [&] {
-    const auto cfg = common::loadSystemConfig(opts.config);
+    const auto cfg = common::loadSimSystemConfig(opts.config);
     const auto& sc = cfg.scenario;
     std::optional<models::OdometrySensor> sensor;
     auto start = [&] { sensor.emplace(sc.odometry, sc.vehicle.wheelbase, models::componentSeed(sc.seed, "odometry")); };

@@ -12,6 +12,7 @@
 #include "lcmloc/app/pacer.hpp"
 #include "lcmloc/app/signals.hpp"
 #include "lcmloc/sim/world.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
 
@@ -25,7 +26,7 @@ int main(int argc, char** argv) {
   std::string map_out;
   app.add_option("--write-map", map_out, "write the scenario's markers as a map file (fusion.map_file) and exit");
   return common::runProcess(app, argc, argv, opts, "lcmloc-sim", [&] {
-    const auto cfg = common::loadSystemConfig(opts.config);
+    const auto cfg = common::loadSimSystemConfig(opts.config);
     if (!map_out.empty()) {
       common::writeScenarioMap(cfg, map_out);
       return common::kExitOk;

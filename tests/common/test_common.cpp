@@ -28,20 +28,27 @@
 #include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/imu_t.hpp"
 #include "lcmloc/pose_t.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
 using common::ConfigError;
 
 namespace {
 
-std::string errorOf(const std::string& yaml, const std::string& file = "test.yaml") {
+/// The error of the whole file's reader (the simulation's sections too; with whole_file false, of
+/// the reader every process uses, lcmloc_app's, which takes those sections unread), or "(no error)".
+std::string errorOf(const std::string& yaml, const std::string& file = "test.yaml", bool whole_file = true) {
   try {
-    common::parseSystemConfig(yaml, file);
+    if (whole_file)
+      common::parseSimSystemConfig(yaml, file);
+    else
+      common::parseSystemConfig(yaml, file);
   } catch (const ConfigError& e) {
     return e.what();
   }
   return "(no error)";
 }
+std::string processErrorOf(const std::string& yaml) { return errorOf(yaml, "test.yaml", false); }
 
 }  // namespace
 
@@ -49,8 +56,8 @@ std::string errorOf(const std::string& yaml, const std::string& file = "test.yam
 // Config
 
 TEST(Config, PaperYamlSpellsOutTheDefaults) {
-  const auto cfg = common::loadSystemConfig(LCMLOC_PAPER_YAML);
-  const common::SystemConfig def;
+  const auto cfg = common::loadSimSystemConfig(LCMLOC_PAPER_YAML);
+  const common::SimSystemConfig def;
   const auto& s = cfg.scenario;
   EXPECT_EQ(cfg.file, LCMLOC_PAPER_YAML);
   EXPECT_EQ(s.name, "paper");
@@ -93,11 +100,11 @@ TEST(Config, PaperYamlSpellsOutTheDefaults) {
 }
 
 TEST(Config, EmptyFileGivesDefaultsAndOverridesApply) {
-  const auto empty = common::parseSystemConfig("", "empty.yaml");
+  const auto empty = common::parseSimSystemConfig("", "empty.yaml");
   EXPECT_EQ(empty.scenario.markers.count, 20);
   EXPECT_EQ(empty.fusion.filter.type, "ukf_gated");
 
-  const auto c = common::parseSystemConfig(R"(
+  const auto c = common::parseSimSystemConfig(R"(
 scenario: {seed: 42, realtime_factor: 10}
 faults: []
 fusion:
@@ -116,6 +123,54 @@ logger: {channels: ["POSE.*", GATE]}
   EXPECT_EQ(c.fusion.filter.wheelbase, 2.5);  // untouched keys keep their defaults
   EXPECT_EQ(c.fusion.shadow, std::vector<std::string>{"dead_reckoning"});
   EXPECT_EQ(c.logger.channels, (std::vector<std::string>{"POSE.*", "GATE"}));
+}
+
+// One file, read by each process for the sections it needs: the reader every process uses
+// (lcmloc_app) takes the simulation's sections by name without reading them, and refuses a
+// top-level key that is no section, as the whole file's reader (lcmloc_simconfig) does, with the
+// same list of valid keys; the whole file's reader refuses what is wrong in the simulation's.
+TEST(Config, TheProcessesReaderAcceptsTheSimulationSectionsUnread) {
+  const std::string wrong_in_each =
+      "scenario: {realtime_factor: -1}\npath: 3\nmarkers: {count: -1}\nvehicle: {speed: fast}\nodometry: {rate_hz: 1000}\n"
+      "magruler: {num_sensors: 1}\nfaults: [{kind: gremlin}]\nimu: {rate_hz: 0}\ngps: {gpsd_port: abc}\n"
+      "ins_sim: {profile: nope}\nvision: {rate_hz: -1}\n";
+  EXPECT_EQ(processErrorOf(wrong_in_each), "(no error)");
+  EXPECT_NE(errorOf(wrong_in_each), "(no error)");
+  std::size_t start = 0;
+  for (std::size_t end; (end = wrong_in_each.find('\n', start)) != std::string::npos; start = end + 1) {
+    const std::string line = wrong_in_each.substr(start, end - start);
+    const std::string section = line.substr(0, line.find(':'));
+    EXPECT_EQ(processErrorOf(line), "(no error)") << line;
+    EXPECT_EQ(errorOf(line).rfind("test.yaml: " + section, 0), 0u) << line << " -> " << errorOf(line);
+  }
+  const std::string unknown = processErrorOf("vehicel: {speed: 1}");
+  EXPECT_EQ(unknown.rfind("test.yaml: vehicel: unknown key (valid keys: scenario, path, markers, vehicle, odometry, "
+                          "magruler, faults, imu, gps, datum, channels, fusion, logger, ins_sim, vision, landmarks)", 0),
+            0u) << unknown;
+  EXPECT_EQ(errorOf("vehicel: {speed: 1}"), unknown);
+  // A section the process reads is checked as before, whatever the simulation's sections hold.
+  EXPECT_EQ(processErrorOf("vehicle: {speed: fast}\nfusion: {output_every: 0}").rfind("test.yaml: fusion.output_every", 0),
+            0u);
+}
+
+// The fusion's landmark map comes from the part of the file every process reads: the top-level
+// `landmarks` (the world's, which lcmloc-vision observes) when fusion.landmarks is not given.
+TEST(Config, TheTopLevelLandmarksAreTheFusionsWithoutTheSimulator) {
+  const std::string yaml = "landmarks: [{id: 7, x: 10.5, y: -2}, {id: 2, x: 0, y: 40}]\n";
+  const auto c = common::parseSystemConfig(yaml, "l.yaml");
+  ASSERT_EQ(c.landmarks.size(), 2u);
+  EXPECT_EQ(c.landmarks[0].id, 7);  // file order kept
+  ASSERT_EQ(c.fusion.landmarks.size(), 2u);
+  EXPECT_EQ(c.fusion.landmarks.at(7), core::Vec2(10.5, -2.0));
+  EXPECT_EQ(c.fusion.landmarks.at(2), core::Vec2(0.0, 40.0));
+  const auto own = common::parseSystemConfig(yaml + "fusion: {landmarks: [{id: 1, x: 1, y: 1}]}", "l.yaml");
+  EXPECT_EQ(own.fusion.landmarks.size(), 1u);  // fusion.landmarks given: that one
+  const auto sim = common::parseSimSystemConfig(yaml, "l.yaml");
+  ASSERT_EQ(sim.scenario.landmarks.size(), 2u);
+  EXPECT_EQ(sim.scenario.landmarks[1].id, 2);
+  EXPECT_EQ(sim.scenario.landmarks[1].y, 40.0);
+  EXPECT_NE(processErrorOf("landmarks: [{id: 1, x: 0, y: 0}, {id: 1, x: 5, y: 5}]").find("landmarks[1].id: duplicate"),
+            std::string::npos);
 }
 
 TEST(Config, UnknownKeyNamesFileKeyPathAndValidKeys) {
@@ -237,7 +292,7 @@ TEST(Config, TheResumePeriodIsAFusionSettingNotTheSimulatorsRate) {
 // Lists of maps (GPS outages and jumps, INS motion segments and IMU dropouts): read item by
 // item; not a list, an unknown key in an item and an out-of-range value name the item.
 TEST(Config, ListsOfMapsAreReadItemByItemWithClearErrors) {
-  const auto cfg = common::parseSystemConfig(
+  const auto cfg = common::parseSimSystemConfig(
       "gps: {outages: [{start: 5, duration: 2}, {start: 30, duration: 1}], jumps: [{at: 10, duration: 3, dx: 4, dy: -1}]}\n"
       "ins_sim: {imu_dropouts: [{start: 1, duration: 0.5}]}\n",
       "l.yaml");

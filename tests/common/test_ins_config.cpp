@@ -6,11 +6,12 @@
 
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/bus/convert.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
 
 TEST(InsConfig, PaperFileLoads) {
-  const auto cfg = common::loadSystemConfig(LCMLOC_INS_YAML);
+  const auto cfg = common::loadSimSystemConfig(LCMLOC_INS_YAML);
   EXPECT_EQ(cfg.fusion.filter.type, "odo_ins");
   EXPECT_EQ(cfg.fusion.shadow, std::vector<std::string>{"odo_ins_uncal"});
   EXPECT_DOUBLE_EQ(cfg.fusion.filter.ins.odo_markov, 0.001);
@@ -24,8 +25,8 @@ TEST(InsConfig, PaperFileLoads) {
   EXPECT_EQ(cfg.fusion.fix_gate.lockout_rejections, 2);
   EXPECT_DOUBLE_EQ(cfg.fusion.fix.max_condition, 100.0);
   // The paper's vision run re-initializes with every fix (no gate).
-  EXPECT_DOUBLE_EQ(common::loadSystemConfig(LCMLOC_INS_VISION_YAML).fusion.fix_gate.probability, 0.0);
-  const auto set = common::parseSystemConfig(
+  EXPECT_DOUBLE_EQ(common::loadSimSystemConfig(LCMLOC_INS_VISION_YAML).fusion.fix_gate.probability, 0.0);
+  const auto set = common::parseSimSystemConfig(
       "fusion: {landmark_fix: {gate_probability: 0.99, lockout_rejections: 0, max_condition: 1000}}\n", "t.yaml");
   EXPECT_DOUBLE_EQ(set.fusion.fix_gate.probability, 0.99);
   EXPECT_EQ(set.fusion.fix_gate.lockout_rejections, 0);
@@ -35,7 +36,7 @@ TEST(InsConfig, PaperFileLoads) {
 TEST(InsConfig, ErrorsNameTheKey) {
   auto expectError = [](const std::string& yaml, const std::string& key) {
     try {
-      common::parseSystemConfig(yaml, "t.yaml");
+      common::parseSimSystemConfig(yaml, "t.yaml");
       ADD_FAILURE() << "accepted: " << yaml;
     } catch (const common::ConfigError& e) {
       EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();

@@ -13,6 +13,7 @@
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/app/csv.hpp"
 #include "lcmloc/drivers/scenario_map.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
 namespace fs = std::filesystem;
@@ -49,7 +50,7 @@ TEST(ScenarioMap, EveryShippedConfigWithMarkersNamesTheMapOfItsWorld) {
     // (the launcher's system files list processes: no world of their own)
     if (entry.path().extension() != ".yaml" || (file.size() >= 11 && file.substr(file.size() - 11) == "system.yaml"))
       continue;
-    const common::SystemConfig cfg = common::loadSystemConfig(entry.path().string());
+    const common::SimSystemConfig cfg = common::loadSimSystemConfig(entry.path().string());
     const core::MarkerMap world = common::scenarioMap(cfg);
     if (world.empty()) continue;
     const std::string& name = file;

@@ -21,6 +21,7 @@
 #include "lcmloc/heartbeat_t.hpp"
 #include "lcmloc/sim/world.hpp"
 #include "lcmloc/odometry_t.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
 
@@ -128,7 +129,7 @@ TEST(TruthProblem, RefusesNonFiniteFieldsBadUtimesAndValuesNoVehicleReaches) {
 // the wrong place, signed overflow in the time arithmetic.
 TEST(TruthDriver, BadGroundTruthIsRefusedCountedAndNeverReachesTheModel) {
   common::Bus bus("memq://");
-  const common::SystemConfig cfg;  // GROUND_TRUTH, HEARTBEAT, fusion.max_time_jump 1 s
+  const common::SimSystemConfig cfg;  // GROUND_TRUTH, HEARTBEAT, fusion.max_time_jump 1 s
   std::vector<lcmloc::ground_truth_t> seen;
   int restarts = 0;
   common::TruthDriver driver(
@@ -176,7 +177,7 @@ TEST(TruthDriver, BadGroundTruthIsRefusedCountedAndNeverReachesTheModel) {
 // odometer publish 9.2e15 m once and 0 ever after, with no log line and no counter.
 TEST(TruthDriver, OdometryIncrementsAreRightAfterANaNDistance) {
   common::Bus bus("memq://");
-  common::SystemConfig cfg;
+  common::SimSystemConfig cfg;
   auto& oc = cfg.scenario.odometry;  // 100 Hz, 1 mm ticks
   oc.scale_error = 0.0;
   oc.slip_std = 0.0;

@@ -387,26 +387,26 @@ TEST_F(ProcessTest, LoggerKeepsAnEarlierRecordingUnlessToldToOverwrite) {
 }
 
 TEST_F(ProcessTest, BadConfigExitsNonZeroNamingFileAndKey) {
+  // name run with --config file exits 2 with a line that has what.
+  const auto expectConfigError = [&](const std::string& name, const std::string& file, const std::string& what,
+                                     const std::string& out) {
+    Child c(kExecutables.at(name), {"--config", file, "--lcm-url", url_}, path(name + out));
+    const auto rc = c.wait(10s);
+    ASSERT_TRUE(rc.has_value()) << name;
+    EXPECT_EQ(*rc, 2) << name << "\n" << c.output();
+    EXPECT_NE(c.output().find(what), std::string::npos) << name << "\n" << c.output();
+  };
   const std::string bad = writeFile("bad.yaml", "fusion:\n  filter:\n    bogus_key: 1\n");
   const std::string missing = path("does_not_exist.yaml");
   for (const auto& [name, exe] : kExecutables) {
-    {
-      Child c(exe, {"--config", bad, "--lcm-url", url_}, path(name + ".bad.out"));
-      const auto rc = c.wait(10s);
-      ASSERT_TRUE(rc.has_value()) << name;
-      EXPECT_EQ(*rc, 2) << name << "\n" << c.output();
-      EXPECT_NE(c.output().find(bad + ": fusion.filter.bogus_key: unknown key"), std::string::npos)
-          << name << "\n" << c.output();
-    }
-    {
-      Child c(exe, {"--config", missing, "--lcm-url", url_}, path(name + ".missing.out"));
-      const auto rc = c.wait(10s);
-      ASSERT_TRUE(rc.has_value()) << name;
-      EXPECT_EQ(*rc, 2) << name << "\n" << c.output();
-      EXPECT_NE(c.output().find(missing + ": cannot open config file"), std::string::npos) << name << "\n"
-                                                                                          << c.output();
-    }
+    expectConfigError(name, bad, bad + ": fusion.filter.bogus_key: unknown key", ".bad.out");
+    expectConfigError(name, missing, missing + ": cannot open config file", ".missing.out");
   }
+  // The simulation's sections: refused by every program here that reads them (the daemon and the
+  // logger take them unread, Config.TheProcessesReaderAcceptsTheSimulationSectionsUnread).
+  const std::string bad_sim = writeFile("bad_sim.yaml", "vehicle:\n  wheelbas: 2.0\n");
+  for (const char* name : {"lcmloc-sim", "lcmloc-odometry", "lcmloc-magruler", "lcmloc-fault-injector", "lcmloc-launcher"})
+    expectConfigError(name, bad_sim, bad_sim + ": vehicle.wheelbas: unknown key", ".bad_sim.out");
   Child filter(LCMLOC_FUSION, {"--config", LCMLOC_PAPER_YAML, "--lcm-url", url_, "--filter", "kalman"},
                path("filter.out"));
   ASSERT_EQ(filter.wait(10s), std::optional<int>(2)) << filter.output();

@@ -17,6 +17,7 @@
 #include "lcmloc/ins_experiment/command.hpp"
 #include "lcmloc/landmark_experiment/command.hpp"
 #include "lcmloc/replay/command.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
 namespace fs = std::filesystem;
@@ -55,7 +56,7 @@ TEST(CtlCommand, EachSubcommandMakesItsControlMessage) {
 }
 
 TEST(ReplayCommand, OverridesTheFilterAndTheShadows) {
-  common::SystemConfig cfg;
+  common::SimSystemConfig cfg;
   cfg.fusion.shadow = {"dead_reckoning"};
   replay::CommandOptions o;
   o.filter = "ukf";
@@ -77,7 +78,7 @@ TEST(ReplayCommand, RefusesAMissingInputAndAnExistingOutput) {
   fs::create_directories(dir);
   std::ofstream(dir / "in.lcmlog") << "";
   std::ofstream(dir / "out.lcmlog") << "kept";
-  const common::SystemConfig cfg;
+  const common::SimSystemConfig cfg;
   replay::CommandOptions o;
   EXPECT_THROW(replay::runCommand(cfg, o), common::UsageError);  // neither given
   o.input = (dir / "missing.lcmlog").string();
@@ -100,7 +101,7 @@ TEST(ExperimentCommands, RefuseAnExistingOutputBeforeAnyWork) {
   fs::create_directories(dir / "out");
   std::ofstream(dir / "out" / "report.json") << "{}";
   const auto before = fs::last_write_time(dir / "out" / "report.json");
-  const common::SystemConfig cfg;
+  const common::SimSystemConfig cfg;
   landmark_experiment::CommandOptions lo;
   lo.output = (dir / "out").string();
   lo.experiment.runs = 1;

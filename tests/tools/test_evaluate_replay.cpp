@@ -32,6 +32,7 @@
 #include "lcmloc/sim/world.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 #include "test_log_writer.hpp"
 
 namespace fs = std::filesystem;
@@ -150,7 +151,7 @@ class EvaluateReplayTest : public ::testing::Test {
            ("lcmloc_test_evaluate_replay_" + std::to_string(::getpid()) + "_" + info->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    cfg_ = common::loadSystemConfig(kConfig);
+    cfg_ = common::loadSimSystemConfig(kConfig);
   }
   void TearDown() override { fs::remove_all(dir_); }
   std::string file(const std::string& name) const { return (dir_ / name).string(); }
@@ -174,7 +175,7 @@ class EvaluateReplayTest : public ::testing::Test {
   }
 
   fs::path dir_;
-  common::SystemConfig cfg_;
+  common::SimSystemConfig cfg_;
 };
 
 /// The report's entry of `name` in the list `list` (by `key`); null when missing.

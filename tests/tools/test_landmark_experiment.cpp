@@ -17,6 +17,7 @@
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/drivers/sim_convert.hpp"
 #include "lcmloc/landmark_experiment/experiment.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 #include "run_command.hpp"
 #include "test_log_writer.hpp"
 
@@ -39,7 +40,7 @@ std::pair<int, std::string> runExperimentCommand(const std::string& args, const 
   return runCommand(LCMLOC_LANDMARK_EXPERIMENT_BIN, args, dir);
 }
 Result smallRun(uint64_t seed) {
-  const auto cfg = common::loadSystemConfig(LCMLOC_LANDMARK_YAML);
+  const auto cfg = common::loadSimSystemConfig(LCMLOC_LANDMARK_YAML);
   Options o;
   o.runs = 200;
   o.seed = seed;
@@ -127,7 +128,7 @@ TEST(LandmarkExperiment, DeterministicAndReportWritten) {
 }
 
 TEST(LandmarkExperiment, SensorOutOfRangeRefusedWithReason) {
-  auto cfg = common::loadSystemConfig(LCMLOC_LANDMARK_YAML);
+  auto cfg = common::loadSimSystemConfig(LCMLOC_LANDMARK_YAML);
   cfg.scenario.vision.max_range = 800.0;  // sees all three only when they are 577 m away
   Options o;
   o.runs = 5;

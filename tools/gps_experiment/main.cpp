@@ -9,6 +9,7 @@
 #include "lcmloc/app/files.hpp"
 #include "lcmloc/gps_experiment/monte_carlo.hpp"
 #include "lcmloc/gps_experiment/printing.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
 
@@ -34,7 +35,7 @@ int main(int argc, char** argv) {
   app.add_option("--min-drive", mc.min_drive_s, "the path repeats until the drive lasts this long [s]")->capture_default_str()->check(CLI::Range(0.0, 86400.0));
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-gps-experiment", [&] {
-    auto cfg = common::loadSystemConfig(opts.config);
+    auto cfg = common::loadSimSystemConfig(opts.config);
     common::prepareOutputDir(out, overwrite);
     if (seed) cfg.scenario.seed = seed;
     const auto filters = gps_experiment::filterConfigs(types, cfg.fusion.filter);

@@ -14,7 +14,7 @@
 
 namespace lcmloc::ins_experiment {
 
-int runCommand(const common::SystemConfig& cfg, const CommandOptions& o) {
+int runCommand(const common::SimSystemConfig& cfg, const CommandOptions& o) {
   Options eo = o.experiment;
   common::refuseExistingOutput(o.log, o.overwrite, "--log");
   common::prepareOutputDir(o.output, o.overwrite);

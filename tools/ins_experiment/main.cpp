@@ -6,6 +6,7 @@
 #include "lcmloc/app/cli.hpp"
 #include "lcmloc/app/files.hpp"
 #include "lcmloc/ins_experiment/command.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
 
@@ -32,6 +33,6 @@ int main(int argc, char** argv) {
   common::addOverwriteFlag(app, o.overwrite);
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-ins-experiment", [&] {
-    return ins_experiment::runCommand(common::loadSystemConfig(opts.config), o);
+    return ins_experiment::runCommand(common::loadSimSystemConfig(opts.config), o);
   });
 }

@@ -75,7 +75,7 @@ std::vector<Observation> readObservations(const std::string& path, const common:
   return obs;
 }
 
-int runCommand(const common::SystemConfig& cfg, CommandOptions o) {
+int runCommand(const common::SimSystemConfig& cfg, CommandOptions o) {
   if (std::hypot(o.off_centre[0], o.off_centre[1]) >= 0.9)
     throw common::ConfigError("--off-centre", "",
                               fmt::format("{},{} is not inside 0.9 circumradius (the danger circle is at 1)",

@@ -5,6 +5,7 @@
 #include "lcmloc/app/cli.hpp"
 #include "lcmloc/app/files.hpp"
 #include "lcmloc/landmark_experiment/command.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
 
@@ -41,6 +42,6 @@ int main(int argc, char** argv) {
       ->delimiter(',')->expected(2)->capture_default_str();
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-landmark-experiment", [&] {
-    return landmark_experiment::runCommand(common::loadSystemConfig(opts.config), o);
+    return landmark_experiment::runCommand(common::loadSimSystemConfig(opts.config), o);
   });
 }

@@ -22,6 +22,7 @@
 #include "lcmloc/app/signals.hpp"
 #include "lcmloc/bus/transport.hpp"
 #include "lcmloc/heartbeat_t.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 namespace lcmloc::launcher {
 
@@ -141,7 +142,7 @@ class Launcher {
       : cfg_(std::move(cfg)), scenario_(std::move(scenario)), url_(std::move(url)) {}
 
   int run() {
-    const auto sys = common::loadSystemConfig(scenario_);  // validate before starting anything
+    const auto sys = common::loadSimSystemConfig(scenario_);  // validate every section before starting anything
     for (const auto& spec : cfg_.processes) {
       children_.emplace_back();
       children_.back().spec = spec;

@@ -2,6 +2,7 @@
 // command.hpp), or (--bench) the replay throughput benchmark on a long synthetic log (bench.hpp).
 #include "lcmloc/app/cli.hpp"
 #include "lcmloc/replay/command.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
 
@@ -49,6 +50,6 @@ int main(int argc, char** argv) {
   app.footer("--lcm-url is accepted for uniformity and unused: the replay reads and writes files only.");
 
   return common::runProcess(app, argc, argv, opts, "lcmloc-replay", [&] {
-    return replay::runCommand(replay::applyOverrides(common::loadSystemConfig(opts.config), o), o);
+    return replay::runCommand(replay::applyOverrides(common::loadSimSystemConfig(opts.config), o), o);
   });
 }

@@ -5,10 +5,10 @@
 
 namespace lcmloc::common {
 
-core::MarkerMap scenarioMap(const SystemConfig& cfg) {
+core::MarkerMap scenarioMap(const SimSystemConfig& cfg) {
   return models::makeMarkerMap(models::Path(cfg.scenario.path), cfg.scenario.markers);
 }
 
-void writeScenarioMap(const SystemConfig& cfg, const std::string& path) { csv::writeMap(path, scenarioMap(cfg)); }
+void writeScenarioMap(const SimSystemConfig& cfg, const std::string& path) { csv::writeMap(path, scenarioMap(cfg)); }
 
 }  // namespace lcmloc::common

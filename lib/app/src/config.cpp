@@ -1,7 +1,8 @@
 // YAML -> config structs. Every map is read through a KeyReader that remembers which keys were
 // asked for, so a key nobody asked for is reported as unknown (with the list of valid keys).
-// Here: the file as a whole, `channels`, `fusion` (with its filter), `logger`; the simulated
-// world's and the sensors' sections are in config_scenario.cpp, the INS method's in config_ins.cpp.
+// Here: the file as a whole, `datum`, `channels`, `fusion` (with its filter), `logger` and the
+// top-level `landmarks`; the INS filter's section and the landmark lists are in config_ins.cpp.
+// The simulation's sections are accepted unread (lcmloc_simconfig reads them).
 #include "lcmloc/app/config.hpp"
 
 #include <algorithm>
@@ -18,7 +19,6 @@
 #include "lcmloc/app/files.hpp"
 #include "lcmloc/app/yaml_reader.hpp"
 #include "config_ins.hpp"
-#include "config_scenario.hpp"
 #include "lcmloc/core/filter.hpp"
 
 namespace lcmloc::common {
@@ -122,6 +122,14 @@ void parseFusion(KeyReader& root, FusionConfig& f) {
     x.get("max_condition", f.fix.max_condition, 1.0, 1e12);
     x.finish();
   }
+  r.finish();
+}
+
+void parseDatum(KeyReader& root, Datum& d) {
+  KeyReader r(root.child("datum"), root.file(), "datum");
+  r.get("latitude", d.latitude, -90.0, 90.0);
+  r.get("longitude", d.longitude, -180.0, 180.0);
+  r.get("altitude", d.altitude, -1e4, 1e5);
   r.finish();
 }
 
@@ -241,50 +249,43 @@ core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterC
 }
 
 SystemConfig parseSystemConfig(const std::string& yaml_text, const std::string& file) {
-  YAML::Node doc;
+  SystemConfig cfg;
+  cfg.file = file;
+  KeyReader root(parseYamlText(yaml_text, file), file, "");
+  // The top-level sections in the file's order (an unknown key's message lists them so); the
+  // simulation's (null here) are accepted unread.
+  using Parse = void (*)(KeyReader&, SystemConfig&);
+  const std::pair<const char*, Parse> sections[] = {
+      {"scenario", nullptr}, {"path", nullptr}, {"markers", nullptr}, {"vehicle", nullptr}, {"odometry", nullptr},
+      {"magruler", nullptr}, {"faults", nullptr}, {"imu", nullptr}, {"gps", nullptr},
+      {"datum", [](KeyReader& r, SystemConfig& c) { parseDatum(r, c.datum); }},
+      {"channels", [](KeyReader& r, SystemConfig& c) { parseChannels(r, c.channels); }},
+      {"fusion", [](KeyReader& r, SystemConfig& c) { parseFusion(r, c.fusion); }},
+      {"logger", [](KeyReader& r, SystemConfig& c) { parseLogger(r, c.logger); }},
+      {"ins_sim", nullptr}, {"vision", nullptr},
+      {"landmarks", [](KeyReader& r, SystemConfig& c) { ins_config::parseLandmarkList(r, "landmarks", c.landmarks); }},
+  };
+  for (const auto& [name, parse] : sections) {
+    if (parse)
+      parse(root, cfg);
+    else
+      root.child(name);
+  }
+  // One landmark map for the whole system: the fusion takes the top-level `landmarks` (the
+  // one lcmloc-vision observes) unless its own `fusion.landmarks` is given.
+  if (cfg.fusion.landmarks.empty())
+    for (const auto& l : cfg.landmarks) cfg.fusion.landmarks[l.id] = core::Vec2(l.x, l.y);
+  root.finish();
+  return cfg;
+}
+
+YAML::Node parseYamlText(const std::string& yaml_text, const std::string& file) {
   try {
-    doc = YAML::Load(yaml_text);
+    return YAML::Load(yaml_text);
   } catch (const YAML::ParserException& e) {
     throw ConfigError(file, "", "YAML syntax error at line " + std::to_string(e.mark.line + 1) +
                                     ", column " + std::to_string(e.mark.column + 1) + ": " + e.msg);
   }
-  SystemConfig cfg;
-  cfg.file = file;
-  KeyReader root(doc, file, "");
-  scenario_config::parseScenarioSection(root, cfg.scenario);
-  scenario_config::parsePath(root, cfg.scenario.path);
-  scenario_config::parseMarkers(root, cfg.scenario.markers);
-  scenario_config::parseVehicle(root, cfg.scenario.vehicle);
-  scenario_config::parseOdometry(root, cfg.scenario.odometry);
-  scenario_config::parseMagRuler(root, cfg.scenario.magruler);
-  scenario_config::parseFaults(root, cfg.scenario.faults);
-  scenario_config::parseImu(root, cfg.scenario.imu);
-  scenario_config::parseGps(root, cfg.scenario.gps, cfg.gps_driver);
-  scenario_config::parseDatum(root, cfg.datum);
-  parseChannels(root, cfg.channels);
-  parseFusion(root, cfg.fusion);
-  parseLogger(root, cfg.logger);
-  ins_config::parseInsSim(root, cfg.ins_sim);
-  scenario_config::parseVision(root, cfg.scenario.vision);
-  ins_config::parseLandmarkList(root, "landmarks", cfg.scenario.landmarks);
-  // One landmark map for the whole system: the fusion takes the top-level `landmarks` (the
-  // one lcmloc-vision observes) unless its own `fusion.landmarks` is given.
-  if (cfg.fusion.landmarks.empty())
-    for (const auto& l : cfg.scenario.landmarks) cfg.fusion.landmarks[l.id] = core::Vec2(l.x, l.y);
-  root.finish();
-  checkSampledRate(cfg.scenario.odometry.rate_hz, cfg.scenario, file, "odometry.rate_hz");
-  checkSampledRate(cfg.scenario.imu.rate_hz, cfg.scenario, file, "imu.rate_hz");
-  checkSampledRate(cfg.scenario.magruler.publish_rate_hz, cfg.scenario, file, "magruler.publish_rate_hz");
-  return cfg;
-}
-
-void checkSampledRate(double rate_hz, const models::ScenarioConfig& sc, const std::string& file,
-                      const std::string& key) {
-  if (rate_hz > sc.vehicle.rate_hz)
-    throw ConfigError(file, key,
-                      fmt::format("{} Hz is above the ground-truth rate vehicle.rate_hz ({} Hz) the sensor samples: it "
-                                  "would publish at {} Hz",
-                                  rate_hz, sc.vehicle.rate_hz, sc.vehicle.rate_hz));
 }
 
 std::string readConfigFile(const std::string& path, const std::string& what) {

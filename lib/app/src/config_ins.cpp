@@ -1,60 +1,10 @@
 #include "config_ins.hpp"
 
 #include <cmath>
-#include <limits>
+
+#include "lcmloc/app/imu_error_keys.hpp"
 
 namespace lcmloc::common::ins_config {
-namespace {
-
-/// The IMU error model's keys, the same in the simulator's and in the filter's section: the
-/// filter models the sensor the simulator draws (first-order Markov + white noise per axis).
-template <class Config>
-void readImuErrorModel(KeyReader& r, Config& c) {
-  r.get("gyro_markov", c.gyro_markov, 0.0, 1e6, "deg/h");
-  r.get("gyro_tau", c.gyro_tau, 1e-3, 1e9);
-  r.get("gyro_white", c.gyro_white, 0.0, 1e6, "deg/h");
-  r.get("accel_markov", c.accel_markov, 0.0, 1.0, "g");
-  r.get("accel_tau", c.accel_tau, 1e-3, 1e9);
-  r.get("accel_white", c.accel_white, 0.0, 1.0, "g");
-}
-
-}  // namespace
-
-void parseInsSim(KeyReader& root, models::InsSimConfig& c) {
-  KeyReader r(root.child("ins_sim"), root.file(), "ins_sim");
-  r.get<uint64_t>("seed", c.seed);
-  r.get("rate_hz", c.rate_hz, 1.0, 10000.0);
-  r.get("odometry_divider", c.odometry_divider, 1, 10000);
-  r.get("duration", c.duration, kInsSimDuration.lo, kInsSimDuration.hi);
-  r.get("profile", c.profile);
-  if (c.profile != "paper" && c.profile != "custom")
-    throw ConfigError(root.file(), "ins_sim.profile", "unknown profile '" + c.profile + "' (valid: paper, custom)");
-  r.get("start", c.start);
-  if (!models::insStartValid(c.start))
-    throw ConfigError(root.file(), "ins_sim.start",
-                      "unknown start '" + c.start + "' (valid: hard, gentle, gentle_turn, gentle_stopgo, steady)");
-  r.getList("segments", c.segments, "{duration, accel, yaw_rate}", [](KeyReader& s, models::InsMotionSegment& v) {
-    s.get("duration", v.duration, 1e-3, 1e6);
-    s.get("accel", v.accel, -20.0, 20.0);
-    s.get("yaw_rate", v.yaw_rate, -180.0, 180.0, "deg/s");
-  });
-  if (c.profile == "custom" && c.segments.empty())
-    throw ConfigError(root.file(), "ins_sim.segments", "the custom profile needs a non-empty list of segments");
-  r.get("latitude", c.latitude, -89.0, 89.0);
-  r.get("longitude", c.longitude, -180.0, 180.0);
-  r.get("height", c.height, -1e4, 1e5);
-  r.get("heading", c.heading, -M_PI, M_PI);
-  readImuErrorModel(r, c);
-  r.get("scale_error", c.scale_error, -0.5, 0.5);
-  r.get("scale_markov", c.scale_markov, 0.0, 0.5);
-  r.get("scale_tau", c.scale_tau, 1e-3, 1e9);
-  r.get("scale_white", c.scale_white, 0.0, 0.5);
-  r.getList("imu_dropouts", c.imu_dropouts, "{start, duration}", [](KeyReader& d, auto& v) {
-    d.get("start", v.first, 0.0, 1e7);
-    d.get("duration", v.second, 0.0, 1e7);
-  });
-  r.finish();
-}
 
 void parseInsFilter(KeyReader& filter, core::InsFilterConfig& c) {
   KeyReader r(filter.child("ins"), filter.file(), filter.keyPath("ins"));
@@ -77,7 +27,7 @@ void parseInsFilter(KeyReader& filter, core::InsFilterConfig& c) {
   r.finish();
 }
 
-void parseLandmarkList(KeyReader& parent, const std::string& key, std::vector<models::Landmark>& out) {
+void parseLandmarkList(KeyReader& parent, const std::string& key, std::vector<MapLandmark>& out) {
   YAML::Node n = parent.child(key);
   if (!n) return;
   out.clear();
@@ -86,7 +36,7 @@ void parseLandmarkList(KeyReader& parent, const std::string& key, std::vector<mo
   if (!n.IsSequence()) throw ConfigError(parent.file(), kp, "expected a list of {id, x, y}, got " + yaml_detail::nodeText(n));
   for (std::size_t i = 0; i < n.size(); ++i) {
     const std::string ip = kp + "[" + std::to_string(i) + "]";
-    models::Landmark l;
+    MapLandmark l;
     KeyReader r(n[i], parent.file(), ip);
     if (!r.child("id")) throw ConfigError(parent.file(), ip + ".id", "missing (every landmark needs an id)");
     r.get("id", l.id);
@@ -109,7 +59,7 @@ void parseLandmarkList(KeyReader& parent, const std::string& key, std::vector<mo
 }
 
 void parseLandmarks(KeyReader& fusion, std::map<int, core::Vec2>& landmarks) {
-  std::vector<models::Landmark> list;
+  std::vector<MapLandmark> list;
   if (!fusion.child("landmarks")) return;  // absent: unchanged
   parseLandmarkList(fusion, "landmarks", list);
   landmarks.clear();

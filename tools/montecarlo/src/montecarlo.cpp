@@ -16,6 +16,7 @@
 #include "lcmloc/app/signals.hpp"
 #include "lcmloc/core/scoring.hpp"
 #include "lcmloc/scenario/scenario_runner.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 namespace lcmloc::montecarlo {
 namespace {
@@ -107,7 +108,7 @@ int run(const Options& o) {
   models::ScenarioConfig sc;
   core::FilterConfig base_filter;
   if (!o.config.empty()) {
-    const auto sys = common::loadSystemConfig(o.config);
+    const auto sys = common::loadSimSystemConfig(o.config);
     sc = sys.scenario;
     base_filter = sys.fusion.filter;
   }

@@ -80,7 +80,7 @@ int64_t readAndDecode(const std::string& path, const common::ChannelConfig& ch, 
 
 /// Why a kept synthetic log does not fit this run ("" when it does): damaged, not the
 /// configured channels, or another length of message time than duration_s.
-std::string keptLogProblem(const std::string& path, const common::SystemConfig& cfg, double duration_s) {
+std::string keptLogProblem(const std::string& path, const common::SimSystemConfig& cfg, double duration_s) {
   std::vector<logio::LogIssue> issues;
   logio::LogScanner scanner(path, &issues);
   int64_t first = -1, last = -1, odometry = 0;
@@ -102,14 +102,14 @@ std::string keptLogProblem(const std::string& path, const common::SystemConfig& 
 
 }  // namespace
 
-int runBench(const common::SystemConfig& base, const BenchOptions& opts) {
+int runBench(const common::SimSystemConfig& base, const BenchOptions& opts) {
   namespace fs = std::filesystem;
   using Clock = std::chrono::steady_clock;
   fs::create_directories(opts.dir);
   const std::string log = (fs::path(opts.dir) / "synthetic.lcmlog").string();
   const std::string out = (fs::path(opts.dir) / "replay_out.lcmlog").string();
 
-  common::SystemConfig cfg = base;
+  common::SimSystemConfig cfg = base;
   cfg.scenario = ovalScenario(base.scenario, OvalTrack{}, opts.duration_s);
   cfg.fusion.shadow.clear();
   cfg.fusion.map_file = (fs::path(opts.dir) / "synthetic_map.csv").string();  // the oval's markers

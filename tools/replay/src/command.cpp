@@ -21,7 +21,7 @@ std::string bytes(int64_t n) {
 
 }  // namespace
 
-common::SystemConfig applyOverrides(common::SystemConfig cfg, const CommandOptions& o) {
+common::SimSystemConfig applyOverrides(common::SimSystemConfig cfg, const CommandOptions& o) {
   if (!o.filter.empty()) {
     YAML::Node n;
     n["type"] = o.filter;
@@ -44,7 +44,7 @@ common::SystemConfig applyOverrides(common::SystemConfig cfg, const CommandOptio
   return cfg;
 }
 
-int runCommand(const common::SystemConfig& cfg, const CommandOptions& o) {
+int runCommand(const common::SimSystemConfig& cfg, const CommandOptions& o) {
   if (o.bench) return runBench(cfg, o.bench_options);
   if (o.input.empty() || o.output.empty()) throw common::UsageError("give an input log and --output FILE (or --bench)");
   common::requireInputFile(o.input, "input log");

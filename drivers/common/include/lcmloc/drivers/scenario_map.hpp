@@ -4,16 +4,16 @@
 // only; `lcmloc-sim --write-map FILE` writes this one for a simulated run.
 #include <string>
 
-#include "lcmloc/app/config.hpp"
 #include "lcmloc/core/types.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 namespace lcmloc::common {
 
 /// The markers the simulated world has (models::makeMarkerMap over the scenario's path).
-core::MarkerMap scenarioMap(const SystemConfig& cfg);
+core::MarkerMap scenarioMap(const SimSystemConfig& cfg);
 /// Writes scenarioMap(cfg) to path (csv::writeMap: every coordinate as the shortest text that
 /// reads back to the same double, so a replay with the file computes what one with the world's
 /// own markers would). Throws std::runtime_error.
-void writeScenarioMap(const SystemConfig& cfg, const std::string& path);
+void writeScenarioMap(const SimSystemConfig& cfg, const std::string& path);
 
 }  // namespace lcmloc::common

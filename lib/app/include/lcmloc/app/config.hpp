@@ -2,6 +2,10 @@
 // YAML configuration -> plain config structs. One file describes a whole system run
 // (config/paper.yaml); each process reads the sections it needs. Unknown keys, wrong types and
 // out-of-range values raise ConfigError naming the file, the key path and the reason.
+// Here: what every process reads. The simulation's sections (`scenario`, `path`, `markers`,
+// `vehicle`, `odometry`, `magruler`, `faults`, `imu`, `gps`, `ins_sim`, `vision`) are accepted
+// here unread: the fusion daemon and the logger take nothing from the simulator;
+// lcmloc_simconfig (lcmloc/simconfig/sim_config.hpp) reads and checks them.
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -12,8 +16,6 @@
 #include "lcmloc/bus/geodesy.hpp"
 #include "lcmloc/core/engine.hpp"
 #include "lcmloc/core/filter.hpp"
-#include "lcmloc/sim/ins_sim.hpp"
-#include "lcmloc/sim/scenario_config.hpp"
 
 namespace lcmloc::common {
 
@@ -27,15 +29,8 @@ class ConfigError : public std::runtime_error {
 struct Bounds {
   double lo, hi;
 };
-inline constexpr Bounds kImuRateHz{0.1, 10000.0};         ///< imu.rate_hz, lcmloc-imu --rate
-inline constexpr Bounds kVisionRateHz{1e-3, 1000.0};      ///< vision.rate_hz, lcmloc-vision --rate
-inline constexpr Bounds kMarkerCount{0, 100000};          ///< markers.count, lcmloc-montecarlo --marker-spacing
-inline constexpr Bounds kRealtimeFactor{0.0, 1e6};        ///< scenario.realtime_factor, --realtime-factor
-inline constexpr Bounds kInsSimDuration{0.01, 1e6};       ///< ins_sim.duration [s], --duration
 inline constexpr Bounds kFlushPeriod{0.001, 3600.0};      ///< logger.flush_period [s], --flush-period
 inline constexpr Bounds kMaxFileSeconds{0.0, 1e9};        ///< logger.max_file_seconds, --max-file-seconds
-inline constexpr Bounds kOdometryScaleError{-0.5, 0.5};   ///< odometry.scale_error, montecarlo --scale-error
-inline constexpr Bounds kOdometrySteeringBias{-0.5, 0.5}; ///< odometry.steering_bias [rad]
 
 /// Channel names (defaults follow docs/ and the design guide).
 struct ChannelConfig {
@@ -54,15 +49,6 @@ struct ChannelConfig {
   std::string landmarks = "LANDMARKS";  ///< landmark_obs_t
   std::string beacons = "BEACONS";      ///< beacon_range_t
   std::string vision = "VISION";  ///< landmark_bearings_t (three-landmark fix)
-};
-
-/// Where lcmloc-gps takes its fixes from (the `gps` section; the simulated receiver's model is
-/// models::GpsSensorConfig in the same section).
-struct GpsDriverConfig {
-  std::string source = "sim";         ///< "sim" (from GROUND_TRUTH) or "gpsd"
-  std::string gpsd_host = "localhost";
-  std::string gpsd_port = "2947";
-  std::string time_source = "fix";    ///< gpsd: utime from the fix's time ("fix") or on receipt ("receive")
 };
 
 struct FusionConfig {
@@ -111,18 +97,26 @@ struct LoggerConfig {
   int recv_buf_size = 134217728;      ///< UDP receive buffer the logger sizes its sockets to [bytes]
 };
 
+/// A landmark of the map (`landmarks: [{id, x, y}, ...]`, local metres, x east, y north).
+struct MapLandmark {
+  int id = 0;
+  double x = 0.0, y = 0.0;
+};
+
+/// What every process reads from the system file (the simulation's sections: SimSystemConfig).
 struct SystemConfig {
   std::string file;                   ///< where it was read from
-  models::ScenarioConfig scenario;
   ChannelConfig channels;
   FusionConfig fusion;
   LoggerConfig logger;
   Datum datum;                        ///< origin of the local frame for lat/lon conversions
-  GpsDriverConfig gps_driver;
-  models::InsSimConfig ins_sim;       ///< `ins_sim`: lcmloc-ins-sim and lcmloc-ins-experiment
+  /// The top-level `landmarks`, in the file's order: the world's landmarks (lcmloc-vision
+  /// observes them), and fusion.landmarks when that is not given.
+  std::vector<MapLandmark> landmarks;
 };
 
-/// Reads a system config file. Missing sections take defaults; throws ConfigError.
+/// Reads a system config file (its simulation sections accepted unread: loadSimSystemConfig
+/// reads them). Missing sections take defaults; throws ConfigError.
 SystemConfig loadSystemConfig(const std::string& path);
 /// Throws ConfigError naming flag when output is one of inputs (what: "input log", "input file"):
 /// the same file by device and inode, so also under another path, through a symbolic link or as
@@ -136,6 +130,8 @@ void refuseOutputOverInputs(const std::string& flag, const std::string& output,
 std::string readConfigFile(const std::string& path, const std::string& what = "config file");
 /// Same from YAML text (file names the source in errors).
 SystemConfig parseSystemConfig(const std::string& yaml_text, const std::string& file);
+/// The YAML document of yaml_text: ConfigError naming file, line and column for a syntax error.
+YAML::Node parseYamlText(const std::string& yaml_text, const std::string& file);
 
 /// Filter parameters from a YAML map (used for `fusion.filter` and for FUSION_CONTROL's
 /// parameters string), applied on top of base. Throws ConfigError.
@@ -145,11 +141,6 @@ core::EngineConfig engineConfig(const SystemConfig& cfg);
 
 core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterConfig& base,
                                      const std::string& file, const std::string& key_prefix);
-
-/// A simulated sensor samples GROUND_TRUTH: its rate (key) cannot be above vehicle.rate_hz.
-/// Throws ConfigError.
-void checkSampledRate(double rate_hz, const models::ScenarioConfig& sc, const std::string& file,
-                      const std::string& key);
 
 /// A list of filter types (`fusion.shadow`, `lcmloc-replay --shadow`, the experiments' --filters):
 /// each a known type, none twice (a shadow publishes on POSE_<TYPE>, an experiment writes one

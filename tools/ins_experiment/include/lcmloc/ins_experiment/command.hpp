@@ -8,6 +8,7 @@
 
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/ins_experiment/experiment.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 namespace lcmloc::ins_experiment {
 
@@ -24,6 +25,6 @@ struct CommandOptions {
 /// Runs the experiment with cfg's ins_sim, fusion.filter (and vision, landmarks, fusion.fix for
 /// fixes). Throws ConfigError (fixes without a landmark map), UsageError (an existing output
 /// without overwrite). Returns common::kExitOk, or kExitConfigError for an unknown start.
-int runCommand(const common::SystemConfig& cfg, const CommandOptions& o);
+int runCommand(const common::SimSystemConfig& cfg, const CommandOptions& o);
 
 }  // namespace lcmloc::ins_experiment

@@ -8,6 +8,7 @@
 
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/landmark_experiment/experiment.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 namespace lcmloc::landmark_experiment {
 
@@ -31,6 +32,6 @@ std::vector<Observation> readObservations(const std::string& path, const common:
 /// Runs the experiment with cfg's `vision` (and `landmarks` for a log). Throws ConfigError (an
 /// off-centre position outside 0.9 circumradius, a log without a map), UsageError (an existing
 /// output without overwrite). Returns common::kExitOk, or kExitInputDamaged for a damaged log.
-int runCommand(const common::SystemConfig& cfg, CommandOptions o);
+int runCommand(const common::SimSystemConfig& cfg, CommandOptions o);
 
 }  // namespace lcmloc::landmark_experiment

@@ -1,6 +1,6 @@
 // The scenario and sensor sections of the system config: `scenario`, `path`, `markers`,
-// `vehicle`, `odometry`, `magruler`, `faults`, `imu`, `gps`, `datum` and `vision` (what the
-// simulator and the drivers read). Called from config.cpp.
+// `vehicle`, `odometry`, `magruler`, `faults`, `imu`, `gps` and `vision` (what the simulator and
+// the drivers read). Called from sim_config.cpp.
 #include "config_scenario.hpp"
 
 #include <algorithm>
@@ -156,14 +156,6 @@ void parseGps(KeyReader& root, models::GpsSensorConfig& g, GpsDriverConfig& d) {
     j.get("dx", v.dx, -1e6, 1e6);
     j.get("dy", v.dy, -1e6, 1e6);
   });
-  r.finish();
-}
-
-void parseDatum(KeyReader& root, Datum& d) {
-  KeyReader r(root.child("datum"), root.file(), "datum");
-  r.get("latitude", d.latitude, -90.0, 90.0);
-  r.get("longitude", d.longitude, -180.0, 180.0);
-  r.get("altitude", d.altitude, -1e4, 1e5);
   r.finish();
 }
 

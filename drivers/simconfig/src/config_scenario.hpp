@@ -1,12 +1,12 @@
 #pragma once
-// Config sections of the simulated world and its sensors, and of the drivers' sources:
-// `scenario`, `path`, `markers`, `vehicle`, `odometry`, `magruler`, `faults`, `imu`, `gps`,
-// `datum` and `vision`. Internal to lib/app/src (called from config.cpp, in the file's order).
+// Config sections of the simulated world and its sensors, and of lcmloc-gps's source:
+// `scenario`, `path`, `markers`, `vehicle`, `odometry`, `magruler`, `faults`, `imu`, `gps` and
+// `vision`. Internal to drivers/simconfig/src (called from sim_config.cpp, in the file's order).
 #include <vector>
 
-#include "lcmloc/app/config.hpp"
 #include "lcmloc/app/yaml_reader.hpp"
 #include "lcmloc/sim/scenario_config.hpp"
+#include "lcmloc/simconfig/sim_config.hpp"
 
 namespace lcmloc::common::scenario_config {
 
@@ -19,7 +19,6 @@ void parseMagRuler(KeyReader& root, models::MagRulerConfig& m);
 void parseImu(KeyReader& root, models::ImuSensorConfig& m);
 /// `gps`: the simulated receiver's model and the driver's source (sim or gpsd).
 void parseGps(KeyReader& root, models::GpsSensorConfig& g, GpsDriverConfig& d);
-void parseDatum(KeyReader& root, Datum& d);
 void parseFaults(KeyReader& root, std::vector<models::FaultConfig>& faults);
 /// `vision`: the simulated bearing sensor (seeds/004 §III).
 void parseVision(KeyReader& root, models::VisionSensorConfig& v);
