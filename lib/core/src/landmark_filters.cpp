@@ -104,14 +104,26 @@ class LandmarkUkf final : public Filter {
       const auto& P = ukf_.P();
       const double slack = 4.0 * std::sqrt(std::max(P(0, 0) + P(1, 1), 0.0) + rs * rs);
       const Vec3 pose = ukf_.x();
+      int inside = 0;  // candidates the gate would accept
       for (const Marker& m : map_) {
         const double dist = std::hypot(m.x - pose.x(), m.y - pose.y());
         if (std::abs(dist - obs.range) > slack) continue;
         if (!ukf_.innovate<2>(X, h_of(m), R, z, kBearingMask, cand)) continue;
+        inside += cand.mahalanobis <= gate2_;
         if (best_id < 0 || cand.mahalanobis < best.mahalanobis) {
           best = cand;
           best_id = m.id;
         }
+      }
+      // Without an identity the association must be unique: when two landmarks pass the gate
+      // (the estimate too uncertain to tell them apart, after a lock-out say) the nearest one is
+      // a guess, and a wrong guess pulls the estimate towards the wrong landmark, where the next
+      // guesses agree with it. Refused (not a gate rejection: no lock-out counts it).
+      if (inside >= 2) {
+        d.reason = "ambiguous";
+        d.marker_id = best_id;
+        d.mahalanobis = best.mahalanobis;
+        return d;
       }
     }
     return finish(d, best_id, best, gate2_);
