@@ -144,6 +144,20 @@ struct FilterConfig {
   InsFilterConfig ins;
 };
 
+/// A filter re-localized from the evidence of measurements its gate had refused (GNSS filters:
+/// GPS fixes that agree with each other, carried forward by the dead-reckoned motion between
+/// them, and all disagree with the estimate). The engine reports it (event "relocalized").
+struct Relocalization {
+  int64_t utime = 0;        ///< the newest fix, whose position was taken
+  int fixes = 0;            ///< fixes that agreed (the newest included)
+  int64_t first_utime = 0;  ///< the oldest of them
+  double spread = 0;        ///< largest distance of an agreeing fix, carried forward, from the newest [m]
+  double jump = 0;          ///< distance the position moved [m]
+  bool heading_from_chord = false;  ///< heading from the chord of the fixes; else kept, its sigma opened
+  double heading_change = 0;        ///< [rad] (0 when kept)
+  double heading_std = 0;           ///< 1 sigma of the heading after it [rad]
+};
+
 /// Measurement kinds a filter may use (Filter::uses).
 enum class Measurement { Ruler, Imu, Gps, Landmark, Beacon };
 
@@ -220,6 +234,8 @@ class Filter {
   /// IMU samples not used because their forward acceleration reached gnss.accel_saturation
   /// (the GNSS filters; 0 for the others). The engine reports each saturated stretch.
   virtual int64_t saturatedImuSamples() const { return 0; }
+  /// The re-localization the last measurement caused, once (cleared by the call); default none.
+  virtual std::optional<Relocalization> takeRelocalization() { return std::nullopt; }
   /// Status only: what state().status returns, without copying the state (per-message path).
   virtual FilterStatus status() const { return state().status; }
   /// Batched time update (fusion.output_every > 1): adds one odometry increment to a pending
