@@ -40,11 +40,12 @@ struct GnssConfig {
   double gps_std = 2.9;            ///< GPS 1 sigma per axis when the fix carries none [m]
   double speed_std0 = 0.5;         ///< initial 1 sigma of the speed [m/s]
   /// Lock-out of the GPS gate: this many consecutive GPS gate rejections declare a lock-out
-  /// (status LOCKOUT) and inflate the position covariance by FilterConfig::lockout_inflation (up
-  /// to FilterConfig::lockout_max_std), again after every further gps_lockout_rejections
-  /// rejections, until a fix is accepted.
+  /// (status LOCKOUT) until a fix is accepted or the filter re-localizes from refused fixes that
+  /// agree (docs/tvekf.md "Re-localization"); nothing is inflated.
   int gps_lockout_rejections = 5;
-  /// Same for the magnetometer heading gate (samples).
+  /// Lock-out of the magnetometer heading gate (samples): the heading covariance is inflated by
+  /// FilterConfig::lockout_inflation (heading sigma up to 1 rad), again after every further
+  /// mag_lockout_rejections rejections, until a heading is accepted.
   int mag_lockout_rejections = 50;
   double coast_timeout = 3.0;      ///< no accepted fix for this long: status DEAD_RECKONING [s]
   /// tvekf only: GPS-course heading aid for a vehicle without magnetometer (the heading of
@@ -126,8 +127,8 @@ struct FilterConfig {
   double steer_bias_std0 = 0.02;   ///< initial 1-sigma of b [rad]
   double scale_rw = 1e-4;          ///< random walk of k per metre travelled [1/sqrt(m)]
   double steer_bias_rw = 1e-4;     ///< random walk of b per metre travelled [rad/sqrt(m)]
-  /// "tvekf" and "ukf_gps" only (they also use wheelbase, initial_pose, p0_diag, sigma, gate,
-  /// lockout_inflation, lockout_max_std).
+  /// "tvekf" and "ukf_gps" only (they also use wheelbase, initial_pose, p0_diag, sigma, gate and,
+  /// for the magnetometer's lock-out, lockout_inflation).
   GnssConfig gnss;
   /// Heading process noise per radian turned [rad^2/rad], added to every odometry step of the
   /// magnetic-ruler family (dead_reckoning, ukf, ukf_gated, ukf_calib) and ukf_landmarks:
