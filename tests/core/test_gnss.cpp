@@ -1,5 +1,6 @@
 // GNSS filters (tvekf, ukf_gps): each stage against hand-worked values, gates, bad input,
-// saturation, outage, lock-out and bounded re-acquisition, and their place in the engine.
+// saturation, outage, lock-out, and their place in the engine (re-localization:
+// test_gnss_relocalization.cpp).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -263,55 +264,31 @@ TEST(GnssFilters, OutageCoastsCovarianceGrowsAndRecovers) {
   }
 }
 
-TEST(GnssFilters, LockoutIsDetectedAndReacquiredWithinABoundedTime) {
-  // The truth is 60 m ahead of a confident estimate (a persistent offset, as after a long
-  // outage on biased odometry): every fix fails the gate until the lock-out inflation opens it.
-  for (const auto& type : kGnssTypes) {
-    FilterConfig c = gnssConfig(type);
-    c.p0_diag = Vec3(1.0, 1.0, 0.01);
-    auto f = makeFilter(c, {});
-    Drive drive;
-    std::vector<GateDecision> dec;
-    bool saw_lockout = false;
-    int fixes_to_reacquire = -1;
-    for (int s = 0; s < 60 && fixes_to_reacquire < 0; ++s) {
-      drive.run(*f, 10.0, 1.0, true, 60.0, &dec);
-      saw_lockout |= f->state().status == FilterStatus::Lockout;
-      if (dec.back().accepted) fixes_to_reacquire = static_cast<int>(dec.size());
-    }
-    EXPECT_TRUE(saw_lockout) << type;
-    // Measured: 10 fixes (two inflations by 25 after 5 rejections each); bound 15.
-    ASSERT_GT(fixes_to_reacquire, 0) << type << " never re-acquired";
-    EXPECT_LE(fixes_to_reacquire, 15) << type;
-    for (int i = 0; i + 1 < fixes_to_reacquire; ++i) EXPECT_EQ(dec[i].reason, "gate") << type;
-    drive.run(*f, 10.0, 5.0, true, 60.0, &dec);
-    EXPECT_NE(f->state().status, FilterStatus::Lockout) << type;
-    EXPECT_LT(std::abs(f->state().x[0] - (drive.x + 60.0)), 5.0) << type;
-  }
-}
-
-TEST(GnssFilters, LockoutInflationStopsAtItsCap) {
-  // GPS 10 km off for 20 minutes: every fix is refused; before the cap the position covariance
-  // was multiplied by 25 every 5 fixes without end (infinite after about 20 minutes).
+TEST(GnssFilters, GpsLockoutDeadReckonsWithoutInflation) {
+  // 20 minutes of fixes 10 km off, each in another direction (never two alike): every fix is
+  // refused, none re-localizes (they do not agree with each other), the status is LOCKOUT, and
+  // the state, covariance included, is that of the same drive without GPS: the covariance grows
+  // by the dead reckoning's own noise only (the GPS lock-out inflates nothing).
   for (const auto& type : kGnssTypes) {
     FilterConfig c = gnssConfig(type);
     auto f = makeFilter(c, {}), twin = makeFilter(c, {});
     Drive drive, twin_drive;
-    std::vector<GateDecision> dec;
-    drive.run(*f, 10.0, 1200.0, true, 1e4, &dec);
-    twin_drive.run(*twin, 10.0, 1200.0, false);  // the same drive without GPS
-    ASSERT_EQ(dec.size(), 1200u) << type;
-    for (const auto& d : dec) ASSERT_EQ(d.reason, "gate") << type;
-    const FilterState s = f->state();
-    EXPECT_EQ(s.status, FilterStatus::Lockout) << type;
-    ASSERT_TRUE(s.x.allFinite() && s.P.allFinite()) << type;
-    // at the cap plus at most one second of position random walk and odometry noise
-    EXPECT_GE(s.P(0, 0), c.lockout_max_std * c.lockout_max_std) << type;
-    EXPECT_LT(s.P(0, 0), 1.01 * c.lockout_max_std * c.lockout_max_std) << type;
-    // the mean dead-reckons as without GPS (ukf_gps's mean lags the truth by 2 % over these
-    // 12 km: its heading is unaided, and the UKF's mean of cos(theta) shrinks as theta's
-    // variance grows)
-    EXPECT_LT(std::abs(s.x[0] - twin->state().x[0]), 0.5) << type;
+    int refused = 0;
+    for (int s = 0; s < 1200; ++s) {
+      drive.run(*f, 10.0, 1.0, false);
+      twin_drive.run(*twin, 10.0, 1.0, false);
+      const double a = s * 2.39996;  // the golden angle
+      const auto d = f->update(gps(drive.t, drive.x + 1e4 * std::cos(a), 1e4 * std::sin(a)));
+      ASSERT_TRUE(d);
+      refused += d->reason == "gate";
+      ASSERT_FALSE(f->takeRelocalization()) << type << " at " << s;
+    }
+    EXPECT_EQ(refused, 1200) << type;
+    const FilterState st = f->state(), ts = twin->state();
+    EXPECT_EQ(st.status, FilterStatus::Lockout) << type;
+    ASSERT_TRUE(st.x.allFinite() && st.P.allFinite()) << type;
+    EXPECT_LT((st.x - ts.x).norm(), 1e-9) << type;
+    EXPECT_LT((st.P - ts.P).norm(), 1e-9 * ts.P.norm()) << type;
   }
 }
 
@@ -413,7 +390,11 @@ TEST(GnssEngine, MeasurementsGoOnlyToFiltersThatUseThem) {
   EXPECT_EQ(engine.counters().accepted, 1);
 }
 
-TEST(GnssEngine, LockoutAndRecoveryEventsForGps) {
+TEST(GnssEngine, LockoutRelocalizationAndRecoveryEventsForGps) {
+  // GPS only: six fixes 500 m off in different directions (refused, no two agree: a lock-out
+  // after five), then fixes at (80, 0): the second of them agrees with the first and the filter,
+  // whose start no fix confirmed, re-localizes there (event with its evidence) and leaves the
+  // lock-out.
   EngineConfig ec;
   ec.filter = gnssConfig("tvekf");
   ec.filter.p0_diag = Vec3(1.0, 1.0, 0.01);
@@ -421,15 +402,17 @@ TEST(GnssEngine, LockoutAndRecoveryEventsForGps) {
   EngineOutputs out;
   out.on_event = [&](const EngineEvent& e) { events.push_back(eventName(e.kind)); };
   FusionEngine engine(ec, {}, out);
-  for (int k = 0; k < 30; ++k) {
+  for (int k = 0; k < 12; ++k) {
     const int64_t t = 1'000'000 + k * 1'000'000;
-    engine.push({"GPS", k, t, gps(t, 80.0, 0.0)});
+    const double a = k * 2.39996;
+    engine.push({"GPS", k, t, k < 6 ? gps(t, 500.0 * std::cos(a), 500.0 * std::sin(a)) : gps(t, 80.0, 0.0)});
   }
   engine.flush();
-  ASSERT_GE(events.size(), 2u);
+  ASSERT_EQ(events.size(), 3u);
   EXPECT_EQ(events[0], "lockout");
-  EXPECT_EQ(events[1], "recovered");
-  EXPECT_NEAR(engine.activeState().x[0], 80.0, 3.0);
+  EXPECT_EQ(events[1], "relocalized");
+  EXPECT_EQ(events[2], "recovered");
+  EXPECT_NEAR(engine.activeState().x[0], 80.0, 1.0);
 }
 
 // A saturated IMU sample is not used (above) and shows on FUSION_STATUS: one "imu_saturated"

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -12,6 +13,7 @@
 #include "process_fixture.hpp"
 #include "lcmloc/bus/geodesy.hpp"
 #include "lcmloc/bus/transport.hpp"
+#include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/gate_decision_t.hpp"
 #include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/heartbeat_t.hpp"
@@ -47,25 +49,26 @@ TEST_F(GnssProcess, GpsfakeGpsdDriverFusionEndToEnd) {
   if (gpsfake.empty() || gpsd.empty())
     GTEST_SKIP() << "gpsfake/gpsd not installed (Debian gpsd, gpsd-clients): the gpsd path is not tested";
   const int port = 29500 + ::getpid() % 400;
-  const std::string cfg = writeFile("gnss.yaml", R"(
+  // The driver's source and the datum only: the fusion runs with the default configuration
+  // (config/paper.yaml: tvekf starts from the prior (0, 0, pi/2) with a sigma of 0.1 m, 110 m
+  // from the first fix).
+  const std::string cfg = writeFile("gps.yaml", R"(
 datum: {latitude: -33.883, longitude: 151.195, altitude: 0.0}
 gps: {source: gpsd, gpsd_host: localhost, gpsd_port: ")" + std::to_string(port) + R"("}
-fusion:
-  filter:
-    type: tvekf
-    initial_pose: [0.0, 0.0, 0.0]
-    p0_diag: [1.0e5, 1.0e5, 1.0]
-    gnss: {position_rw: 5.0}   # GPS only (no odometry here): let the estimate follow the fixes
 )");
   lcmloc::common::Bus bus(url_);
   std::vector<lcmloc::gps_fix_t> fixes;
   std::vector<lcmloc::gate_decision_t> decisions;
   std::vector<lcmloc::pose_t> poses;
+  std::vector<lcmloc::fusion_status_t> relocalized;
   bus.subscribe<lcmloc::gps_fix_t>("GPS", [&](const std::string&, const lcmloc::gps_fix_t& m, int64_t) { fixes.push_back(m); });
   bus.subscribe<lcmloc::gate_decision_t>("GATE", [&](const std::string&, const lcmloc::gate_decision_t& m, int64_t) { decisions.push_back(m); });
   bus.subscribe<lcmloc::pose_t>("POSE", [&](const std::string&, const lcmloc::pose_t& m, int64_t) { poses.push_back(m); });
+  bus.subscribe<lcmloc::fusion_status_t>("FUSION_STATUS", [&](const std::string&, const lcmloc::fusion_status_t& m, int64_t) {
+    if (m.event == "relocalized") relocalized.push_back(m);
+  });
 
-  Child fusion(LCMLOC_FUSION, {"--config", cfg, "--lcm-url", url_}, path("fusion.log"));
+  Child fusion(LCMLOC_FUSION, {"--filter", "tvekf", "--lcm-url", url_}, path("fusion.log"));
   // gpsfake starts its own gpsd on the port and feeds it once the driver connects.
   Child fake(gpsfake, {"-1", "-q", "-c", "0.1", "-P", std::to_string(port), LCMLOC_NMEA_FILE}, path("gpsfake.log"));
   std::unique_ptr<Child> driver;
@@ -88,32 +91,60 @@ fusion:
 
   // The NMEA log drives east at 5 m/s from (100, 50) m; no fix at 12:00:12 and 12:00:13.
   const lcmloc::common::LocalFrame frame({-33.883, 151.195, 0.0});
+  auto truthX = [](int64_t utime) { return 100.0 + 5.0 * static_cast<double>((utime / 1000000) % 60); };
   int with_fix = 0, without = 0;
+  std::vector<int64_t> fix_utimes;
   for (const auto& f : fixes) {
     if (f.fix_type < 2) { ++without; continue; }
     ++with_fix;
+    fix_utimes.push_back(f.utime);
     double x, y, z;
     frame.toLocal(f.latitude, f.longitude, f.altitude, x, y, z);
-    const double k = static_cast<double>((f.utime / 1000000) % 60);  // seconds of the minute
     // The log was written with a spherical Earth and 1e-4 arc-minute resolution (~0.2 m).
-    EXPECT_NEAR(x, 100.0 + 5.0 * k, 0.5) << "utime " << f.utime;
+    EXPECT_NEAR(x, truthX(f.utime), 0.5) << "utime " << f.utime;
     EXPECT_NEAR(y, 50.0, 0.5);
     EXPECT_GE(f.position_std, 0.0);
   }
   EXPECT_GE(with_fix, 12);
   EXPECT_EQ(without, 2);
-  int accepted = 0, no_fix = 0;
+  // gpsd may send one fix time twice (a 2D fix without an error estimate, then the 3D fix):
+  // one fix, not two independent ones.
+  fix_utimes.erase(std::unique(fix_utimes.begin(), fix_utimes.end()), fix_utimes.end());
+  ASSERT_GE(fix_utimes.size(), 10u);
+  int used = 0, no_fix = 0, refused_in_a_row = 0, most_in_a_row = 0;
   for (const auto& d : decisions) {
     EXPECT_EQ(d.sensor, "GPS");
     EXPECT_EQ(d.filter, "tvekf");
-    accepted += d.accepted;
+    used += d.accepted;
     no_fix += d.reason == "no_fix";
+    if (d.utime > fix_utimes[1]) {
+      refused_in_a_row = d.reason == "gate" ? refused_in_a_row + 1 : 0;
+      most_in_a_row = std::max(most_in_a_row, refused_in_a_row);
+    }
   }
   EXPECT_EQ(no_fix, 2);
-  EXPECT_GE(accepted, 10);
-  ASSERT_FALSE(poses.empty());
-  // From (0, 0) with a wide prior, the first fix pulls the estimate to within metres of it.
-  EXPECT_NEAR(poses.front().state[0], 100.0 + 5.0 * ((fixes.front().utime / 1000000) % 60), 5.0);
+  // The first fix is refused by the prior's gate and kept: the second agrees with it and the
+  // filter re-localizes there, the first fix named as its evidence.
+  for (const auto& d : decisions) {
+    if (d.utime == fix_utimes[0]) EXPECT_EQ(d.reason, "gate");
+    if (d.utime == fix_utimes[1]) EXPECT_EQ(d.reason, "relocalized");
+  }
+  ASSERT_FALSE(relocalized.empty()) << fusion.output();
+  EXPECT_EQ(relocalized.front().utime, fix_utimes[1]);
+  EXPECT_NE(relocalized.front().detail.find("2 GPS fixes agree"), std::string::npos) << relocalized.front().detail;
+  EXPECT_NE(relocalized.front().detail.find("the first at utime " + std::to_string(fix_utimes[0])), std::string::npos)
+      << relocalized.front().detail;
+  // The pose by the second fix is within 5 m of the truth.
+  const auto second = std::find_if(poses.begin(), poses.end(), [&](const lcmloc::pose_t& p) { return p.utime >= fix_utimes[1]; });
+  ASSERT_NE(second, poses.end());
+  EXPECT_EQ(second->utime, fix_utimes[1]);
+  EXPECT_LT(std::hypot(second->state[0] - truthX(fix_utimes[1]), second->state[1] - 50.0), 5.0)
+      << second->state[0] << ", " << second->state[1];
+  // After it, every fix is used except while the estimate lags the moving vehicle (no odometry:
+  // the default position random walk of 0.1 m/sqrt(s) is its only motion): then at most two are
+  // refused before the third re-localizes it.
+  EXPECT_GE(used, static_cast<int>(fix_utimes.size()) - 5);
+  EXPECT_LE(most_in_a_row, 2);
   EXPECT_NEAR(poses.back().state[1], 50.0, 10.0);
   driver->signal(SIGINT);
   fusion.signal(SIGINT);

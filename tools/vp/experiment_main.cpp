@@ -51,12 +51,13 @@ int main(int argc, char** argv) {
     io.stop = [] { return common::stopRequested(); };
     eo.init_from_gps = !no_init;
     const auto r = vp::runExperiment(cfg, io, eo);
-    std::printf("%-16s %8s %8s %10s %10s %10s %10s %8s %8s\n", "filter", "poses", "scored", "rmse[m]", "median[m]",
-                "p95[m]", "max[m]", "gps_rej", "lockout");
+    std::printf("%-16s %8s %8s %10s %10s %10s %10s %8s %8s %8s\n", "filter", "poses", "scored", "rmse[m]",
+                "median[m]", "p95[m]", "max[m]", "gps_rej", "lockout", "reloc");
     for (const auto& s : r.scores)
-      std::printf("%-16s %8lld %8lld %10.2f %10.2f %10.2f %10.2f %8lld %8lld\n", s.filter.c_str(),
+      std::printf("%-16s %8lld %8lld %10.2f %10.2f %10.2f %10.2f %8lld %8lld %8lld\n", s.filter.c_str(),
                   static_cast<long long>(s.poses), static_cast<long long>(s.scored), s.rmse_m, s.median_m, s.p95_m,
-                  s.max_m, static_cast<long long>(s.gps_rejected), static_cast<long long>(s.lockouts));
+                  s.max_m, static_cast<long long>(s.gps_rejected), static_cast<long long>(s.lockouts),
+                  static_cast<long long>(s.relocalized));
     std::printf("report: %s/report.json, figures drive.png, error.png (%.1f s)\n", eo.out_dir.c_str(), r.seconds);
     return common::kExitOk;
   });

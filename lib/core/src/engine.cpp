@@ -192,6 +192,8 @@ struct FusionEngine::Impl final : InputOrder::Client {
       if (is_active) ++(d->accepted ? counters.accepted : counters.rejected);
       out.decision(f.name(), is_active, *d);
       bank.emitState(f, is_active);
+      if (const std::optional<Relocalization> r = f.takeRelocalization(); r && is_active)
+        out.event(EventKind::Relocalized, in.utime, events::Relocalized{refOf(in), f.name(), *r});
     });
   }
   void handle(const EngineInput& in, const ImuInput& m) {

@@ -129,6 +129,22 @@ std::string text(const events::GapBridged& e) {
   return detail;
 }
 
+std::string text(const events::Relocalized& e) {
+  const Relocalization& r = e.evidence;
+  char t[400];
+  std::snprintf(t, sizeof t,
+                "%s re-localized: %d GPS fixes agree within %.2f m (carried forward by the dead-reckoned motion; "
+                "the first at utime %lld) and disagree with the estimate: position moved %.2f m to the newest fix, ",
+                e.filter.c_str(), r.fixes, r.spread, static_cast<long long>(r.first_utime), r.jump);
+  char h[160];
+  if (r.heading_from_chord)
+    std::snprintf(h, sizeof h, "heading from their chord (changed by %.4f rad, 1 sigma %.4f rad)", r.heading_change,
+                  r.heading_std);
+  else
+    std::snprintf(h, sizeof h, "heading kept (1 sigma opened to %.4f rad)", r.heading_std);
+  return at(e.input) + ": " + t + h;
+}
+
 std::string text(const events::Answer& e, bool ack) {
   using C = events::Answer::Command;
   const std::string head = at(e.command) + ": ";
@@ -162,6 +178,7 @@ const char* eventName(EventKind kind) {
     case EventKind::Fix: return "fix";
     case EventKind::FixRefused: return "fix_refused";
     case EventKind::FixLockout: return "fix_lockout";
+    case EventKind::Relocalized: return "relocalized";
   }
   return "event";
 }

@@ -2,12 +2,16 @@
 // What the GNSS filters ("tvekf": tvekf_filter.cpp, "ukf_gps": gps_ukf_filter.cpp) share: the
 // state (x, y, theta, speed, distance), the odometry time step with the IMU's forward
 // acceleration, the magnetometer and GPS measurements behind their gates, the lock-out
-// detectors and the GPS-course heading aid (gnss_filters.cpp). Not installed; src/ only.
+// detectors, the GPS-course heading aid (gnss_filters.cpp) and the re-localization from refused
+// fixes (gnss_relocalization.cpp). Not installed; src/ only.
+#include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <limits>
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "filter_internal.hpp"
@@ -18,9 +22,9 @@ namespace lcmloc::core::gnss_filter {
 enum : int { kX = 0, kY = 1, kTheta = 2, kSpeed = 3, kDistance = 4, kN = 5 };
 
 /// Consecutive gate rejections of one measurement kind. Every n-th rejection in a row is a
-/// lock-out: the caller inflates the covariance of the states that measurement observes, so
-/// the gate, which compares the innovation with that covariance, opens within a bounded
-/// number of rejections (the inflation grows geometrically). An acceptance ends it.
+/// lock-out (status LOCKOUT). For the magnetometer the caller then inflates the heading
+/// covariance, so the gate opens within a bounded number of rejections; for GPS it does not
+/// (the filter re-localizes from agreeing fixes instead: RejectedFixes). An acceptance ends it.
 class Lockout {
  public:
   explicit Lockout(int n) : n_(n) {}
@@ -37,6 +41,57 @@ class Lockout {
   int n_;
   int count_ = 0;
   bool active_ = false;
+};
+
+/// GPS fixes the gate refused since the last accepted one (at most kCapacity, none more than
+/// kMaxAgeS older than the newest), each with the dead-reckoned motion up to it: the evidence a
+/// lost filter re-localizes from. Fixes agree when, each carried forward to the newest by the
+/// dead-reckoned displacement between them (odometry distance along the filter's heading,
+/// rotated by the heading error a long enough chord reveals), each lies within the chi-square
+/// gate of the newest, with the variance of both fixes plus the heading uncertainty times the
+/// displacement squared.
+class RejectedFixes {
+ public:
+  static constexpr std::size_t kCapacity = 8;
+  static constexpr double kMaxAgeS = 30.0;
+  /// A chord (of the fixes and of the dead reckoning) this many times the two fixes' combined
+  /// sigma long gives the heading (its 1 sigma then at most 1/kChordSigmas rad).
+  static constexpr double kChordSigmas = 3.0;
+  struct Agreement {
+    int fixes = 1;             ///< fixes that agree with the newest, the newest included
+    int64_t first_utime = 0;   ///< the oldest of them
+    double spread = 0;         ///< largest distance of one carried forward from the newest [m]
+    bool heading = false;      ///< heading error from the chord of the fixes (dtheta)
+    double dtheta = 0;         ///< heading error: chord of the fixes minus dead-reckoned chord [rad]
+    double heading_var = 0;    ///< variance of the heading after it: of dtheta, or what the agreement bounds [rad^2]
+  };
+  void clear() {
+    w_.clear();
+    dr_.setZero();
+    hvar_ = 0;
+  }
+  bool empty() const { return w_.empty(); }
+  /// One odometry step while the window holds fixes: distance ds along heading theta, and the
+  /// heading variance the step added.
+  void move(double ds, double theta, double step_heading_var);
+  /// Adds a refused fix (1 sigma sd per axis) and returns the largest agreement of the window
+  /// with it; heading_var is the filter's heading variance, gate the 2-dof chi-square gate.
+  Agreement add(int64_t utime, const Vec2& z, double sd, double heading_var, double gate);
+
+ private:
+  struct Fix {
+    int64_t utime;
+    Vec2 z;
+    double var;
+    Vec2 dr;
+    double hvar;
+  };
+  /// The fixes that agree with the newest, carried forward with the filter's heading (anchor
+  /// npos) or rotated by the heading error of the chord from w_[anchor] to the newest.
+  Agreement agreeing(std::size_t anchor, double heading_var, double gate) const;
+  std::deque<Fix> w_;
+  Vec2 dr_ = Vec2::Zero();  ///< dead-reckoned position since the window began [m]
+  double hvar_ = 0;         ///< heading variance added since the window began [rad^2]
 };
 
 /// One odometry interval as the time update sees it.
@@ -84,6 +139,8 @@ class GnssFilterBase : public Filter {
 
   /// IMU samples whose forward acceleration was saturated or not finite (not used).
   int64_t saturatedImuSamples() const override { return saturated_; }
+  /// The re-localization the last GPS fix caused, once.
+  std::optional<Relocalization> takeRelocalization() override { return std::exchange(relocalized_, std::nullopt); }
   /// GPS-course heading aid (gnss.course_distance, tvekf): heading updates accepted / gated.
   int64_t courseAccepted() const { return course_accepted_; }
   int64_t courseRejected() const { return course_rejected_; }
@@ -108,7 +165,6 @@ class GnssFilterBase : public Filter {
   virtual double heading() const = 0;
   virtual void positionUpdate(const Vec2& z, double r, GateDecision& d) = 0;
   virtual void inflateHeading() = 0;
-  virtual void inflatePosition() = 0;
   /// Adds the position random walk of dt seconds to the position covariance.
   virtual void growPosition(double dt) = 0;
 
@@ -119,6 +175,14 @@ class GnssFilterBase : public Filter {
   /// was constant over the stretch. Fused as a heading measurement theta + error with variance
   /// 2 sd^2 / |chord|^2 (+ gnss.course_std^2) behind the 1-dof gate; then re-anchored.
   void courseAid(const Vec2& z, double sd);
+  /// A refused fix: into the window; re-localizes when enough fixes agree (two while no fix
+  /// confirmed the state the filter started from, its configured pose or another's state;
+  /// three after), else counts towards the lock-out.
+  void refusedFix(const GpsInput& gps, const Vec2& z, double sd, GateDecision& d);
+  /// Position from the newest fix (sigma sd), heading from the chord or kept with its sigma
+  /// opened to what the agreement bounds, speed and distance kept; their cross-covariances with
+  /// the pose dropped.
+  void relocalize(const Vec2& z, double sd, const RejectedFixes::Agreement& a, int64_t utime);
 
   FilterConfig cfg_;
   GnssConfig g_;
@@ -140,6 +204,9 @@ class GnssFilterBase : public Filter {
   int64_t last_fix_utime_ = 0;
   int64_t last_position_utime_ = 0;  ///< time the position prediction has reached
   Lockout gps_lock_, mag_lock_;
+  RejectedFixes rejected_;
+  bool confirmed_ = false;  ///< a fix was accepted (or re-localized) since the state was set
+  std::optional<Relocalization> relocalized_;
   bool course_open_ = false;
   Vec2 course_anchor_ = Vec2::Zero(), course_dr_ = Vec2::Zero();
   double course_dist_ = 0;

@@ -40,6 +40,9 @@ void GnssFilterBase::initialize(const FilterState& from) {
   have_fix_ = false;
   last_position_utime_ = from.utime;
   course_open_ = false;
+  rejected_.clear();
+  confirmed_ = false;
+  relocalized_.reset();
   gps_lock_ = Lockout(g_.gps_lockout_rejections);
   mag_lock_ = Lockout(g_.mag_lockout_rejections);
 }
@@ -84,6 +87,12 @@ void GnssFilterBase::predict(const OdometryInput& odo) {
   st.delta_theta = odo.delta_theta;
   timeUpdate(st);
   last_position_utime_ = std::max(last_position_utime_, odo.utime);
+  if (!rejected_.empty()) {  // the dead-reckoned motion that carries the refused fixes forward
+    Eigen::VectorXd x;
+    Eigen::MatrixXd P;
+    fillState(x, P);
+    rejected_.move(odo.delta_s, heading(), headingNoise(st, x[kSpeed], P(kSpeed, kSpeed)));
+  }
   if (course_open_) {  // dead-reckoned displacement along the filter's heading since the anchor fix
     const double th = heading();
     course_dr_ += odo.delta_s * Vec2(std::cos(th), std::sin(th));
@@ -132,13 +141,17 @@ std::optional<GateDecision> GnssFilterBase::update(const GpsInput& gps) {
     if (last_position_utime_ > 0) growPosition(static_cast<double>(gps.utime - last_position_utime_) * 1e-6);
     last_position_utime_ = gps.utime;
   }
-  positionUpdate(Vec2(gps.x, gps.y), sd * sd, d);
-  if (d.reason == "gate" && gps_lock_.reject()) inflatePosition();
-  if (d.accepted) {
+  const Vec2 z(gps.x, gps.y);
+  positionUpdate(z, sd * sd, d);
+  if (d.reason == "gate") {
+    refusedFix(gps, z, sd, d);
+  } else if (d.accepted) {
     gps_lock_.accept();
+    rejected_.clear();
+    confirmed_ = true;
     have_fix_ = true;
     last_fix_utime_ = gps.utime;
-    if (use_course_ && g_.course_distance > 0) courseAid(Vec2(gps.x, gps.y), sd);
+    if (use_course_ && g_.course_distance > 0) courseAid(z, sd);
   }
   return d;
 }

@@ -97,7 +97,6 @@ class GpsUkf final : public GnssFilterBase {
   }
 
   void inflateHeading() override { inflateStates({{kTheta, kLockoutMaxHeadingStd}}); }
-  void inflatePosition() override { inflateStates({{kX, cfg_.lockout_max_std}, {kY, cfg_.lockout_max_std}}); }
   void growPosition(double dt) override {
     U::Matrix P = ukf_.P();
     P(kX, kX) += g_.position_rw * g_.position_rw * dt;

@@ -121,9 +121,6 @@ class TvEkf final : public GnssFilterBase {
   void inflateHeading() override {
     Pth_ = std::max(Pth_, std::min(Pth_ * cfg_.lockout_inflation, kLockoutMaxHeadingStd * kLockoutMaxHeadingStd));
   }
-  void inflatePosition() override {
-    detail::inflateCapped(Pp_, {{0, cfg_.lockout_max_std}, {1, cfg_.lockout_max_std}}, cfg_.lockout_inflation);
-  }
   void growPosition(double dt) override {
     Pp_.diagonal().array() += g_.position_rw * g_.position_rw * dt;
   }

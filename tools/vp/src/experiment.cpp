@@ -126,7 +126,10 @@ ExperimentResult runExperiment(const common::SystemConfig& cfg0, ImportOptions i
           (g.accepted ? s.gps_accepted : s.gps_rejected)++;
       } else if (*e.channel == cfg.channels.status) {
         lcmloc::fusion_status_t st;
-        if (logio::decodeEvent(e, st) && st.event == "lockout") ++s.lockouts;
+        if (logio::decodeEvent(e, st)) {
+          if (st.event == "lockout") ++s.lockouts;
+          if (st.event == "relocalized") ++s.relocalized;
+        }
       }
     });
     std::error_code ec;
@@ -166,7 +169,7 @@ ExperimentResult runExperiment(const common::SystemConfig& cfg0, ImportOptions i
     j["filters"][s.filter] = {{"poses", s.poses}, {"heldout_scored", s.scored}, {"rmse_m", s.rmse_m},
                               {"median_m", s.median_m}, {"p95_m", s.p95_m}, {"max_m", s.max_m},
                               {"gps_accepted", s.gps_accepted}, {"gps_rejected", s.gps_rejected},
-                              {"lockouts", s.lockouts}};
+                              {"lockouts", s.lockouts}, {"relocalized", s.relocalized}};
   eval::writeJson(j, opt.out_dir + "/report.json");
 
   // figures

@@ -30,9 +30,11 @@ enum class EventKind {
   Fix,           ///< the active filter took a landmark fix
   FixRefused,    ///< a landmark fix refused (geometry, or a filter's gate)
   FixLockout,    ///< a filter took a landmark fix after refusing several in a row
+  Relocalized,   ///< the active filter re-localized from measurements its gate had refused
 };
 /// "ack", "refused", "lockout", "recovered", "ambiguous", "restarted", "too_old", "too_new",
-/// "time_jump", "bad_input", "odometry_gap", "imu_saturated", "fix", "fix_refused", "fix_lockout".
+/// "time_jump", "bad_input", "odometry_gap", "imu_saturated", "fix", "fix_refused", "fix_lockout",
+/// "relocalized".
 const char* eventName(EventKind kind);
 
 /// The input an event is about.
@@ -94,6 +96,8 @@ struct GapBridged {
   int64_t period_us = 0;
   std::vector<std::string> bridged;
 };
+/// relocalized: the active filter took the pose of `evidence` (the input is its newest fix).
+struct Relocalized { InputRef input; std::string filter; Relocalization evidence; };
 /// ack or refused: the answer to a command. Switch: filter is the new type, previous the one
 /// before; Reset: filter is the active filter; why: the refusal's reason, or (ack) a note.
 struct Answer {
@@ -108,7 +112,7 @@ using EventFields =
     std::variant<events::Late, events::Outlier, events::CommandAhead, events::TimeJump, events::Lockout,
                  events::Recovered, events::Ambiguous, events::Restarted, events::NonFinite, events::FixNotMade,
                  events::FixGated, events::FixLockout, events::Fix, events::ImuSaturated, events::GapBridged,
-                 events::Answer>;
+                 events::Answer, events::Relocalized>;
 
 /// An event worth a human's attention at message time utime.
 struct EngineEvent {

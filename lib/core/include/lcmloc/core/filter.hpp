@@ -40,11 +40,12 @@ struct GnssConfig {
   double gps_std = 2.9;            ///< GPS 1 sigma per axis when the fix carries none [m]
   double speed_std0 = 0.5;         ///< initial 1 sigma of the speed [m/s]
   /// Lock-out of the GPS gate: this many consecutive GPS gate rejections declare a lock-out
-  /// (status LOCKOUT) and inflate the position covariance by FilterConfig::lockout_inflation (up
-  /// to FilterConfig::lockout_max_std), again after every further gps_lockout_rejections
-  /// rejections, until a fix is accepted.
+  /// (status LOCKOUT) until a fix is accepted or the filter re-localizes from refused fixes that
+  /// agree (docs/tvekf.md "Re-localization"); nothing is inflated.
   int gps_lockout_rejections = 5;
-  /// Same for the magnetometer heading gate (samples).
+  /// Lock-out of the magnetometer heading gate (samples): the heading covariance is inflated by
+  /// FilterConfig::lockout_inflation (heading sigma up to 1 rad), again after every further
+  /// mag_lockout_rejections rejections, until a heading is accepted.
   int mag_lockout_rejections = 50;
   double coast_timeout = 3.0;      ///< no accepted fix for this long: status DEAD_RECKONING [s]
   /// tvekf only: GPS-course heading aid for a vehicle without magnetometer (the heading of
@@ -126,8 +127,8 @@ struct FilterConfig {
   double steer_bias_std0 = 0.02;   ///< initial 1-sigma of b [rad]
   double scale_rw = 1e-4;          ///< random walk of k per metre travelled [1/sqrt(m)]
   double steer_bias_rw = 1e-4;     ///< random walk of b per metre travelled [rad/sqrt(m)]
-  /// "tvekf" and "ukf_gps" only (they also use wheelbase, initial_pose, p0_diag, sigma, gate,
-  /// lockout_inflation, lockout_max_std).
+  /// "tvekf" and "ukf_gps" only (they also use wheelbase, initial_pose, p0_diag, sigma, gate and,
+  /// for the magnetometer's lock-out, lockout_inflation).
   GnssConfig gnss;
   /// Heading process noise per radian turned [rad^2/rad], added to every odometry step of the
   /// magnetic-ruler family (dead_reckoning, ukf, ukf_gated, ukf_calib) and ukf_landmarks:
@@ -142,6 +143,20 @@ struct FilterConfig {
   } landmarks;
   /// "odo_ins" and "odo_ins_uncal" only (they also use initial_pose for the start heading).
   InsFilterConfig ins;
+};
+
+/// A filter re-localized from the evidence of measurements its gate had refused (GNSS filters:
+/// GPS fixes that agree with each other, carried forward by the dead-reckoned motion between
+/// them, and all disagree with the estimate). The engine reports it (event "relocalized").
+struct Relocalization {
+  int64_t utime = 0;        ///< the newest fix, whose position was taken
+  int fixes = 0;            ///< fixes that agreed (the newest included)
+  int64_t first_utime = 0;  ///< the oldest of them
+  double spread = 0;        ///< largest distance of an agreeing fix, carried forward, from the newest [m]
+  double jump = 0;          ///< distance the position moved [m]
+  bool heading_from_chord = false;  ///< heading from the chord of the fixes; else kept, its sigma opened
+  double heading_change = 0;        ///< [rad] (0 when kept)
+  double heading_std = 0;           ///< 1 sigma of the heading after it [rad]
 };
 
 /// Measurement kinds a filter may use (Filter::uses).
@@ -220,6 +235,8 @@ class Filter {
   /// IMU samples not used because their forward acceleration reached gnss.accel_saturation
   /// (the GNSS filters; 0 for the others). The engine reports each saturated stretch.
   virtual int64_t saturatedImuSamples() const { return 0; }
+  /// The re-localization the last measurement caused, once (cleared by the call); default none.
+  virtual std::optional<Relocalization> takeRelocalization() { return std::nullopt; }
   /// Status only: what state().status returns, without copying the state (per-message path).
   virtual FilterStatus status() const { return state().status; }
   /// Batched time update (fusion.output_every > 1): adds one odometry increment to a pending

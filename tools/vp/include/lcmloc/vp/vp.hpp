@@ -102,7 +102,7 @@ struct Score {
   int64_t poses = 0;
   int64_t scored = 0;                 ///< held-out fixes inside the estimate's time span
   double rmse_m = 0, median_m = 0, p95_m = 0, max_m = 0;
-  int64_t gps_accepted = 0, gps_rejected = 0, lockouts = 0;
+  int64_t gps_accepted = 0, gps_rejected = 0, lockouts = 0, relocalized = 0;
   std::vector<double> t, err;         ///< per scored held-out fix: time since start [s], error [m]
   std::vector<std::array<double, 3>> track;  ///< t [s], x, y (every pose)
 };
