@@ -98,6 +98,26 @@ TEST(MapIndex, NearIsExactlyTheBruteForceBoxForRandomMapsAndQueries) {
   EXPECT_GT(nonempty, 1000);  // the queries did find markers
 }
 
+TEST(MapIndex, TwoDenseClustersFarApartAreIndexedAsExactly) {
+  // a fine cell over a wide extent: too many cells to pack a cell and an index in 64 bits
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  MarkerMap map;
+  for (int i = 0; i < 70000; ++i) {
+    const double o = i % 2 ? 1e6 : 0.0;
+    map.push_back({i, o + u(rng), o + u(rng)});
+  }
+  const MapIndex index(map);
+  EXPECT_LT(index.cellSize(), 0.1);
+  std::vector<uint32_t> got;
+  for (int i = 0; i < 40; ++i) {
+    const Marker& m = map[rng() % map.size()];
+    const double r = 0.05 * (i % 5);
+    index.near(m.x, m.y, r, got);
+    ASSERT_EQ(got, bruteNear(map, m.x, m.y, r)) << i;
+  }
+}
+
 TEST(MapIndex, AQueryThatIsNotFiniteGivesEveryMarker) {
   const MarkerMap map{{1, 0, 0}, {2, 5, 5}, {3, -5, 2}};
   const MapIndex index(map);

@@ -52,13 +52,13 @@ MapIndex::MapIndex(MarkerMap markers) : markers_(std::move(markers)) {
       odd_.push_back(static_cast<uint32_t>(i));
       continue;
     }
-    finite_.push_back(static_cast<uint32_t>(i));
+    ++finite_;
     xmin_ = std::min(xmin_, m.x);
     xmax_ = std::max(xmax_, m.x);
     ymin_ = std::min(ymin_, m.y);
     ymax_ = std::max(ymax_, m.y);
   }
-  if (finite_.empty()) xmin_ = ymin_ = xmax_ = ymax_ = 0.0;
+  if (finite_ == 0) xmin_ = ymin_ = xmax_ = ymax_ = 0.0;
   grid_ = build(chooseCell());
   closest_ = computeClosestPair();
 }
@@ -98,13 +98,13 @@ int64_t MapIndex::Grid::cellY(double y) const { return cellOf(y - y0, cell, ny);
 double MapIndex::chooseCell() const {
   const double extent = std::max(xmax_ - xmin_, ymax_ - ymin_);
   if (!std::isfinite(extent)) return kInf;  // (coordinates near the largest double: one cell)
-  if (finite_.size() < 2 || !(extent > 0.0)) return 1.0;
+  if (finite_ < 2 || !(extent > 0.0)) return 1.0;
   const double q = extent / static_cast<double>(1 << kLevels);
   const double top = static_cast<double>((1 << kLevels) - 1);
   std::vector<uint64_t> codes;
-  codes.reserve(finite_.size());
-  for (uint32_t i : finite_) {
-    const Marker& m = markers_[i];
+  codes.reserve(finite_);
+  for (const Marker& m : markers_) {
+    if (!finitePosition(m)) continue;
     const auto qx = static_cast<uint64_t>(std::min(std::floor((m.x - xmin_) / q), top));
     const auto qy = static_cast<uint64_t>(std::min(std::floor((m.y - ymin_) / q), top));
     codes.push_back(interleave(qx, qy));
@@ -133,6 +133,9 @@ double MapIndex::chooseCell() const {
   return q * static_cast<double>(uint64_t{1} << level);
 }
 
+/// The markers sorted by (cell, index). When the cell number (row-major) and the index fit in
+/// 64 bits together, as they do for maps of millions of markers, each marker is one packed
+/// integer (8 bytes while sorting); otherwise a (key, index) pair.
 MapIndex::Grid MapIndex::build(double cell) const {
   Grid g;
   g.x0 = xmin_;
@@ -140,9 +143,42 @@ MapIndex::Grid MapIndex::build(double cell) const {
   g.cell = cell;
   g.nx = cellsAcross(xmax_ - xmin_, cell);
   g.ny = cellsAcross(ymax_ - ymin_, cell);
+  auto bits = [](uint64_t v) { return v == 0 ? 0 : 64 - __builtin_clzll(v); };
+  const int index_bits = bits(markers_.size());
+  const int cell_bits = bits(static_cast<uint64_t>(g.nx) * static_cast<uint64_t>(g.ny));
+  if (index_bits + cell_bits <= 64) {
+    std::vector<uint64_t> packed;
+    packed.reserve(finite_);
+    for (std::size_t i = 0; i < markers_.size(); ++i)
+      if (finitePosition(markers_[i])) {
+        const auto c = static_cast<uint64_t>(g.cellY(markers_[i].y) * g.nx + g.cellX(markers_[i].x));
+        packed.push_back(c << index_bits | i);
+      }
+    std::sort(packed.begin(), packed.end());
+    const uint64_t mask = (uint64_t{1} << index_bits) - 1;
+    g.order.resize(packed.size());
+    std::size_t cells = 0;
+    for (std::size_t k = 0; k < packed.size(); ++k) {
+      g.order[k] = static_cast<uint32_t>(packed[k] & mask);
+      cells += k == 0 || (packed[k] >> index_bits) != (packed[k - 1] >> index_bits) ? 1 : 0;
+    }
+    g.keys.reserve(cells);
+    g.start.reserve(cells + 1);
+    for (std::size_t k = 0; k < packed.size(); ++k) {
+      const uint64_t c = packed[k] >> index_bits;
+      if (k == 0 || c != packed[k - 1] >> index_bits) {
+        g.keys.push_back(Grid::key(static_cast<int64_t>(c % static_cast<uint64_t>(g.nx)), static_cast<int64_t>(c / static_cast<uint64_t>(g.nx))));
+        g.start.push_back(static_cast<uint32_t>(k));
+      }
+    }
+    g.start.push_back(static_cast<uint32_t>(packed.size()));
+    return g;
+  }
   std::vector<std::pair<uint64_t, uint32_t>> keyed;
-  keyed.reserve(finite_.size());
-  for (uint32_t i : finite_) keyed.emplace_back(Grid::key(g.cellX(markers_[i].x), g.cellY(markers_[i].y)), i);
+  keyed.reserve(finite_);
+  for (std::size_t i = 0; i < markers_.size(); ++i)
+    if (finitePosition(markers_[i]))
+      keyed.emplace_back(Grid::key(g.cellX(markers_[i].x), g.cellY(markers_[i].y)), static_cast<uint32_t>(i));
   std::sort(keyed.begin(), keyed.end());
   g.order.reserve(keyed.size());
   for (std::size_t k = 0; k < keyed.size(); ++k) {
@@ -170,8 +206,8 @@ void MapIndex::near(double x, double y, double r, std::vector<uint32_t>& out) co
   if (!g.keys.empty() && !(hx < xmin_ || lx > xmax_ || hy < ymin_ || ly > ymax_)) {
     const int64_t ix0 = g.cellX(lx), ix1 = g.cellX(hx), iy0 = g.cellY(ly), iy1 = g.cellY(hy);
     if (static_cast<uint64_t>(iy1 - iy0 + 1) > g.keys.size()) {
-      for (uint32_t i : finite_)  // more rows than cells: one pass over the markers is less work
-        if (inBox(markers_[i])) out.push_back(i);
+      for (std::size_t i = 0; i < markers_.size(); ++i)  // more rows than cells: one pass is less work
+        if (inBox(markers_[i])) out.push_back(static_cast<uint32_t>(i));
     } else {
       for (int64_t iy = iy0; iy <= iy1; ++iy) {
         const uint64_t last = Grid::key(ix1, iy);
@@ -186,15 +222,10 @@ void MapIndex::near(double x, double y, double r, std::vector<uint32_t>& out) co
   std::sort(out.begin(), out.end());
 }
 
-/// The smallest distance between two markers of the same or adjacent cells of g.
-double MapIndex::closestWithin(const Grid& g) const {
+/// The smallest distance between two markers whose cells of g are at most `reach` cells apart
+/// in x and in y.
+double MapIndex::closestWithin(const Grid& g, int64_t reach) const {
   double best = kInf;
-  auto cellRange = [&g](uint64_t key) -> std::pair<uint32_t, uint32_t> {
-    const auto it = std::lower_bound(g.keys.begin(), g.keys.end(), key);
-    if (it == g.keys.end() || *it != key) return {0, 0};
-    const auto k = static_cast<std::size_t>(it - g.keys.begin());
-    return {g.start[k], g.start[k + 1]};
-  };
   auto closer = [&](uint32_t a, uint32_t b) {
     const Marker &p = markers_[a], &q = markers_[b];
     best = std::min(best, std::hypot(q.x - p.x, q.y - p.y));
@@ -203,28 +234,32 @@ double MapIndex::closestWithin(const Grid& g) const {
     const int64_t ix = static_cast<int64_t>(g.keys[k] & 0xFFFFFFFFu), iy = static_cast<int64_t>(g.keys[k] >> 32);
     for (uint32_t a = g.start[k]; a < g.start[k + 1]; ++a)
       for (uint32_t b = a + 1; b < g.start[k + 1]; ++b) closer(g.order[a], g.order[b]);
-    // each pair of adjacent cells once: the cell to the right and the three above
-    const int64_t next[4][2] = {{ix + 1, iy}, {ix - 1, iy + 1}, {ix, iy + 1}, {ix + 1, iy + 1}};
-    for (const auto& c : next) {
-      if (c[0] < 0 || c[0] >= g.nx || c[1] >= g.ny) continue;
-      const auto [b0, b1] = cellRange(Grid::key(c[0], c[1]));
-      for (uint32_t a = g.start[k]; a < g.start[k + 1]; ++a)
-        for (uint32_t b = b0; b < b1; ++b) closer(g.order[a], g.order[b]);
+    // each pair of cells once: the next ones in this row, and those of the rows above
+    for (int64_t dy = 0; dy <= reach && iy + dy < g.ny; ++dy) {
+      const int64_t from = dy == 0 ? ix + 1 : std::max<int64_t>(ix - reach, 0);
+      const int64_t to = std::min(ix + reach, g.nx - 1);
+      if (from > to) continue;
+      const uint64_t last = Grid::key(to, iy + dy);
+      for (auto j = static_cast<std::size_t>(std::lower_bound(g.keys.begin(), g.keys.end(), Grid::key(from, iy + dy)) - g.keys.begin());
+           j < g.keys.size() && g.keys[j] <= last; ++j)
+        for (uint32_t a = g.start[k]; a < g.start[k + 1]; ++a)
+          for (uint32_t b = g.start[j]; b < g.start[j + 1]; ++b) closer(g.order[a], g.order[b]);
     }
   }
   return best;
 }
 
-/// Any pair closer than half a cell is in the same or adjacent cells (rounding included): once
-/// the closest pair among adjacent cells is that close, it is the closest of all. Otherwise the
-/// cells double until it is, or until the whole map lies in adjacent cells.
+/// A pair closer than (reach - 1/2) cells is at most `reach` cells apart (rounding included):
+/// once the closest pair found that far is that close, it is the closest of all. The index's own
+/// grid is searched two cells around each cell; when that finds no pair close enough, grids of
+/// doubling cells one cell around, until one does or the whole map lies in adjacent cells.
 double MapIndex::computeClosestPair() const {
-  if (finite_.size() < 2) return kInf;
-  double best = closestWithin(grid_);
-  if (best <= 0.5 * grid_.cell || (grid_.nx <= 2 && grid_.ny <= 2)) return best;
+  if (finite_ < 2) return kInf;
+  double best = closestWithin(grid_, 2);
+  if (best <= 1.5 * grid_.cell || (grid_.nx <= 3 && grid_.ny <= 3)) return best;
   for (double cell = 2.0 * grid_.cell;; cell *= 2.0) {
     const Grid g = build(cell);
-    best = closestWithin(g);
+    best = closestWithin(g, 1);
     if (best <= 0.5 * cell || (g.nx <= 2 && g.ny <= 2)) return best;
   }
 }

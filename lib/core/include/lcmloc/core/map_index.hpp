@@ -13,8 +13,8 @@ namespace lcmloc::core {
 
 class MapIndex {
  public:
-  /// Indexes markers (kept in their order). Time O(n log n); memory about 12 bytes per marker
-  /// besides the markers themselves.
+  /// Indexes markers (kept in their order). Time O(n log n); memory about 8 to 16 bytes per
+  /// marker besides the markers themselves.
   explicit MapIndex(MarkerMap markers);
 
   const MarkerMap& markers() const { return markers_; }
@@ -58,11 +58,11 @@ class MapIndex {
   };
   Grid build(double cell) const;
   double chooseCell() const;
-  double closestWithin(const Grid& g) const;
+  double closestWithin(const Grid& g, int64_t reach) const;
   double computeClosestPair() const;
 
   MarkerMap markers_;
-  std::vector<uint32_t> finite_;  ///< markers with a finite position
+  std::size_t finite_ = 0;         ///< markers with a finite position
   std::vector<uint32_t> odd_;     ///< markers whose position is not finite (always returned)
   std::vector<uint32_t> by_id_;   ///< indices sorted by (id, index)
   double xmin_ = 0.0, ymin_ = 0.0, xmax_ = 0.0, ymax_ = 0.0;
