@@ -12,7 +12,7 @@ LCMLOC_PACKAGES=(
   build-essential cmake pkg-config
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
   libeigen3-dev libspdlog-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
-  libgtest-dev googletest libbenchmark-dev
+  libgtest-dev googletest libbenchmark-dev libnanoflann-dev
   default-jdk-headless libjchart2d-java
   gnuplot-nox iproute2
   gpsd gpsd-clients libgps-dev libgeographiclib-dev

@@ -89,7 +89,8 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
       throw common::ConfigError(cfg.file, "fusion.map_file", e.what());
     }
   }
-  engine_ = std::make_unique<core::FusionEngine>(ec, map, out);
+  const std::size_t markers = map.size();
+  engine_ = std::make_unique<core::FusionEngine>(ec, std::move(map), out);  // (the engine's is the one copy)
 
   const auto& ch = cfg.channels;
   std::vector<std::string> inputs;
@@ -105,7 +106,7 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
 
   spdlog::info("filter {} (shadow: {}), {} markers, reorder window {:.3f} s; in: {}; out: {}, {}, {}",
                cfg.fusion.filter.type, cfg.fusion.shadow.empty() ? "none" : fmt::format("{}", fmt::join(cfg.fusion.shadow, ", ")),
-               map.size(), cfg.fusion.reorder_window, fmt::format("{}", fmt::join(inputs, ", ")), ch.pose, ch.gate,
+               markers, cfg.fusion.reorder_window, fmt::format("{}", fmt::join(inputs, ", ")), ch.pose, ch.gate,
                ch.status);
   if (!hold_) publishStatus("started", "filter " + engine_->activeFilter(), 0);
 }

@@ -493,3 +493,25 @@ TEST(Calibration, EstimatesOdometerScaleAndSteeringBias) {
   EXPECT_LT((x.head<2>() - r.final_truth.head<2>()).norm(), 0.03);
   EXPECT_EQ(r.final_state.status, FilterStatus::Ok);
 }
+
+TEST(Association, ATieBetweenMarkersAtOnePlaceGoesToTheFirstInTheMap) {
+  // Two markers at one position among many along the road (a map of thousands: the filters look
+  // up the markers near the pose): the first of them in map order is taken, whichever its id.
+  MarkerMap map = straightMap(5000);
+  map.insert(map.begin() + 2, Marker{9001, map[0].x, map[0].y});  // marker 0's place, later in the map
+  map.insert(map.begin() + 3000, Marker{4242, map[1].x, map[1].y});  // marker 1's place, later in the map
+  std::swap(map[0], map[1]);  // marker 1 ahead of marker 0
+  for (int which = 0; which < 2; ++which) {
+    auto f = makeFilter(config("ukf"), map);
+    int64_t t = 0;
+    drive(*f, 2.0 * (which + 1), t);
+    const GateDecision d = f->update(detection(t, 0.0));
+    ASSERT_TRUE(d.accepted);
+    EXPECT_EQ(d.marker_id, which) << "marker " << which << " comes before its twin";
+  }
+  std::swap(map[2], map[1]);  // now 9001 ahead of marker 0
+  auto f = makeFilter(config("ukf"), map);
+  int64_t t = 0;
+  drive(*f, 2.0, t);
+  EXPECT_EQ(f->update(detection(t, 0.0)).marker_id, 9001);
+}

@@ -17,18 +17,6 @@
 namespace lcmloc::core {
 namespace {
 
-/// [m] The smallest distance between two markers of the map (+inf: fewer than two): after a gap
-/// whose spread exceeds half of it, the marker taken may be a neighbour ("ambiguous").
-double closestMarkers(const MarkerMap& m) {
-  std::vector<Marker> v(m);
-  std::sort(v.begin(), v.end(), [](const Marker& a, const Marker& b) { return a.x < b.x; });
-  double best = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < v.size(); ++i)
-    for (std::size_t j = i + 1; j < v.size() && v[j].x - v[i].x < best; ++j)
-      best = std::min(best, std::hypot(v[j].x - v[i].x, v[j].y - v[i].y));
-  return best;
-}
-
 /// Saturated IMU samples of the active filter: one event per saturated stretch (a pothole gives
 /// a few samples in a row), not per sample.
 class ImuSaturationWatch {
@@ -56,7 +44,7 @@ class ImuSaturationWatch {
 
 struct FusionEngine::Impl final : InputOrder::Client {
   EngineConfig cfg;
-  MarkerMap map;
+  SharedMapIndex map;
   EngineOutputs out;
   EngineCounters counters;
   FilterBank bank;
@@ -66,14 +54,16 @@ struct FusionEngine::Impl final : InputOrder::Client {
   Commands commands;
   ImuSaturationWatch imu;
   InputOrder order;
+  /// [m] The smallest distance between two markers of the map (+inf: fewer than two): after a
+  /// gap whose spread exceeds half of it, the marker taken may be a neighbour ("ambiguous").
   const double marker_spacing;
   FilterStatus last_status;  ///< the active filter's status after the input before
 
   Impl(EngineConfig c, MarkerMap m, EngineOutputs o)
-      : cfg(std::move(c)), map(std::move(m)), out(std::move(o)), bank(cfg.filter, cfg.shadow, map, out),
+      : cfg(std::move(c)), map(std::make_shared<const MapIndex>(std::move(m))), out(std::move(o)), bank(cfg.filter, cfg.shadow, map, out),
         decimation(cfg.output_every, bank), gaps(cfg.odometry_gap, bank, decimation, out),
         fixes(cfg, bank, out, counters), commands(bank, fixes, out),
-        order(cfg.reorder_window_us, cfg.max_time_jump_us, *this), marker_spacing(closestMarkers(map)),
+        order(cfg.reorder_window_us, cfg.max_time_jump_us, *this), marker_spacing(map->closestPair()),
         last_status(bank.active().state().status) {}
 
   /// Every part starts afresh (a new time base; the active filter's type is kept).

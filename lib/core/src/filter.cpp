@@ -174,6 +174,10 @@ bool Filter::applyFix(const PoseFix& fix) {
 }
 
 std::unique_ptr<Filter> makeFilter(const FilterConfig& cfg, const MarkerMap& map) {
+  return makeFilterOver(cfg, std::make_shared<const MapIndex>(map));
+}
+
+std::unique_ptr<Filter> makeFilterOver(const FilterConfig& cfg, const SharedMapIndex& map) {
   validate(cfg);
   if (auto f = detail::makeRulerFilter(cfg, map)) return f;
   if (auto f = detail::makeGnssFilter(cfg)) return f;

@@ -5,14 +5,14 @@
 
 namespace lcmloc::core {
 
-FilterBank::FilterBank(FilterConfig base, std::vector<std::string> shadow_types, const MarkerMap& map,
+FilterBank::FilterBank(FilterConfig base, std::vector<std::string> shadow_types, SharedMapIndex map,
                        const EngineOutputs& out)
-    : base_(std::move(base)), map_(map), out_(out), active_cfg_(base_) {
-  active_ = makeFilter(active_cfg_, map_);
+    : base_(std::move(base)), map_(std::move(map)), out_(out), active_cfg_(base_) {
+  active_ = makeFilterOver(active_cfg_, map_);
   for (const auto& type : shadow_types) {
     FilterConfig sc = base_;
     sc.type = type;
-    shadows_.push_back(makeFilter(sc, map_));
+    shadows_.push_back(makeFilterOver(sc, map_));
   }
 }
 
@@ -37,7 +37,7 @@ FilterConfig FilterBank::configOf(const Filter& f, bool is_active) const {
 }
 
 void FilterBank::startFresh(Filter& f, const FilterConfig& fc, int64_t utime) const {
-  auto n = makeFilter(fc, map_);
+  auto n = makeFilterOver(fc, map_);
   FilterState s = n->state();
   s.utime = utime;
   f.initialize(s);
@@ -61,7 +61,7 @@ FilterBank::Switched FilterBank::switchTo(const FilterConfig& c, int64_t utime) 
   Switched r;
   std::unique_ptr<Filter> next;
   try {
-    next = makeFilter(c, map_);
+    next = makeFilterOver(c, map_);
   } catch (const std::invalid_argument& e) {
     r.error = e.what();
     return r;
@@ -85,11 +85,11 @@ void FilterBank::initialize(const FilterState& state) {
 }
 
 void FilterBank::reset() {
-  active_ = makeFilter(active_cfg_, map_);
+  active_ = makeFilterOver(active_cfg_, map_);
   for (auto& s : shadows_) {
     FilterConfig sc = base_;
     sc.type = s->name();
-    s = makeFilter(sc, map_);
+    s = makeFilterOver(sc, map_);
   }
 }
 

@@ -19,14 +19,14 @@ void copyMatching(const FilterState& from, const std::vector<std::string>& names
 
 /// The odometry-only and magnetic-ruler filters ("dead_reckoning", "ukf", "ukf_gated",
 /// "ukf_calib") over the map; nullptr for another type. The configuration is checked already.
-std::unique_ptr<Filter> makeRulerFilter(const FilterConfig& cfg, const MarkerMap& map);
+std::unique_ptr<Filter> makeRulerFilter(const FilterConfig& cfg, const SharedMapIndex& map);
 
 /// The GNSS filters ("tvekf", "ukf_gps"); nullptr for another type. Throws
 /// std::invalid_argument for an invalid configuration.
 std::unique_ptr<Filter> makeGnssFilter(const FilterConfig& cfg);
 
 /// The landmark/beacon filter ("ukf_landmarks") over the map; nullptr for another type.
-std::unique_ptr<Filter> makeLandmarkFilter(const FilterConfig& cfg, const MarkerMap& map);
+std::unique_ptr<Filter> makeLandmarkFilter(const FilterConfig& cfg, const SharedMapIndex& map);
 
 /// s.names = names, unless they are the same already (the engine fills one FilterState for
 /// every state it publishes: the names seldom change).

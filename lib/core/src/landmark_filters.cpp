@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <unordered_map>
+#include <vector>
 
 #include "filter_internal.hpp"
 #include "lcmloc/core/angles.hpp"
@@ -26,10 +26,9 @@ class LandmarkUkf final : public Filter {
   using U = Ukf<3>;
 
  public:
-  LandmarkUkf(const FilterConfig& c, const MarkerMap& map)
-      : cfg_(c), map_(map), gated_(c.gate.enabled), gate2_(gated_ ? c.gate.threshold(2) : kInf),
+  LandmarkUkf(const FilterConfig& c, SharedMapIndex map)
+      : cfg_(c), map_(std::move(map)), gated_(c.gate.enabled), gate2_(gated_ ? c.gate.threshold(2) : kInf),
         gate1_(gated_ ? c.gate.threshold(1) : kInf), ukf_(c.sigma, kThetaMask) {
-    for (std::size_t i = 0; i < map_.size(); ++i) index_.emplace(map_[i].id, i);
     book_.caps = detail::lockoutCaps(cfg_, names_);
     reset();
   }
@@ -90,22 +89,25 @@ class LandmarkUkf final : public Filter {
       return [&m](const U::Vector& s) { return predictRangeBearing(s, m.x, m.y); };
     };
     if (obs.landmark_id >= 0) {
-      const auto it = index_.find(obs.landmark_id);
-      if (it == index_.end()) {
+      const Marker* known = map_->find(obs.landmark_id);
+      if (!known) {
         d.reason = "unknown_id";
         d.marker_id = obs.landmark_id;
         return d;
       }
-      const Marker& m = map_[it->second];
+      const Marker& m = *known;
       if (ukf_.innovate<2>(X, h_of(m), R, z, kBearingMask, best)) best_id = m.id;
     } else {
       // Nearest neighbour: only landmarks whose distance from the predicted position can match
-      // the measured range within 4 sigma (position and range) are tried.
+      // the measured range within 4 sigma (position and range) are tried: the index hands those
+      // within range + slack of it, in map order.
       const auto& P = ukf_.P();
       const double slack = 4.0 * std::sqrt(std::max(P(0, 0) + P(1, 1), 0.0) + rs * rs);
       const Vec3 pose = ukf_.x();
       int inside = 0;  // candidates the gate would accept
-      for (const Marker& m : map_) {
+      map_->near(pose.x(), pose.y(), MapIndex::widen(obs.range + slack, pose.x(), pose.y()), near_);
+      for (const uint32_t i : near_) {
+        const Marker& m = (*map_)[i];
         const double dist = std::hypot(m.x - pose.x(), m.y - pose.y());
         if (std::abs(dist - obs.range) > slack) continue;
         if (!ukf_.innovate<2>(X, h_of(m), R, z, kBearingMask, cand)) continue;
@@ -136,13 +138,13 @@ class LandmarkUkf final : public Filter {
       d.reason = "bad_input";
       return d;
     }
-    const auto it = index_.find(b.beacon_id);
-    if (it == index_.end()) {
+    const Marker* known = map_->find(b.beacon_id);
+    if (!known) {
       d.reason = "unknown_id";
       d.marker_id = b.beacon_id;
       return d;
     }
-    const Marker& m = map_[it->second];
+    const Marker& m = *known;
     const double rs = b.range_std > 0 ? b.range_std : cfg_.landmarks.beacon_std;
     Eigen::Matrix<double, 1, 1> R, z;
     R(0, 0) = rs * rs;
@@ -171,8 +173,8 @@ class LandmarkUkf final : public Filter {
   }
 
   FilterConfig cfg_;
-  MarkerMap map_;
-  std::unordered_map<int, std::size_t> index_;
+  SharedMapIndex map_;
+  std::vector<uint32_t> near_;  ///< nearest-neighbour candidates (reused)
   bool gated_;
   double gate2_, gate1_;
   U ukf_;
@@ -183,7 +185,7 @@ class LandmarkUkf final : public Filter {
 
 }  // namespace
 
-std::unique_ptr<Filter> detail::makeLandmarkFilter(const FilterConfig& cfg, const MarkerMap& map) {
+std::unique_ptr<Filter> detail::makeLandmarkFilter(const FilterConfig& cfg, const SharedMapIndex& map) {
   if (cfg.type != "ukf_landmarks") return nullptr;
   return std::make_unique<LandmarkUkf>(cfg, map);
 }

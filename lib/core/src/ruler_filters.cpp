@@ -189,8 +189,8 @@ class RulerUkf final : public Filter {
   using U = Ukf<N>;
 
  public:
-  RulerUkf(std::string name, const FilterConfig& c, const MarkerMap& map, bool gated)
-      : name_(std::move(name)), cfg_(c), map_(map), gated_(gated && c.gate.enabled),
+  RulerUkf(std::string name, const FilterConfig& c, SharedMapIndex map, bool gated)
+      : name_(std::move(name)), cfg_(c), map_(std::move(map)), gated_(gated && c.gate.enabled),
         gate_(gated_ ? c.gate.threshold(2) : kInf), ukf_(c.sigma, kThetaMask) {
     names_ = {"x", "y", "theta"};
     if (N == 5) names_.insert(names_.end(), {"odo_scale", "steer_bias"});
@@ -306,7 +306,11 @@ class RulerUkf final : public Filter {
       R = J * R_ * J.transpose();
       z = Vec2(r * c, r * sn);
     }
-    for (const Marker& m : map_) {
+    // the markers within the reachable window's radius (reachable()'s pre-test), in map order
+    const double radius = reach_radius_ + M_SQRT2 * margin;
+    map_->near(pose.x(), pose.y(), MapIndex::widen(radius, pose.x(), pose.y()), near_);
+    for (const uint32_t i : near_) {
+      const Marker& m = (*map_)[i];
       if (!reachable(pose, m, margin)) continue;
       auto h = [&m, wide](const typename U::Vector& s) {
         return wide ? markerInBody(s.template head<3>(), m.x, m.y)
@@ -350,7 +354,8 @@ class RulerUkf final : public Filter {
   /// in a bounded number of rejections instead of drifting away from them for ever.
   std::string name_;
   FilterConfig cfg_;
-  MarkerMap map_;
+  SharedMapIndex map_;
+  std::vector<uint32_t> near_;  ///< association candidates (reused)
   bool gated_;
   double gate_;
   U ukf_;
@@ -365,7 +370,7 @@ class RulerUkf final : public Filter {
 
 }  // namespace
 
-std::unique_ptr<Filter> detail::makeRulerFilter(const FilterConfig& cfg, const MarkerMap& map) {
+std::unique_ptr<Filter> detail::makeRulerFilter(const FilterConfig& cfg, const SharedMapIndex& map) {
   if (cfg.type == "dead_reckoning") return std::make_unique<DeadReckoningFilter>(cfg);
   if (cfg.type == "ukf") return std::make_unique<RulerUkf<3>>(cfg.type, cfg, map, false);
   if (cfg.type == "ukf_gated") return std::make_unique<RulerUkf<3>>(cfg.type, cfg, map, true);

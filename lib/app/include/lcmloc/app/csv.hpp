@@ -31,8 +31,24 @@ std::ifstream openCsv(const std::string& path, std::string& header);
 
 /// A map file: header "id,x,y", one marker / landmark / beacon per row, id an integer >= 0,
 /// x and y in metres in the local frame. Throws std::runtime_error naming file, line and reason
-/// for any bad row or a duplicate id (a map is configuration: nothing is skipped).
+/// for any bad row (not a number, not finite), a duplicate id, or a marker far outside the rest
+/// (farMarker): a map is configuration, nothing is skipped. Time O(n log n) in the rows.
 core::MarkerMap loadMap(const std::string& path);
+
+/// Where a map's markers are: the median point (median x, median y) and the spread, the median
+/// distance of the markers from it. Both hold whatever a few wrong rows say. All 0 with fewer
+/// than three markers.
+struct MapSpread {
+  double cx = 0.0, cy = 0.0, spread = 0.0;
+};
+MapSpread mapSpread(const core::MarkerMap& map);
+
+/// A marker is far outside the rest when no other marker lies within kFarSpreads times the map's
+/// spread of it (a road's spread is a quarter of its length; a cloud's, about its radius).
+inline constexpr double kFarSpreads = 8.0;
+/// The first marker (in map order) far outside the rest, -1: none (nor with fewer than three
+/// markers or a spread of 0, more than half of them at one point). O(n log n).
+long farMarker(const core::MarkerMap& map, const MapSpread& spread);
 
 /// Writes a map file (header "id,x,y"; each coordinate the shortest text that reads back to the
 /// same double, so loadMap gives map again exactly). Throws std::runtime_error.

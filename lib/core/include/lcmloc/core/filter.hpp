@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "lcmloc/core/map_index.hpp"
 #include "lcmloc/core/types.hpp"
 #include "lcmloc/core/ukf.hpp"
 
@@ -261,8 +262,11 @@ class Filter {
   virtual void addPoseNoise(const Mat3& Q);
 };
 
-/// Builds a filter of cfg.type over the marker map. Throws std::invalid_argument for an unknown
-/// type or an invalid configuration (message names the parameter).
+/// Builds a filter of cfg.type over the marker map (shared, not copied: filters of one map share
+/// its index). Throws std::invalid_argument for an unknown type or an invalid configuration
+/// (message names the parameter).
+std::unique_ptr<Filter> makeFilterOver(const FilterConfig& cfg, const SharedMapIndex& map);
+/// The same over map, indexed for this filter alone.
 std::unique_ptr<Filter> makeFilter(const FilterConfig& cfg, const MarkerMap& map);
 
 /// Why a state cannot start a filter ("" when it can): fewer than 3 entries or a P of another

@@ -9,15 +9,20 @@
 
 #include "lcmloc/core/engine_events.hpp"
 #include "lcmloc/core/filter.hpp"
+#include "lcmloc/core/map_index.hpp"
 
 namespace lcmloc::core {
 
 class FilterBank {
  public:
-  /// base: the initial active filter; shadow_types: shadow filters of base's parameters. Throws
-  /// std::invalid_argument when a config is invalid.
-  FilterBank(FilterConfig base, std::vector<std::string> shadow_types, const MarkerMap& map,
+  /// base: the initial active filter; shadow_types: shadow filters of base's parameters; every
+  /// filter shares map. Throws std::invalid_argument when a config is invalid.
+  FilterBank(FilterConfig base, std::vector<std::string> shadow_types, SharedMapIndex map,
              const EngineOutputs& out);
+  /// The same over map, indexed here.
+  FilterBank(FilterConfig base, std::vector<std::string> shadow_types, const MarkerMap& map,
+             const EngineOutputs& out)
+      : FilterBank(std::move(base), std::move(shadow_types), std::make_shared<const MapIndex>(map), out) {}
 
   Filter& active() { return *active_; }
   const Filter& active() const { return *active_; }
@@ -66,7 +71,7 @@ class FilterBank {
 
  private:
   FilterConfig base_;
-  const MarkerMap& map_;
+  SharedMapIndex map_;
   const EngineOutputs& out_;
   FilterConfig active_cfg_;
   std::unique_ptr<Filter> active_;
