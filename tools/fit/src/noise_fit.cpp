@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numeric>
 #include <sstream>
+#include <unordered_map>
 
 #include <spdlog/fmt/fmt.h>
 
@@ -32,10 +33,12 @@ std::optional<TruthSample> truthAt(const std::vector<TruthSample>& t, int64_t ut
   return s;
 }
 
-const core::Marker* find(const core::MarkerMap& map, int id) {
-  for (const auto& m : map)
-    if (m.id == id) return &m;
-  return nullptr;
+/// The map by id (a map of a city has millions of entries: no search per observation).
+std::unordered_map<int, const core::Marker*> byId(const core::MarkerMap& map) {
+  std::unordered_map<int, const core::Marker*> ids;
+  ids.reserve(map.size());
+  for (const auto& m : map) ids.emplace(m.id, &m);
+  return ids;
 }
 
 /// Range and bearing from the truth pose to (x, y).
@@ -154,6 +157,11 @@ NoiseFit fitAgainstTruth(const Recording& r, const FitOptions& opt) {
     f.notes.push_back("no ground truth: nothing fitted");
     return f;
   }
+  const auto ids = byId(r.map);
+  auto find = [&ids](int id) -> const core::Marker* {
+    const auto it = ids.find(id);
+    return it == ids.end() ? nullptr : it->second;
+  };
   std::vector<double> range, bearing;
   int64_t unknown = 0, not_in_map = 0;
   for (const auto& o : r.landmarks) {
@@ -161,7 +169,7 @@ NoiseFit fitAgainstTruth(const Recording& r, const FitOptions& opt) {
       ++unknown;
       continue;
     }
-    const core::Marker* m = find(r.map, o.landmark_id);
+    const core::Marker* m = find(o.landmark_id);
     const auto p = m ? truthAt(r.truth, o.utime, max_gap) : std::nullopt;
     if (!m) ++not_in_map;
     if (!p) continue;
@@ -180,7 +188,7 @@ NoiseFit fitAgainstTruth(const Recording& r, const FitOptions& opt) {
   std::vector<double> beacon;
   std::map<int, std::vector<double>> by_id;
   for (const auto& b : r.beacons) {
-    const core::Marker* m = find(r.map, b.beacon_id);
+    const core::Marker* m = find(b.beacon_id);
     const auto p = m ? truthAt(r.truth, b.utime, max_gap) : std::nullopt;
     if (!p) continue;
     const double e = b.range - std::hypot(m->x - p->x, m->y - p->y);
