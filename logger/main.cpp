@@ -24,25 +24,25 @@ int main(int argc, char** argv) {
   CLI::App app{"lcmloc-logger: records LCM channels to log files that lcm-logplayer plays.\n"
                "SIGINT/SIGTERM: write what is queued, close and exit; SIGHUP: start a new file (one that cannot be "
                "opened is reported, and recording goes on into the current file; tried again at the next SIGHUP)."};
-  common::CommonOptions opts;
-  common::addCommonOptions(app, opts);
+  app::CommonOptions opts;
+  app::addCommonOptions(app, opts);
   logger::LoggerFlags flags;
   logger::addLoggerFlags(app, flags);
 
-  return common::runProcess(app, argc, argv, opts, "lcmloc-logger", [&] {
-    const auto cfg = common::loadSystemConfig(opts.config);
+  return app::runProcess(app, argc, argv, opts, "lcmloc-logger", [&] {
+    const auto cfg = app::loadSystemConfig(opts.config);
     struct sigaction sa {};
     sa.sa_handler = onHup;
     sigemptyset(&sa.sa_mask);
     sigaction(SIGHUP, &sa, nullptr);  // no SA_RESTART: the LCM wait returns at once
     std::signal(SIGXFSZ, SIG_IGN);     // a file size limit becomes EFBIG, handled like a full disk
     const logger::RecorderOptions ro = logger::recorderOptions(cfg, flags);
-    const std::string url = common::withReceiveBuffer(opts.lcm_url, cfg.logger.recv_buf_size);
+    const std::string url = bus::withReceiveBuffer(opts.lcm_url, cfg.logger.recv_buf_size);
 
-    common::Bus bus(url);
+    bus::Bus bus(url);
     logger::sizeReceiveBuffer(url, cfg.logger.recv_buf_size);
     logger::Recorder recorder(ro, bus);
-    while (!common::stopRequested()) {
+    while (!app::stopRequested()) {
       if (g_hup.exchange(false)) recorder.requestRotate();
       if (!recorder.step(100)) break;  // a write error
     }

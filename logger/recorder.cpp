@@ -63,19 +63,19 @@ void addLoggerFlags(CLI::App& app, LoggerFlags& f) {
           },
           "0 or MB in [0.001, 1e9]"));
   app.add_option("--max-file-seconds", f.max_seconds, "start a new file after this many seconds (overrides logger.max_file_seconds)")
-      ->check(CLI::Range(common::kMaxFileSeconds.lo, common::kMaxFileSeconds.hi));
+      ->check(CLI::Range(app::kMaxFileSeconds.lo, app::kMaxFileSeconds.hi));
   app.add_option("--flush-period", f.flush_period, "fsync period in seconds (overrides logger.flush_period)")
-      ->check(CLI::Range(common::kFlushPeriod.lo, common::kFlushPeriod.hi));
+      ->check(CLI::Range(app::kFlushPeriod.lo, app::kFlushPeriod.hi));
   app.add_flag("--overwrite", f.overwrite,
                "replace an existing log file (default: keep it and write NAME-001.lcmlog, the first free name)");
 }
 
-RecorderOptions recorderOptions(const common::SystemConfig& cfg, const LoggerFlags& f) {
+RecorderOptions recorderOptions(const app::SystemConfig& cfg, const LoggerFlags& f) {
   RecorderOptions ro;
   WriterOptions& wo = ro.writer;
   wo.pattern = f.output.empty() ? cfg.logger.output : f.output;
   if (std::error_code ec; std::filesystem::is_directory(wo.pattern, ec))
-    throw common::ConfigError(f.output.empty() ? cfg.file : "--output", f.output.empty() ? "logger.output" : "",
+    throw app::ConfigError(f.output.empty() ? cfg.file : "--output", f.output.empty() ? "logger.output" : "",
                               "'" + wo.pattern + "' is a directory: give a file name in it, e.g. '" +
                                   (std::filesystem::path(wo.pattern) / "run.lcmlog").string() + "'");
   wo.capacity = static_cast<std::size_t>(cfg.logger.queue_capacity);
@@ -88,7 +88,7 @@ RecorderOptions recorderOptions(const common::SystemConfig& cfg, const LoggerFla
   try {
     std::regex check(ro.regex, std::regex::extended);  // LCM compiles it as a POSIX extended regex
   } catch (const std::regex_error& e) {
-    throw common::ConfigError(f.channels.empty() ? cfg.file : "--channel", f.channels.empty() ? "logger.channels" : "",
+    throw app::ConfigError(f.channels.empty() ? cfg.file : "--channel", f.channels.empty() ? "logger.channels" : "",
                               "bad channel regex '" + ro.regex + "': " + e.what());
   }
   ro.status_channel = cfg.logger.status_channel;
@@ -139,7 +139,7 @@ void sizeReceiveBuffer(const std::string& url, int bytes) {
                  best, bytes, rmem_max, bytes);
 }
 
-Recorder::Recorder(RecorderOptions opts, common::MessageBus& bus)
+Recorder::Recorder(RecorderOptions opts, bus::MessageBus& bus)
     : opts_(std::move(opts)),
       bus_(bus),
       writer_(opts_.writer),
@@ -166,7 +166,7 @@ void Recorder::onMessage(const std::string& ch, const uint8_t* data, std::size_t
   if (!own && other_.received == 0)
     spdlog::warn("more than {} channels: '{}' and every later new channel are counted together as '{}' (their "
                  "sequence gaps are not followed); every message is still recorded",
-                 kMaxChannels, common::printable(ch), kOtherChannels);
+                 kMaxChannels, app::printable(ch), kOtherChannels);
   ++s.received;
   int64_t seq = 0;
   const TypeInfo* type = findType(data, size);
@@ -185,11 +185,11 @@ void Recorder::onMessage(const std::string& ch, const uint8_t* data, std::size_t
       if (!sequences_full_)
         spdlog::warn("more than {} sequences (channels, heartbeat processes): the sequence gaps of '{}' and of "
                      "every later new one are not counted",
-                     kMaxSequences, common::printable(key));
+                     kMaxSequences, app::printable(key));
       sequences_full_ = true;
     } else if (own) {
       const auto gap = gaps_.observe(key, seq);
-      const std::string shown = gap.missing || gap.restarted || gap.ignored ? common::printable(key) : std::string();
+      const std::string shown = gap.missing || gap.restarted || gap.ignored ? app::printable(key) : std::string();
       if (gap.ignored) {
         ++s.ignored;
         s.gaps -= gap.uncounted;
@@ -209,7 +209,7 @@ void Recorder::publishStatus(const std::string& state) {
   if (opts_.status_channel.empty()) return;
   const auto w = writer_.stats();
   lcmloc::logger_status_t m;
-  m.utime = common::wallMicros();
+  m.utime = bus::wallMicros();
   m.seq = status_seq_++;
   m.state = state;
   m.file = w.file;
@@ -233,7 +233,7 @@ void Recorder::publishStatus(const std::string& state) {
   bus_.publish(opts_.status_channel, m);
 }
 
-common::Heartbeat::Counters Recorder::counters() const {
+app::Heartbeat::Counters Recorder::counters() const {
   const auto w = writer_.stats();
   return {{"received", received_},
           {"written", w.written},
@@ -282,13 +282,13 @@ int Recorder::finish() {
   bus_.drain();
   writer_.close();
   summary();
-  return writer_.failed() ? common::kExitRuntimeError : common::kExitOk;
+  return writer_.failed() ? app::kExitRuntimeError : app::kExitOk;
 }
 
 void Recorder::summary() const {
   const auto w = writer_.stats();
   for (const auto& [ch, s] : channels()) {
-    spdlog::info("  {:<24} {:>8} messages, {} sequence gaps, {} dropped{}", common::printable(ch), s.received, s.gaps,
+    spdlog::info("  {:<24} {:>8} messages, {} sequence gaps, {} dropped{}", app::printable(ch), s.received, s.gaps,
                  s.dropped, s.ignored ? fmt::format(", {} seq(s) ignored", s.ignored) : "");
   }
   const auto files = writer_.files();

@@ -1,5 +1,5 @@
 #pragma once
-// lcmloc-logger's behaviour over any common::MessageBus (the logger runs it over LCM, its unit
+// lcmloc-logger's behaviour over any bus::MessageBus (the logger runs it over LCM, its unit
 // tests over the MemoryBus): the subscription only enqueues into a LogWriter (log_writer.hpp),
 // which writes on its own thread, rotating by size, by time and on request (SIGHUP). Per-channel
 // accounting from the messages' seq: upstream gaps apart from the logger's own drops (a full
@@ -43,8 +43,8 @@ struct LoggerFlags {
 };
 void addLoggerFlags(CLI::App& app, LoggerFlags& flags);
 /// The recorder's options from the configuration and the flags (which win). Throws
-/// common::ConfigError for an output that is a directory or a channel regex that does not compile.
-RecorderOptions recorderOptions(const common::SystemConfig& cfg, const LoggerFlags& flags);
+/// app::ConfigError for an output that is a directory or a channel regex that does not compile.
+RecorderOptions recorderOptions(const app::SystemConfig& cfg, const LoggerFlags& flags);
 
 /// One regex for LCM: empty = every channel. LCM anchors it as ^...$, which binds only the
 /// first and the last alternative of A|B: the alternation is grouped, ((A)|(B)).
@@ -62,7 +62,7 @@ struct ChannelStats {
 class Recorder {
  public:
   /// Opens the first file (throws std::runtime_error when it cannot) and subscribes to opts.regex.
-  Recorder(RecorderOptions opts, common::MessageBus& bus);
+  Recorder(RecorderOptions opts, bus::MessageBus& bus);
   Recorder(const Recorder&) = delete;
   Recorder& operator=(const Recorder&) = delete;
 
@@ -83,7 +83,7 @@ class Recorder {
   int64_t gaps() const { return gaps_.gaps(); }
   WriterStats writerStats() const { return writer_.stats(); }
   std::vector<std::string> files() const { return writer_.files(); }
-  common::Heartbeat::Counters counters() const;
+  app::Heartbeat::Counters counters() const;
 
  private:
   void onMessage(const std::string& ch, const uint8_t* data, std::size_t size, int64_t recv);
@@ -91,18 +91,18 @@ class Recorder {
   void summary() const;
 
   RecorderOptions opts_;
-  common::MessageBus& bus_;
+  bus::MessageBus& bus_;
   LogWriter writer_;
   std::map<std::string, ChannelStats> stats_;  ///< the first kMaxChannels channels
   ChannelStats other_;                         ///< the others together
-  common::SeqTracker gaps_;  ///< keyed by channel (HEARTBEAT: by channel and process), kMaxSequences at most
-  common::LogThrottle gap_log_;  ///< every gap is counted; the first 5 per key are logged, then 1 in 1000
+  bus::SeqTracker gaps_;  ///< keyed by channel (HEARTBEAT: by channel and process), kMaxSequences at most
+  app::LogThrottle gap_log_;  ///< every gap is counted; the first 5 per key are logged, then 1 in 1000
   bool sequences_full_ = false;
   int64_t received_ = 0;
   int64_t status_seq_ = 0;
   int64_t awaited_status_seq_ = -1;  ///< our final status, once published: recorded when it comes back
   bool final_status_back_ = false, status_recorded_ = false;
-  common::Heartbeat hb_;
+  app::Heartbeat hb_;
   std::chrono::steady_clock::time_point next_status_;
 };
 

@@ -16,26 +16,26 @@ using namespace lcmloc;
 
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-fault-injector: fault markers, GROUND_TRUTH -> MAGRULER_FAULT + FAULT_EVENTS"};
-  common::CommonOptions opts;
-  common::addCommonOptions(app, opts);
+  app::CommonOptions opts;
+  app::addCommonOptions(app, opts);
 
-  return common::runProcess(app, argc, argv, opts, "lcmloc-fault-injector", [&] {
-    const auto cfg = common::loadSimSystemConfig(opts.config);
+  return app::runProcess(app, argc, argv, opts, "lcmloc-fault-injector", [&] {
+    const auto cfg = simconfig::loadSimSystemConfig(opts.config);
     const auto& sc = cfg.scenario;
     const auto& ch = cfg.channels;
-    std::optional<models::FaultInjector> injector;
-    auto start = [&] { injector.emplace(sc.faults, sc.magruler, models::componentSeed(sc.seed, "faults")); };
+    std::optional<sim::FaultInjector> injector;
+    auto start = [&] { injector.emplace(sc.faults, sc.magruler, sim::componentSeed(sc.seed, "faults")); };
     start();
 
-    common::Bus bus(opts.lcm_url);
+    bus::Bus bus(opts.lcm_url);
     int64_t event_seq = 0;
-    common::TruthDriver driver(
+    drivers::TruthDriver driver(
         bus, cfg, "lcmloc-fault-injector",
         [&](const std::string&, const lcmloc::ground_truth_t& m) {
-          auto f = injector->sample(common::toCore(m));
+          auto f = injector->sample(drivers::toCore(m));
           if (!f) return;
           const int64_t measurement_seq = driver.nextSeq();
-          bus.publish(ch.magruler_fault, common::toLcm(f->reading, measurement_seq));
+          bus.publish(ch.magruler_fault, drivers::toLcm(f->reading, measurement_seq));
           lcmloc::fault_event_t ev;
           ev.utime = f->reading.utime;
           ev.seq = event_seq++;

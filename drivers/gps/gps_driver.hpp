@@ -9,10 +9,10 @@
 namespace lcmloc::gps {
 
 /// The simulated receiver: a fix per GROUND_TRUTH sample due, until a stop is requested.
-int runSim(const common::SimSystemConfig& cfg, common::Bus& bus);
+int runSim(const simconfig::SimSystemConfig& cfg, bus::Bus& bus);
 /// gpsd's reports as they come, until a stop is requested. Throws GpsdError.
-int runGpsd(const common::SimSystemConfig& cfg, common::Bus& bus);
-/// runGpsd or runSim, as cfg.gps_driver.source says. Returns common::kExitOk.
-int run(const common::SimSystemConfig& cfg, common::Bus& bus);
+int runGpsd(const simconfig::SimSystemConfig& cfg, bus::Bus& bus);
+/// runGpsd or runSim, as cfg.gps_driver.source says. Returns app::kExitOk.
+int run(const simconfig::SimSystemConfig& cfg, bus::Bus& bus);
 
 }  // namespace lcmloc::gps

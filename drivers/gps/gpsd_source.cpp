@@ -48,7 +48,7 @@ std::optional<lcmloc::gps_fix_t> GpsdSource::poll(int timeout_ms) {
   if (use_fix_time_ && !time_ok) return std::nullopt;  // a report without time cannot be ordered
   m.utime = use_fix_time_
                 ? static_cast<int64_t>(d.fix.time.tv_sec) * 1000000 + d.fix.time.tv_nsec / 1000
-                : common::wallMicros();
+                : bus::wallMicros();
   const int mode = d.fix.mode;
   m.fix_type = static_cast<int8_t>(mode >= MODE_2D && std::isfinite(d.fix.latitude) &&
                                            std::isfinite(d.fix.longitude)

@@ -9,19 +9,19 @@ using namespace lcmloc;
 
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-gps: GNSS fixes on GPS, simulated (from GROUND_TRUTH) or from gpsd"};
-  common::CommonOptions opts;
-  common::addCommonOptions(app, opts);
+  app::CommonOptions opts;
+  app::addCommonOptions(app, opts);
   std::string source, host, port;
   app.add_option("--source", source, "override gps.source (sim, gpsd)")->check(CLI::IsMember({"sim", "gpsd"}));
   app.add_option("--gpsd-host", host, "override gps.gpsd_host");
   app.add_option("--gpsd-port", port, "override gps.gpsd_port");
 
-  return common::runProcess(app, argc, argv, opts, "lcmloc-gps", [&] {
-    auto cfg = common::loadSimSystemConfig(opts.config);
+  return app::runProcess(app, argc, argv, opts, "lcmloc-gps", [&] {
+    auto cfg = simconfig::loadSimSystemConfig(opts.config);
     if (!source.empty()) cfg.gps_driver.source = source;
     if (!host.empty()) cfg.gps_driver.gpsd_host = host;
     if (!port.empty()) cfg.gps_driver.gpsd_port = port;
-    common::Bus bus(opts.lcm_url);
+    bus::Bus bus(opts.lcm_url);
     return gps::run(cfg, bus);
   });
 }

@@ -19,35 +19,35 @@ using namespace lcmloc;
 
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-imu: simulated IMU (accel, gyro, mag), GROUND_TRUTH -> IMU"};
-  common::CommonOptions opts;
-  common::addCommonOptions(app, opts);
+  app::CommonOptions opts;
+  app::addCommonOptions(app, opts);
   double rate = 0.0;
-  app.add_option("--rate", rate, "override imu.rate_hz [Hz]")->check(CLI::Range(common::kImuRateHz.lo, common::kImuRateHz.hi));
+  app.add_option("--rate", rate, "override imu.rate_hz [Hz]")->check(CLI::Range(simconfig::kImuRateHz.lo, simconfig::kImuRateHz.hi));
 
-  return common::runProcess(app, argc, argv, opts, "lcmloc-imu", [&] {
-    auto cfg = common::loadSimSystemConfig(opts.config);
+  return app::runProcess(app, argc, argv, opts, "lcmloc-imu", [&] {
+    auto cfg = simconfig::loadSimSystemConfig(opts.config);
     auto& sc = cfg.scenario;
     if (rate > 0) {
       sc.imu.rate_hz = rate;
-      common::checkSampledRate(rate, sc, "--rate", "imu.rate_hz");
+      simconfig::checkSampledRate(rate, sc, "--rate", "imu.rate_hz");
     }
-    std::optional<models::ImuSensor> sensor;
-    auto start = [&] { sensor.emplace(sc.imu, sc.vehicle.wheelbase, models::componentSeed(sc.seed, "imu")); };
+    std::optional<sim::ImuSensor> sensor;
+    auto start = [&] { sensor.emplace(sc.imu, sc.vehicle.wheelbase, sim::componentSeed(sc.seed, "imu")); };
     start();
 
-    common::Bus bus(opts.lcm_url);
+    bus::Bus bus(opts.lcm_url);
     int64_t saturated = 0;
     const double range = sc.imu.accel_range;
-    common::TruthDriver driver(
+    drivers::TruthDriver driver(
         bus, cfg, "lcmloc-imu",
         [&](const std::string&, const lcmloc::ground_truth_t& m) {
-          if (auto s = sensor->sample(common::toCore(m))) {
+          if (auto s = sensor->sample(drivers::toCore(m))) {
             if (range > 0 && s->accel.cwiseAbs().maxCoeff() >= range && saturated++ < 5)
               spdlog::warn("accelerometer saturated at utime {} (range {} m/s^2)", s->utime, range);
-            bus.publish(cfg.channels.imu, common::toLcm(*s, driver.nextSeq()));
+            bus.publish(cfg.channels.imu, drivers::toLcm(*s, driver.nextSeq()));
           }
         },
-        start, [&] { return common::Heartbeat::Counters{{"saturated", saturated}}; });
+        start, [&] { return app::Heartbeat::Counters{{"saturated", saturated}}; });
     spdlog::info("{} -> {} at {} Hz, declination {} rad, accel range {} m/s^2", cfg.channels.ground_truth,
                  cfg.channels.imu, sc.imu.rate_hz, sc.imu.declination, range);
     return driver.run([&] { return fmt::format("{} IMU samples out ({} saturated)", driver.published(), saturated); });

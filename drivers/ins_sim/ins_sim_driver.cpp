@@ -12,20 +12,20 @@
 
 namespace lcmloc::ins_sim {
 
-int run(const common::SimSystemConfig& cfg, const models::InsSimConfig& ic, double factor, common::Bus& bus) {
-  models::InsSim sim(ic, cfg.scenario.vehicle.start_utime);
+int run(const simconfig::SimSystemConfig& cfg, const sim::InsSimConfig& ic, double factor, bus::Bus& bus) {
+  sim::InsSim sim(ic, cfg.scenario.vehicle.start_utime);
   int64_t truth_seq = 0, imu_seq = 0, odo_seq = 0;
-  common::Heartbeat hb(bus, cfg.channels.heartbeat, "lcmloc-ins-sim", [&] {
-    return common::Heartbeat::Counters{{"truth", truth_seq}, {"imu", imu_seq}, {"odometry", odo_seq}};
+  app::Heartbeat hb(bus, cfg.channels.heartbeat, "lcmloc-ins-sim", [&] {
+    return app::Heartbeat::Counters{{"truth", truth_seq}, {"imu", imu_seq}, {"odometry", odo_seq}};
   });
   hb.tick();
   spdlog::info("ins_sim seed {}: {:.0f} s, profile {} (start {}), {} Hz, odometry every {} sample(s), "
                "real-time factor {}",
                ic.seed, ic.duration, ic.profile, ic.start, ic.rate_hz, ic.odometry_divider, factor);
-  common::Pacer pacer(factor);
+  app::Pacer pacer(factor);
   bool running = pacer.waitUntil(cfg.scenario.vehicle.start_utime, [&] { hb.tick(); });
-  if (running) bus.publish(cfg.channels.ground_truth, common::toLcm(sim.initial().truth, truth_seq++));
-  models::InsSimStep s;
+  if (running) bus.publish(cfg.channels.ground_truth, drivers::toLcm(sim.initial().truth, truth_seq++));
+  sim::InsSimStep s;
   double last_report = 0.0;
   while (running && !sim.finished()) {
     s = sim.step();
@@ -34,23 +34,23 @@ int run(const common::SimSystemConfig& cfg, const models::InsSimConfig& ic, doub
       break;
     }
     // Odometry (rank before IMU at equal utime in the fusion engine) then IMU then truth.
-    if (s.odometry) bus.publish(cfg.channels.odometry, common::toLcm(*s.odometry, odo_seq++));
-    if (s.imu) bus.publish(cfg.channels.imu, common::toLcm(*s.imu, imu_seq++));
-    bus.publish(cfg.channels.ground_truth, common::toLcm(s.truth, truth_seq++));
+    if (s.odometry) bus.publish(cfg.channels.odometry, drivers::toLcm(*s.odometry, odo_seq++));
+    if (s.imu) bus.publish(cfg.channels.imu, drivers::toLcm(*s.imu, imu_seq++));
+    bus.publish(cfg.channels.ground_truth, drivers::toLcm(s.truth, truth_seq++));
     if (sim.time() - last_report >= 600.0) {
       last_report = sim.time();
       spdlog::info("t = {:.0f} s, {:.1f} km travelled", sim.time(), s.truth.distance / 1000.0);
     }
   }
   if (!running) {
-    spdlog::info("stopped by signal {} at t = {:.1f} s", common::stopSignal(), sim.time());
+    spdlog::info("stopped by signal {} at t = {:.1f} s", app::stopSignal(), sim.time());
     hb.publish("stopping");
-    return common::kExitOk;
+    return app::kExitOk;
   }
   spdlog::info("run over: {:.0f} s, {:.2f} km, {} IMU samples, {} odometry increments", sim.time(),
                s.truth.distance / 1000.0, imu_seq, odo_seq);
   hb.publish("stopping");
-  return common::kExitOk;
+  return app::kExitOk;
 }
 
 }  // namespace lcmloc::ins_sim

@@ -10,7 +10,7 @@ namespace lcmloc::ins_sim {
 
 /// Runs the simulation ic (start time from cfg.scenario.vehicle, channels from cfg) on bus at the
 /// real-time factor (0 = as fast as possible) until it is over or a stop is requested. Returns
-/// common::kExitOk.
-int run(const common::SimSystemConfig& cfg, const models::InsSimConfig& ic, double factor, common::Bus& bus);
+/// app::kExitOk.
+int run(const simconfig::SimSystemConfig& cfg, const sim::InsSimConfig& ic, double factor, bus::Bus& bus);
 
 }  // namespace lcmloc::ins_sim

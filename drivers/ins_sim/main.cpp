@@ -9,22 +9,22 @@ using namespace lcmloc;
 
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-ins-sim: odometry/INS simulation (seeds/004 §II), publishes GROUND_TRUTH, IMU, ODOMETRY"};
-  common::CommonOptions opts;
-  common::addCommonOptions(app, opts);
+  app::CommonOptions opts;
+  app::addCommonOptions(app, opts);
   double rtf = -1.0, duration = 0.0;
   uint64_t seed = 0;
   app.add_option("--realtime-factor", rtf, "override scenario.realtime_factor (0 = as fast as possible)")
-      ->check(CLI::Range(common::kRealtimeFactor.lo, common::kRealtimeFactor.hi));
+      ->check(CLI::Range(simconfig::kRealtimeFactor.lo, simconfig::kRealtimeFactor.hi));
   app.add_option("--duration", duration, "override ins_sim.duration [s]")
-      ->check(CLI::Range(common::kInsSimDuration.lo, common::kInsSimDuration.hi));
-  app.add_option("--seed", seed, "override ins_sim.seed")->check(common::seed());
+      ->check(CLI::Range(simconfig::kInsSimDuration.lo, simconfig::kInsSimDuration.hi));
+  app.add_option("--seed", seed, "override ins_sim.seed")->check(app::seed());
 
-  return common::runProcess(app, argc, argv, opts, "lcmloc-ins-sim", [&] {
-    const auto cfg = common::loadSimSystemConfig(opts.config);
+  return app::runProcess(app, argc, argv, opts, "lcmloc-ins-sim", [&] {
+    const auto cfg = simconfig::loadSimSystemConfig(opts.config);
     auto ic = cfg.ins_sim;
     if (duration > 0) ic.duration = duration;
     if (seed) ic.seed = seed;
-    common::Bus bus(opts.lcm_url);
+    bus::Bus bus(opts.lcm_url);
     return ins_sim::run(cfg, ic, rtf >= 0.0 ? rtf : cfg.scenario.realtime_factor, bus);
   });
 }

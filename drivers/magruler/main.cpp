@@ -17,32 +17,32 @@ using namespace lcmloc;
 
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-magruler: simulated magnetic ruler, GROUND_TRUTH -> MAGRULER"};
-  common::CommonOptions opts;
-  common::addCommonOptions(app, opts);
+  app::CommonOptions opts;
+  app::addCommonOptions(app, opts);
 
-  return common::runProcess(app, argc, argv, opts, "lcmloc-magruler", [&] {
-    const auto cfg = common::loadSimSystemConfig(opts.config);
+  return app::runProcess(app, argc, argv, opts, "lcmloc-magruler", [&] {
+    const auto cfg = simconfig::loadSimSystemConfig(opts.config);
     const auto& sc = cfg.scenario;
     const std::string out = cfg.channels.magruler.empty() ? "MAGRULER" : cfg.channels.magruler.front();
-    const auto map = models::makeMarkerMap(models::Path(sc.path), sc.markers);
-    std::optional<models::MagneticRuler> ruler;
-    auto start = [&] { ruler.emplace(sc.magruler, map, models::componentSeed(sc.seed, "magruler")); };
+    const auto map = sim::makeMarkerMap(sim::Path(sc.path), sc.markers);
+    std::optional<sim::MagneticRuler> ruler;
+    auto start = [&] { ruler.emplace(sc.magruler, map, sim::componentSeed(sc.seed, "magruler")); };
     start();
 
-    common::Bus bus(opts.lcm_url);
+    bus::Bus bus(opts.lcm_url);
     int64_t detections = 0;
-    common::TruthDriver driver(
+    drivers::TruthDriver driver(
         bus, cfg, "lcmloc-magruler",
         [&](const std::string&, const lcmloc::ground_truth_t& m) {
-          if (auto r = ruler->sample(common::toCore(m))) {
+          if (auto r = ruler->sample(drivers::toCore(m))) {
             if (r->detected) {
               ++detections;
               spdlog::debug("marker detected at utime {}: d_m = {:.4f} m", r->utime, r->lateral_offset);
             }
-            bus.publish(out, common::toLcm(*r, driver.nextSeq()));
+            bus.publish(out, drivers::toLcm(*r, driver.nextSeq()));
           }
         },
-        start, [&] { return common::Heartbeat::Counters{{"detections", detections}}; });
+        start, [&] { return app::Heartbeat::Counters{{"detections", detections}}; });
     spdlog::info("{} -> {}: {} markers in the map, {} sensors", cfg.channels.ground_truth, out, map.size(),
                  sc.magruler.num_sensors);
     return driver.run([&] { return fmt::format("{} readings out ({} detections)", driver.published(), detections); });

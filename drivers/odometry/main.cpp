@@ -15,22 +15,22 @@ using namespace lcmloc;
 
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-odometry: simulated encoders, GROUND_TRUTH -> ODOMETRY"};
-  common::CommonOptions opts;
-  common::addCommonOptions(app, opts);
+  app::CommonOptions opts;
+  app::addCommonOptions(app, opts);
 
-  return common::runProcess(app, argc, argv, opts, "lcmloc-odometry", [&] {
-    const auto cfg = common::loadSimSystemConfig(opts.config);
+  return app::runProcess(app, argc, argv, opts, "lcmloc-odometry", [&] {
+    const auto cfg = simconfig::loadSimSystemConfig(opts.config);
     const auto& sc = cfg.scenario;
-    std::optional<models::OdometrySensor> sensor;
-    auto start = [&] { sensor.emplace(sc.odometry, sc.vehicle.wheelbase, models::componentSeed(sc.seed, "odometry")); };
+    std::optional<sim::OdometrySensor> sensor;
+    auto start = [&] { sensor.emplace(sc.odometry, sc.vehicle.wheelbase, sim::componentSeed(sc.seed, "odometry")); };
     start();
 
-    common::Bus bus(opts.lcm_url);
-    common::TruthDriver driver(
+    bus::Bus bus(opts.lcm_url);
+    drivers::TruthDriver driver(
         bus, cfg, "lcmloc-odometry",
         [&](const std::string&, const lcmloc::ground_truth_t& m) {
-          if (auto s = sensor->sample(common::toCore(m)))
-            bus.publish(cfg.channels.odometry, common::toLcm(*s, driver.nextSeq()));
+          if (auto s = sensor->sample(drivers::toCore(m)))
+            bus.publish(cfg.channels.odometry, drivers::toLcm(*s, driver.nextSeq()));
         },
         start);
     spdlog::info("{} -> {} at {} Hz, scale error {}, steering bias {} rad", cfg.channels.ground_truth,

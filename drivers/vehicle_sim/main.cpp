@@ -18,37 +18,37 @@ using namespace lcmloc;
 
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-sim: simulated vehicle, publishes ground truth (GROUND_TRUTH)"};
-  common::CommonOptions opts;
-  common::addCommonOptions(app, opts);
+  app::CommonOptions opts;
+  app::addCommonOptions(app, opts);
   double rtf = -1.0;
   app.add_option("--realtime-factor", rtf, "override scenario.realtime_factor (0 = as fast as possible)")
-      ->check(CLI::Range(common::kRealtimeFactor.lo, common::kRealtimeFactor.hi));
+      ->check(CLI::Range(simconfig::kRealtimeFactor.lo, simconfig::kRealtimeFactor.hi));
   std::string map_out;
   app.add_option("--write-map", map_out, "write the scenario's markers as a map file (fusion.map_file) and exit");
-  return common::runProcess(app, argc, argv, opts, "lcmloc-sim", [&] {
-    const auto cfg = common::loadSimSystemConfig(opts.config);
+  return app::runProcess(app, argc, argv, opts, "lcmloc-sim", [&] {
+    const auto cfg = simconfig::loadSimSystemConfig(opts.config);
     if (!map_out.empty()) {
-      common::writeScenarioMap(cfg, map_out);
-      return common::kExitOk;
+      drivers::writeScenarioMap(cfg, map_out);
+      return app::kExitOk;
     }
     const auto& sc = cfg.scenario;
     const double factor = rtf >= 0.0 ? rtf : sc.realtime_factor;
 
-    const models::Path path(sc.path);
-    const double stop_at = models::stopArcLength(sc, path.length());
-    models::VehicleSim vehicle(sc.vehicle, path, stop_at, models::componentSeed(sc.seed, "vehicle"));
+    const sim::Path path(sc.path);
+    const double stop_at = sim::stopArcLength(sc, path.length());
+    sim::VehicleSim vehicle(sc.vehicle, path, stop_at, sim::componentSeed(sc.seed, "vehicle"));
 
-    common::Bus bus(opts.lcm_url);
+    bus::Bus bus(opts.lcm_url);
     int64_t seq = 0;
-    common::Heartbeat hb(bus, cfg.channels.heartbeat, "lcmloc-sim", [&] { return common::Heartbeat::Counters{{"published", seq}}; });
+    app::Heartbeat hb(bus, cfg.channels.heartbeat, "lcmloc-sim", [&] { return app::Heartbeat::Counters{{"published", seq}}; });
     hb.tick();
     spdlog::info("scenario '{}' seed {}: {:.1f} m of path at {:.1f} m/s, real-time factor {}",
                  sc.name, sc.seed, stop_at, sc.vehicle.speed, factor);
 
-    common::Pacer pacer(factor);
-    auto publish = [&](const models::TruthState& s) {
+    app::Pacer pacer(factor);
+    auto publish = [&](const sim::TruthState& s) {
       if (!pacer.waitUntil(s.utime, [&] { hb.tick(); })) return false;
-      bus.publish(cfg.channels.ground_truth, common::toLcm(s, seq++));
+      bus.publish(cfg.channels.ground_truth, drivers::toLcm(s, seq++));
       return true;
     };
     bool running = publish(vehicle.state());
@@ -56,11 +56,11 @@ int main(int argc, char** argv) {
 
     const auto& s = vehicle.state();
     if (!running)
-      spdlog::info("stopped by signal {} after {} samples", common::stopSignal(), seq);
+      spdlog::info("stopped by signal {} after {} samples", app::stopSignal(), seq);
     else
       spdlog::info("run over: {} samples, {:.2f} m travelled, final pose ({:.3f}, {:.3f}, {:.3f})",
                    seq, s.distance, s.x, s.y, s.heading);
     hb.publish("stopping");
-    return common::kExitOk;
+    return app::kExitOk;
   });
 }

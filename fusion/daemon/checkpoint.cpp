@@ -16,7 +16,7 @@
 namespace lcmloc::fusion {
 
 void writeCheckpoint(const std::string& path, const core::FilterState& state, const std::string& filter) {
-  const lcmloc::pose_t m = common::toLcm(state, filter, 0);
+  const lcmloc::pose_t m = bus::toLcm(state, filter, 0);
   std::vector<uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
   if (m.encode(buf.data(), 0, static_cast<int>(buf.size())) < 0)
     throw std::runtime_error("checkpoint: cannot encode the state");
@@ -42,7 +42,7 @@ std::string checkpointUnwritable(const std::string& path) {
 
 std::optional<Checkpoint> readCheckpoint(const std::string& path) {
   // (a directory, /dev/zero or /dev/full: not a checkpoint, and not to be read to the end)
-  if (const std::string problem = common::fileProblem(path, 1u << 20); problem == common::kNoSuchFile)
+  if (const std::string problem = app::fileProblem(path, 1u << 20); problem == app::kNoSuchFile)
     return std::nullopt;
   else if (!problem.empty())
     throw std::runtime_error("checkpoint '" + path + "': " + problem + " (a checkpoint is a file of at most 1 MB)");
@@ -59,7 +59,7 @@ std::optional<Checkpoint> readCheckpoint(const std::string& path) {
   if (!ok || m.dim < 3 || static_cast<int>(m.state.size()) != m.dim)
     throw std::runtime_error("checkpoint '" + path + "' is not a valid checkpoint (an encoded pose_t)");
   Checkpoint c;
-  c.state = common::toCore(m);
+  c.state = bus::toCore(m);
   c.filter = m.filter;
   if (const std::string why = core::unusableState(c.state); !why.empty())
     throw std::runtime_error("checkpoint '" + path + "' holds a state no filter can start from: " + why);

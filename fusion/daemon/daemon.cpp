@@ -36,24 +36,24 @@ std::string upper(std::string s) {
 
 }  // namespace
 
-FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& bus)
+FusionDaemon::FusionDaemon(const app::SystemConfig& cfg, bus::MessageBus& bus)
     : FusionDaemon(cfg, bus, Options{}) {}
 
-FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& bus, Options opts)
+FusionDaemon::FusionDaemon(const app::SystemConfig& cfg, bus::MessageBus& bus, Options opts)
     : cfg_(cfg), bus_(bus), intake_(cfg), hold_(opts.hold) {
   echo_ = opts.echo;
   status_period_us_ = static_cast<int64_t>(std::llround(cfg.fusion.status_period * 1e6));
   if (echo_) echoes_.resize(kEchoSeqs);
-  core::EngineConfig ec = common::engineConfig(cfg);
+  core::EngineConfig ec = app::engineConfig(cfg);
   max_jump_us_ = ec.max_time_jump_us;
   core::EngineOutputs out;
   out.on_state = [this](const std::string& f, bool active, const core::FilterState& s) { publishState(f, active, s); };
   out.on_decision = [this](const std::string& f, bool, const core::GateDecision& d) {
-    bus_.publish(cfg_.channels.gate, common::toLcm(d, f, out_seq_[cfg_.channels.gate]++));
+    bus_.publish(cfg_.channels.gate, bus::toLcm(d, f, out_seq_[cfg_.channels.gate]++));
     // Every decision is on the GATE channel; a rejection is a debug line (a replay of a real
     // recording rejects thousands), a lock-out an event.
     if (!d.accepted && d.reason == "gate")
-      spdlog::debug("{}: {} seq {} rejected by the gate (tau = {:.2f} > {:.3f})", f, common::printable(d.sensor),
+      spdlog::debug("{}: {} seq {} rejected by the gate (tau = {:.2f} > {:.3f})", f, app::printable(d.sensor),
                    d.measurement_seq, d.mahalanobis, d.gate);
   };
   out.on_event = [this](const core::EngineEvent& e) {
@@ -63,30 +63,30 @@ FusionDaemon::FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& 
       case core::EventKind::TooOld:
         ++rejected_;
         if (log_throttle_.allow("too_old"))
-          spdlog::warn("rejected input: {} (older than the {:.3f} s reorder window)", common::printable(detail),
+          spdlog::warn("rejected input: {} (older than the {:.3f} s reorder window)", app::printable(detail),
                        cfg_.fusion.reorder_window);
         publishStatus("rejected_input", "too old: " + detail, e.utime);
         return;
       case core::EventKind::TooNew:  // the time-jump guard dropped it (fusion.max_time_jump)
         ++rejected_;
-        if (log_throttle_.allow("too_new")) spdlog::warn("rejected input: {}", common::printable(detail));
+        if (log_throttle_.allow("too_new")) spdlog::warn("rejected input: {}", app::printable(detail));
         publishStatus("rejected_input", "too new: " + detail, last_utime_);
         return;
       case core::EventKind::OdometryGap:
       case core::EventKind::Ambiguous:  // the estimate may be off: a warning
-        spdlog::warn("{}: {}", core::eventName(e.kind), common::printable(detail));
+        spdlog::warn("{}: {}", core::eventName(e.kind), app::printable(detail));
         break;
       default:
-        spdlog::info("{}: {}", core::eventName(e.kind), common::printable(detail));
+        spdlog::info("{}: {}", core::eventName(e.kind), app::printable(detail));
     }
     publishStatus(core::eventName(e.kind), detail, e.utime);
   };
   core::MarkerMap map;  // from the map file only ("" = no map); the simulator writes its own with lcmloc-sim --write-map
   if (!cfg.fusion.map_file.empty()) {
     try {
-      map = common::csv::loadMap(cfg.fusion.map_file);
+      map = app::csv::loadMap(cfg.fusion.map_file);
     } catch (const std::runtime_error& e) {  // a configuration error: the key that names the file
-      throw common::ConfigError(cfg.file, "fusion.map_file", e.what());
+      throw app::ConfigError(cfg.file, "fusion.map_file", e.what());
     }
   }
   const std::size_t markers = map.size();
@@ -131,7 +131,7 @@ void FusionDaemon::release(const std::optional<core::FilterState>& init, const s
   if (held_dropped_ > 0)
     detail += fmt::format("; {} inputs queued while waiting were dropped, the oldest first (more than {} came in)",
                           held_dropped_, kMaxHeld);
-  spdlog::info("started: {}", common::printable(detail));
+  spdlog::info("started: {}", app::printable(detail));
   publishStatus("started", detail, utime);
   auto held = std::move(held_);
   held_.clear();
@@ -157,33 +157,33 @@ bool FusionDaemon::checkEcho(const lcmloc::pose_t& m) {
         "another process publishes on {} (seq {}, utime {}, filter {}; this daemon's next seq is {}): a second fusion "
         "daemon on this bus? Its poses interleave with these; stop one ({} so far)",
         cfg_.channels.pose, m.seq, m.utime, m.filter, pose_seqs_, foreign_outputs_);
-    spdlog::warn("{}", common::printable(detail));
+    spdlog::warn("{}", app::printable(detail));
     publishStatus("foreign_output", detail, last_utime_);
   }
   return true;
 }
 
 void FusionDaemon::warn(const std::string& event, const std::string& detail) {
-  spdlog::warn("{}", common::printable(detail));
+  spdlog::warn("{}", app::printable(detail));
   publishStatus(event, detail, last_utime_);
 }
 
 void FusionDaemon::reportSeq(const IntakeItem& item) {
-  const common::SeqGap& gap = item.gap;
+  const bus::SeqGap& gap = item.gap;
   const std::string& ch = item.input.channel;
   gaps_ += gap.missing - gap.uncounted;  // (the tracker's count: a small jump is taken back when it was an outlier)
   if (gap.ignored) {  // a lone corrupt seq: neither a loss nor a restart (and maybe a gap too)
     const std::string what = gap.describeIgnored(ch);
-    if (log_throttle_.allow("ignored:" + ch)) spdlog::warn("{}", common::printable(what));
+    if (log_throttle_.allow("ignored:" + ch)) spdlog::warn("{}", app::printable(what));
     publishStatus("seq_ignored", what, last_utime_);
   }
   if (gap) {
     const std::string what = gap.describe(ch);
-    if (log_throttle_.allow("gap:" + ch)) spdlog::warn("{}", common::printable(what));
+    if (log_throttle_.allow("gap:" + ch)) spdlog::warn("{}", app::printable(what));
     publishStatus("drop", what, last_utime_);
   } else if (gap.restarted) {
     const std::string what = gap.describeRestart(ch);
-    if (log_throttle_.allow("restart:" + ch)) spdlog::warn("{}", common::printable(what));
+    if (log_throttle_.allow("restart:" + ch)) spdlog::warn("{}", app::printable(what));
     publishStatus("source_restart", what, last_utime_);
   }
 }
@@ -191,13 +191,13 @@ void FusionDaemon::reportSeq(const IntakeItem& item) {
 void FusionDaemon::reject(const std::string& ch, int64_t seq, int64_t utime, const std::string& why) {
   ++rejected_;
   const std::string detail = ch + " seq " + std::to_string(seq) + ": " + why;
-  if (log_throttle_.allow("reject:" + ch)) spdlog::warn("rejected input: {}", common::printable(detail));
+  if (log_throttle_.allow("reject:" + ch)) spdlog::warn("rejected input: {}", app::printable(detail));
   publishStatus("rejected_input", detail, utime > 0 ? utime : last_utime_);
 }
 
 void FusionDaemon::decodeError(const std::string& ch, const std::string& why) {
   ++rejected_;
-  if (log_throttle_.allow("decode:" + ch)) spdlog::warn("rejected input: {}: {}", common::printable(ch), why);
+  if (log_throttle_.allow("decode:" + ch)) spdlog::warn("rejected input: {}: {}", app::printable(ch), why);
   publishStatus("rejected_input", ch + ": " + why, last_utime_);
 }
 
@@ -229,7 +229,7 @@ void FusionDaemon::checkResumeGap(const core::EngineInput& in) {
       "{} seq {}: the first input comes {:.3f} s of message time after the state this daemon started from (utime {}): "
       "the motion in between was not seen (the filters bridge it: odometry_gap)",
       in.channel, in.seq, (static_cast<double>(in.utime) - static_cast<double>(*init_utime_)) * 1e-6, *init_utime_);
-  spdlog::warn("{}", common::printable(detail));
+  spdlog::warn("{}", app::printable(detail));
   publishStatus("resume_gap", detail, in.utime);
 }
 
@@ -255,7 +255,7 @@ void FusionDaemon::push(core::EngineInput&& in) {
     reject(in.channel, in.seq, in.utime, "older than the reorder window");  // normally reported by the engine
 }
 
-DaemonIntake::DaemonIntake(const common::SystemConfig& cfg) : cfg_(cfg), frame_(cfg.datum) {}
+DaemonIntake::DaemonIntake(const app::SystemConfig& cfg) : cfg_(cfg), frame_(cfg.datum) {}
 
 void DaemonIntake::start(IntakeItem& out, IntakeItem::Kind kind, const std::string& ch, int64_t seq, int64_t utime) {
   out.kind = kind;
@@ -268,7 +268,7 @@ void DaemonIntake::start(IntakeItem& out, IntakeItem::Kind kind, const std::stri
 void DaemonIntake::tracked(IntakeItem& out, const std::string& ch, int64_t seq, int64_t utime) {
   start(out, IntakeItem::Kind::Nothing, ch, seq, utime);
   if (gaps_.follows(ch, seq)) return;
-  const common::SeqGap gap = gaps_.observe(ch, seq);
+  const bus::SeqGap gap = gaps_.observe(ch, seq);
   if (gap.missing > 0 || gap.uncounted > 0 || gap.ignored || gap.restarted) {
     out.seq_event = true;
     out.gap = gap;
@@ -293,10 +293,10 @@ void DaemonIntake::control(const std::string& ch, const lcmloc::fusion_control_t
       try {
         YAML::Node params = m.parameters.empty() ? YAML::Node() : YAML::Load(m.parameters);
         if (!m.filter.empty()) params["type"] = m.filter;
-        fc = common::parseFilterConfig(params, fc, ch, "parameters");
+        fc = app::parseFilterConfig(params, fc, ch, "parameters");
       } catch (const std::exception& e) {
         out.kind = IntakeItem::Kind::Refused;
-        out.note = "refused switch to '" + common::printable(m.filter) + "': " + common::printable(e.what());
+        out.note = "refused switch to '" + app::printable(m.filter) + "': " + app::printable(e.what());
         out.why = ch + " seq " + std::to_string(m.seq) + ": switch to '" + m.filter + "': " + e.what();
         return;
       }
@@ -339,7 +339,7 @@ void FusionDaemon::publishState(const std::string& filter, bool active, const co
     po = &pose_out_.back();
   }
   const int64_t seq = (*po->seq)++;
-  const std::size_t size = common::encodePose(s, filter, seq, po->bytes);
+  const std::size_t size = bus::encodePose(s, filter, seq, po->bytes);
   bus_.publishRaw(po->channel, po->bytes.data(), size);
   if (!active) return;
   if (echo_) {
@@ -366,7 +366,7 @@ void FusionDaemon::publishStatus(const std::string& event, const std::string& de
   m.filter = engine_->activeFilter();
   m.status = static_cast<int32_t>(last_status_);
   m.event = event;
-  m.detail = common::printable(detail);  // names from the bus inside: no control characters on the bus again
+  m.detail = app::printable(detail);  // names from the bus inside: no control characters on the bus again
   m.messages_in = messages_in_;
   m.messages_used = engine_->counters().processed;
   m.messages_rejected = rejected_;
@@ -386,7 +386,7 @@ void FusionDaemon::shutdown() {
   spdlog::info("stopping: {}", detail);
 }
 
-common::Heartbeat::Counters FusionDaemon::counters() const {
+app::Heartbeat::Counters FusionDaemon::counters() const {
   const auto c = engine_->counters();
   return {{"in", messages_in_}, {"processed", c.processed}, {"rejected", rejected_},
           {"gaps", gaps_}, {"accepted", c.accepted}, {"gate_rejected", c.rejected}};

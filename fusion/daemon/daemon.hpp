@@ -41,7 +41,7 @@ struct IntakeItem {
   Kind kind = Kind::Nothing;
   bool seq_event = false;   ///< the sequence tracker found a gap, a restart or an ignored seq (gap)
   core::EngineInput input;  ///< channel, seq and utime always; the payload with Kind::Input
-  common::SeqGap gap;       ///< with seq_event: what the sequence tracker found
+  bus::SeqGap gap;       ///< with seq_event: what the sequence tracker found
   std::string why;          ///< Rejected, Refused, DecodeError: the reason
   std::string note;         ///< Refused: the log line
 };
@@ -51,22 +51,22 @@ struct IntakeItem {
 /// thread than the rest of the daemon (the replay's reading thread).
 class DaemonIntake {
  public:
-  explicit DaemonIntake(const common::SystemConfig& cfg);
+  explicit DaemonIntake(const app::SystemConfig& cfg);
   /// Fills `out` (whatever it held before) with what a sensor message is: its seq checked, then
-  /// converted by common::toInput (an input, nothing, or rejected with why). One for every kind
+  /// converted by bus::toInput (an input, nothing, or rejected with why). One for every kind
   /// of sensor input (kSensorInputs).
   template <typename Lcm>
   void take(const std::string& ch, const Lcm& m, IntakeItem& out) {
     tracked(out, ch, m.seq, m.utime);
     out.why.clear();
-    switch (common::toInput(m, common::InputContext{ch, frame_}, out.input.payload, out.why)) {
-      case common::Converted::Input:
+    switch (bus::toInput(m, bus::InputContext{ch, frame_}, out.input.payload, out.why)) {
+      case bus::Converted::Input:
         out.kind = IntakeItem::Kind::Input;
         return;
-      case common::Converted::Refused:
+      case bus::Converted::Refused:
         out.kind = IntakeItem::Kind::Rejected;
         return;
-      case common::Converted::Nothing:  // counted, nothing else
+      case bus::Converted::Nothing:  // counted, nothing else
         return;
     }
   }
@@ -78,12 +78,12 @@ class DaemonIntake {
   /// out for message (ch, seq, utime) of `kind`, its seq checked when tracked.
   void start(IntakeItem& out, IntakeItem::Kind kind, const std::string& ch, int64_t seq, int64_t utime);
   void tracked(IntakeItem& out, const std::string& ch, int64_t seq, int64_t utime);
-  const common::SystemConfig& cfg_;
-  common::SeqTracker gaps_;
-  common::LocalFrame frame_;  ///< lat/lon of GPS fixes -> local metric frame (cfg.datum)
+  const app::SystemConfig& cfg_;
+  bus::SeqTracker gaps_;
+  bus::LocalFrame frame_;  ///< lat/lon of GPS fixes -> local metric frame (cfg.datum)
 };
 
-/// The daemon is written against common::MessageBus: lcmloc-fusion runs it over LCM, the
+/// The daemon is written against bus::MessageBus: lcmloc-fusion runs it over LCM, the
 /// offline replay (lcmloc-replay) over a log file, so both publish the same bytes.
 class FusionDaemon {
  public:
@@ -94,8 +94,8 @@ class FusionDaemon {
     /// Remember what it publishes on POSE, for checkEcho (live only).
     bool echo = false;
   };
-  FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& bus);
-  FusionDaemon(const common::SystemConfig& cfg, common::MessageBus& bus, Options opts);
+  FusionDaemon(const app::SystemConfig& cfg, bus::MessageBus& bus);
+  FusionDaemon(const app::SystemConfig& cfg, bus::MessageBus& bus, Options opts);
   /// What the intake makes of each message the bus hands over goes into the item `slot` returns
   /// for it, instead of to apply() (the offline replay: the bus dispatches, and the intake runs,
   /// on its reading thread; it apply()s the items in their order on its own). Empty: apply() at
@@ -128,7 +128,7 @@ class FusionDaemon {
   void warn(const std::string& event, const std::string& detail);
   /// Processes everything still in the reorder window and publishes a final status.
   void shutdown();
-  common::Heartbeat::Counters counters() const;
+  app::Heartbeat::Counters counters() const;
   /// The active filter's latest state (for checkpoints).
   core::FilterState activeState() const { return engine_->activeState(); }
   std::string activeFilter() const { return engine_->activeFilter(); }
@@ -174,8 +174,8 @@ class FusionDaemon {
   void publishStatus(const std::string& event, const std::string& detail, int64_t utime);
   std::string poseChannel(const std::string& filter, bool active) const;
 
-  const common::SystemConfig& cfg_;
-  common::MessageBus& bus_;
+  const app::SystemConfig& cfg_;
+  bus::MessageBus& bus_;
   std::unique_ptr<core::FusionEngine> engine_;
   /// The intake and slot_ are the replay's reading thread's, the rest its applying thread's.
   DaemonIntake intake_;
@@ -190,7 +190,7 @@ class FusionDaemon {
     bool active = false;
     std::string channel;
     int64_t* seq = nullptr;
-    std::vector<uint8_t> bytes;  ///< common::encodePose's output
+    std::vector<uint8_t> bytes;  ///< bus::encodePose's output
   };
   std::vector<PoseOut> pose_out_;
   /// The last kEchoSeqs POSE this daemon published on the active channel, by seq: a fingerprint
@@ -204,7 +204,7 @@ class FusionDaemon {
   std::vector<Echo> echoes_;
   int64_t pose_seqs_ = 0;  ///< seqs published on the active POSE channel (the next one's seq)
   int64_t foreign_outputs_ = 0;
-  common::LogThrottle log_throttle_;  ///< per kind of problem: first 5, then 1 in 1000
+  app::LogThrottle log_throttle_;  ///< per kind of problem: first 5, then 1 in 1000
   int64_t messages_in_ = 0, rejected_ = 0, last_utime_ = 0, next_status_utime_ = INT64_MIN;
   int64_t status_period_us_ = 0;  ///< fusion.status_period [us]
   core::FilterStatus last_status_ = core::FilterStatus::Uninitialized;

@@ -2,7 +2,7 @@
 // The sensor inputs the fusion daemon takes: one descriptor per kind. Adding a sensor adds its
 // line here; with its lcm type (lcmtypes/, lib/logio's type registry), its core type and
 // InputKind (lib/core: canonical rank, the measurement kind filters are asked about), its
-// converter (common::toInput, lib/bus), its channel key (common::ChannelConfig) and the filters
+// converter (bus::toInput, lib/bus), its channel key (app::ChannelConfig) and the filters
 // that use it, that is all (docs/architecture.md, "Adding an input kind").
 #include <string>
 #include <tuple>
@@ -23,33 +23,33 @@
 namespace lcmloc::fusion {
 
 /// A sensor input kind: messages of type Lcm on the channels `channels` gives, each converted by
-/// common::toInput(const Lcm&, ...) into a Core for the engine, its seq tracked per channel.
+/// bus::toInput(const Lcm&, ...) into a Core for the engine, its seq tracked per channel.
 template <typename Lcm, typename Core>
 struct SensorInput {
   using lcm_type = Lcm;
   using core_type = Core;
   const char* name;  ///< the channels key (channels.<name> in the system file)
-  std::vector<std::string> (*channels)(const common::ChannelConfig&);
+  std::vector<std::string> (*channels)(const app::ChannelConfig&);
 };
 
 namespace detail {
-template <typename Lcm, typename Core, std::string common::ChannelConfig::*channel>
+template <typename Lcm, typename Core, std::string app::ChannelConfig::*channel>
 SensorInput<Lcm, Core> one(const char* name) {
-  return {name, [](const common::ChannelConfig& c) { return std::vector<std::string>{c.*channel}; }};
+  return {name, [](const app::ChannelConfig& c) { return std::vector<std::string>{c.*channel}; }};
 }
 }  // namespace detail
 
 /// Every sensor input kind, in the order the daemon subscribes to them (FUSION_CONTROL, a
 /// command rather than a sensor, is the daemon's own).
 inline const auto kSensorInputs = std::make_tuple(
-    detail::one<lcmloc::odometry_t, core::OdometryInput, &common::ChannelConfig::odometry>("odometry"),
+    detail::one<lcmloc::odometry_t, core::OdometryInput, &app::ChannelConfig::odometry>("odometry"),
     SensorInput<lcmloc::magruler_t, core::RulerDetection>{
-        "magruler", [](const common::ChannelConfig& c) { return c.magruler; }},
-    detail::one<lcmloc::imu_t, core::ImuInput, &common::ChannelConfig::imu>("imu"),
-    detail::one<lcmloc::gps_fix_t, core::GpsInput, &common::ChannelConfig::gps>("gps"),
-    detail::one<lcmloc::landmark_obs_t, core::LandmarkObservation, &common::ChannelConfig::landmarks>("landmarks"),
-    detail::one<lcmloc::beacon_range_t, core::BeaconRange, &common::ChannelConfig::beacons>("beacons"),
-    detail::one<lcmloc::landmark_bearings_t, core::BearingsInput, &common::ChannelConfig::vision>("vision"));
+        "magruler", [](const app::ChannelConfig& c) { return c.magruler; }},
+    detail::one<lcmloc::imu_t, core::ImuInput, &app::ChannelConfig::imu>("imu"),
+    detail::one<lcmloc::gps_fix_t, core::GpsInput, &app::ChannelConfig::gps>("gps"),
+    detail::one<lcmloc::landmark_obs_t, core::LandmarkObservation, &app::ChannelConfig::landmarks>("landmarks"),
+    detail::one<lcmloc::beacon_range_t, core::BeaconRange, &app::ChannelConfig::beacons>("beacons"),
+    detail::one<lcmloc::landmark_bearings_t, core::BearingsInput, &app::ChannelConfig::vision>("vision"));
 
 /// Calls f(descriptor) for each sensor input kind.
 template <typename F>

@@ -9,16 +9,16 @@ using namespace lcmloc;
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-fusion: fusion daemon, ODOMETRY + MAGRULER* + IMU + GPS + LANDMARKS + BEACONS + VISION + "
                "FUSION_CONTROL -> POSE (POSE_<TYPE> for shadows), GATE, FUSION_STATUS"};
-  common::CommonOptions opts;
-  common::addCommonOptions(app, opts);
+  app::CommonOptions opts;
+  app::addCommonOptions(app, opts);
   fusion::RunnerOptions ro;
   fusion::addRunnerOptions(app, ro);
 
-  return common::runProcess(app, argc, argv, opts, "lcmloc-fusion", [&] {
+  return app::runProcess(app, argc, argv, opts, "lcmloc-fusion", [&] {
     fusion::DaemonRunner runner(opts.config, ro);  // configuration and checkpoint checked first
-    common::Bus bus(opts.lcm_url);
+    bus::Bus bus(opts.lcm_url);
     runner.start(bus);
-    while (!common::stopRequested()) runner.step(100);
+    while (!app::stopRequested()) runner.step(100);
     return runner.finish();
   });
 }

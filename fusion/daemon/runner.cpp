@@ -16,28 +16,28 @@ void addRunnerOptions(CLI::App& app, RunnerOptions& o) {
   app.add_option("--init-from-bus", o.init_from_bus,
                  "hand-over from a running daemon: wait up to SECONDS for its POSE, until it reports stopped, "
                  "and start from its last POSE (inputs are queued meanwhile); 0 = off")
-      ->check(common::wallSeconds());
+      ->check(app::wallSeconds());
   app.add_option("--checkpoint", o.checkpoint,
                  "checkpoint FILE: start from it if it exists (after --init-from-bus found nothing), write the "
                  "active filter's state to it periodically and at exit");
   app.add_option("--checkpoint-period", o.checkpoint_period, "[s, wall] between checkpoint writes")
-      ->check(common::positive())
-      ->check(common::wallSeconds());
+      ->check(app::positive())
+      ->check(app::wallSeconds());
 }
 
 DaemonRunner::DaemonRunner(const std::string& config_path, RunnerOptions opts)
-    : DaemonRunner(common::loadSystemConfig(config_path), std::move(opts)) {}
+    : DaemonRunner(app::loadSystemConfig(config_path), std::move(opts)) {}
 
-DaemonRunner::DaemonRunner(common::SystemConfig cfg, RunnerOptions opts) : cfg_(std::move(cfg)), opts_(std::move(opts)) {
+DaemonRunner::DaemonRunner(app::SystemConfig cfg, RunnerOptions opts) : cfg_(std::move(cfg)), opts_(std::move(opts)) {
   if (!opts_.filter.empty()) {
     YAML::Node n;
     n["type"] = opts_.filter;
-    cfg_.fusion.filter = common::parseFilterConfig(n, cfg_.fusion.filter, "--filter", "fusion.filter");
+    cfg_.fusion.filter = app::parseFilterConfig(n, cfg_.fusion.filter, "--filter", "fusion.filter");
   }
   if (!opts_.checkpoint.empty()) {
     saved_ = readCheckpoint(opts_.checkpoint);  // a corrupt file is an error now
     if (const std::string why = checkpointUnwritable(opts_.checkpoint); !why.empty())
-      throw common::ConfigError(opts_.checkpoint, "--checkpoint", why);
+      throw app::ConfigError(opts_.checkpoint, "--checkpoint", why);
   }
 }
 
@@ -56,7 +56,7 @@ std::optional<core::FilterState> DaemonRunner::lastPoseOnBus(std::string* filter
   const std::string pose_channel = cfg_.channels.pose;
   bus_->subscribe<lcmloc::pose_t>(pose_channel, [w, pose_channel](const std::string&, const lcmloc::pose_t& m, int64_t) {
     if (!w->waiting || m.dim < 3 || static_cast<int>(m.state.size()) < 3) return;
-    core::FilterState s = common::toCore(m);
+    core::FilterState s = bus::toCore(m);
     if (const std::string why = core::unusableState(s); !why.empty()) {
       if (!w->warned) spdlog::warn("a {} on the bus no filter can start from, not taken: {}", pose_channel, why);
       w->warned = true;
@@ -73,7 +73,7 @@ std::optional<core::FilterState> DaemonRunner::lastPoseOnBus(std::string* filter
   spdlog::info("waiting up to {:.1f} s for the running daemon's last {} (until it reports stopped on {})", timeout_s,
                cfg_.channels.pose, cfg_.channels.status);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  while (!common::stopRequested() && !w->stopped && std::chrono::steady_clock::now() < deadline) {
+  while (!app::stopRequested() && !w->stopped && std::chrono::steady_clock::now() < deadline) {
     hb_->tick();
     bus_->handle(50);
   }
@@ -86,11 +86,11 @@ std::optional<core::FilterState> DaemonRunner::lastPoseOnBus(std::string* filter
   return w->last;
 }
 
-void DaemonRunner::start(common::MessageBus& bus) {
+void DaemonRunner::start(bus::MessageBus& bus) {
   bus_ = &bus;
   const bool hold = opts_.init_from_bus > 0 || !opts_.checkpoint.empty();
   daemon_ = std::make_unique<FusionDaemon>(cfg_, bus, FusionDaemon::Options{hold, true});
-  hb_ = std::make_unique<common::Heartbeat>(bus, cfg_.channels.heartbeat, "lcmloc-fusion",
+  hb_ = std::make_unique<app::Heartbeat>(bus, cfg_.channels.heartbeat, "lcmloc-fusion",
                                             [this] { return daemon_->counters(); });
   if (hold) {
     std::optional<core::FilterState> init;
@@ -152,16 +152,16 @@ int DaemonRunner::finish() {
   daemon_->shutdown();
   saveCheckpoint();
   hb_->publish("stopping");
-  if (opts_.checkpoint.empty()) return common::kExitOk;
+  if (opts_.checkpoint.empty()) return app::kExitOk;
   if (checkpoint_failing_) {
     spdlog::error("the checkpoint {} could not be written at exit", opts_.checkpoint);
-    return common::kExitRuntimeError;
+    return app::kExitRuntimeError;
   }
   if (checkpoint_written_)
     spdlog::info("checkpoint written to {}", opts_.checkpoint);
   else
     spdlog::info("no input processed: checkpoint {} left as it was", opts_.checkpoint);
-  return common::kExitOk;
+  return app::kExitOk;
 }
 
 }  // namespace lcmloc::fusion

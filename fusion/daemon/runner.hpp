@@ -1,5 +1,5 @@
 #pragma once
-// lcmloc-fusion's process around the FusionDaemon, over any common::MessageBus (the program runs
+// lcmloc-fusion's process around the FusionDaemon, over any bus::MessageBus (the program runs
 // it over LCM, the unit tests over the MemoryBus): the command line beyond the common options, the
 // hand-over from a running daemon (--init-from-bus) or a checkpoint (--checkpoint), the check of
 // its own POSE echo (another daemon on the bus), the heartbeat, the periodic checkpoint and the
@@ -29,11 +29,11 @@ void addRunnerOptions(CLI::App& app, RunnerOptions& opts);
 class DaemonRunner {
  public:
   /// Loads the configuration (with --filter), reads the checkpoint and checks that it can be
-  /// written. Throws common::ConfigError for a bad configuration or an unwritable checkpoint,
+  /// written. Throws app::ConfigError for a bad configuration or an unwritable checkpoint,
   /// std::runtime_error for a corrupt one.
   DaemonRunner(const std::string& config_path, RunnerOptions opts);
   /// As above with a configuration already loaded.
-  DaemonRunner(common::SystemConfig cfg, RunnerOptions opts);
+  DaemonRunner(app::SystemConfig cfg, RunnerOptions opts);
   ~DaemonRunner();
   DaemonRunner(const DaemonRunner&) = delete;
   DaemonRunner& operator=(const DaemonRunner&) = delete;
@@ -41,7 +41,7 @@ class DaemonRunner {
   /// Starts the daemon on bus. With --init-from-bus it first waits (up to that long, handling the
   /// bus) for the running daemon's last POSE, until that one reports stopped; else, or when none
   /// came, starts from the checkpoint if there is one, else from the configuration.
-  void start(common::MessageBus& bus);
+  void start(bus::MessageBus& bus);
   /// One turn of the process loop: the heartbeat, bus.handle(timeout_ms), the checkpoint when due.
   void step(int timeout_ms);
   /// The stop: what already arrived is processed (for at most a second), the daemon shuts down
@@ -50,19 +50,19 @@ class DaemonRunner {
   int finish();
 
   FusionDaemon& daemon() { return *daemon_; }
-  const common::SystemConfig& config() const { return cfg_; }
+  const app::SystemConfig& config() const { return cfg_; }
 
  private:
   /// The last usable POSE of the running daemon on the bus (and its filter), see start().
   std::optional<core::FilterState> lastPoseOnBus(std::string* filter);
   void saveCheckpoint();
 
-  common::SystemConfig cfg_;  ///< (the daemon keeps a reference to it)
+  app::SystemConfig cfg_;  ///< (the daemon keeps a reference to it)
   RunnerOptions opts_;
   std::optional<Checkpoint> saved_;
-  common::MessageBus* bus_ = nullptr;
+  bus::MessageBus* bus_ = nullptr;
   std::unique_ptr<FusionDaemon> daemon_;
-  std::unique_ptr<common::Heartbeat> hb_;
+  std::unique_ptr<app::Heartbeat> hb_;
   /// A failing write is logged when it starts failing and when it works again (not every period).
   bool checkpoint_failing_ = false, checkpoint_written_ = false;
   std::chrono::steady_clock::time_point last_checkpoint_;

@@ -1,5 +1,5 @@
 // Maps at road scale: loading a map file and association per detection, by the size of the map.
-//   BM_MapLoad/N:        common::csv::loadMap of an N-marker file (a magnetic road along y, the
+//   BM_MapLoad/N:        app::csv::loadMap of an N-marker file (a magnetic road along y, the
 //                        worst case of an index sorted by x) and a FusionEngine over it with the
 //                        ruler filter active and three shadows (ukf, ukf_calib, ukf_landmarks).
 //                        Counters: rss_MB, the resident memory the loaded engine holds (VmRSS after
@@ -83,7 +83,7 @@ void releaseFreed() {
 void BM_MapLoad(benchmark::State& state) {
   const int64_t n = state.range(0);
   const std::string file = (std::filesystem::temp_directory_path() / ("lcmloc_bench_map_" + std::to_string(n) + ".csv")).string();
-  common::csv::writeMap(file, road(n));
+  app::csv::writeMap(file, road(n));
   core::EngineConfig cfg;
   cfg.filter.type = "ukf_gated";
   cfg.shadow = {"ukf", "ukf_calib", "ukf_landmarks"};
@@ -95,7 +95,7 @@ void BM_MapLoad(benchmark::State& state) {
     const double before = statusMb("VmRSS");
     state.ResumeTiming();
     {
-      core::FusionEngine engine(cfg, common::csv::loadMap(file), core::EngineOutputs{});
+      core::FusionEngine engine(cfg, app::csv::loadMap(file), core::EngineOutputs{});
       benchmark::DoNotOptimize(engine.activeFilter());
       state.PauseTiming();
       rss = statusMb("VmRSS") - before;

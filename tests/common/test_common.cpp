@@ -31,7 +31,7 @@
 #include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
-using common::ConfigError;
+using app::ConfigError;
 
 namespace {
 
@@ -40,9 +40,9 @@ namespace {
 std::string errorOf(const std::string& yaml, const std::string& file = "test.yaml", bool whole_file = true) {
   try {
     if (whole_file)
-      common::parseSimSystemConfig(yaml, file);
+      simconfig::parseSimSystemConfig(yaml, file);
     else
-      common::parseSystemConfig(yaml, file);
+      app::parseSystemConfig(yaml, file);
   } catch (const ConfigError& e) {
     return e.what();
   }
@@ -56,8 +56,8 @@ std::string processErrorOf(const std::string& yaml) { return errorOf(yaml, "test
 // Config
 
 TEST(Config, PaperYamlSpellsOutTheDefaults) {
-  const auto cfg = common::loadSimSystemConfig(LCMLOC_PAPER_YAML);
-  const common::SimSystemConfig def;
+  const auto cfg = simconfig::loadSimSystemConfig(LCMLOC_PAPER_YAML);
+  const simconfig::SimSystemConfig def;
   const auto& s = cfg.scenario;
   EXPECT_EQ(cfg.file, LCMLOC_PAPER_YAML);
   EXPECT_EQ(s.name, "paper");
@@ -100,11 +100,11 @@ TEST(Config, PaperYamlSpellsOutTheDefaults) {
 }
 
 TEST(Config, EmptyFileGivesDefaultsAndOverridesApply) {
-  const auto empty = common::parseSimSystemConfig("", "empty.yaml");
+  const auto empty = simconfig::parseSimSystemConfig("", "empty.yaml");
   EXPECT_EQ(empty.scenario.markers.count, 20);
   EXPECT_EQ(empty.fusion.filter.type, "ukf_gated");
 
-  const auto c = common::parseSimSystemConfig(R"(
+  const auto c = simconfig::parseSimSystemConfig(R"(
 scenario: {seed: 42, realtime_factor: 10}
 faults: []
 fusion:
@@ -157,15 +157,15 @@ TEST(Config, TheProcessesReaderAcceptsTheSimulationSectionsUnread) {
 // `landmarks` (the world's, which lcmloc-vision observes) when fusion.landmarks is not given.
 TEST(Config, TheTopLevelLandmarksAreTheFusionsWithoutTheSimulator) {
   const std::string yaml = "landmarks: [{id: 7, x: 10.5, y: -2}, {id: 2, x: 0, y: 40}]\n";
-  const auto c = common::parseSystemConfig(yaml, "l.yaml");
+  const auto c = app::parseSystemConfig(yaml, "l.yaml");
   ASSERT_EQ(c.landmarks.size(), 2u);
   EXPECT_EQ(c.landmarks[0].id, 7);  // file order kept
   ASSERT_EQ(c.fusion.landmarks.size(), 2u);
   EXPECT_EQ(c.fusion.landmarks.at(7), core::Vec2(10.5, -2.0));
   EXPECT_EQ(c.fusion.landmarks.at(2), core::Vec2(0.0, 40.0));
-  const auto own = common::parseSystemConfig(yaml + "fusion: {landmarks: [{id: 1, x: 1, y: 1}]}", "l.yaml");
+  const auto own = app::parseSystemConfig(yaml + "fusion: {landmarks: [{id: 1, x: 1, y: 1}]}", "l.yaml");
   EXPECT_EQ(own.fusion.landmarks.size(), 1u);  // fusion.landmarks given: that one
-  const auto sim = common::parseSimSystemConfig(yaml, "l.yaml");
+  const auto sim = simconfig::parseSimSystemConfig(yaml, "l.yaml");
   ASSERT_EQ(sim.scenario.landmarks.size(), 2u);
   EXPECT_EQ(sim.scenario.landmarks[1].id, 2);
   EXPECT_EQ(sim.scenario.landmarks[1].y, 40.0);
@@ -243,8 +243,8 @@ TEST(Config, WrongTypeAndRangeAreClear) {
 }
 
 TEST(Config, OutputEveryIsAPositiveInteger) {
-  EXPECT_EQ(common::parseSystemConfig("", "e.yaml").fusion.output_every, 1);
-  EXPECT_EQ(common::parseSystemConfig("fusion: {output_every: 10}", "o.yaml").fusion.output_every, 10);
+  EXPECT_EQ(app::parseSystemConfig("", "e.yaml").fusion.output_every, 1);
+  EXPECT_EQ(app::parseSystemConfig("fusion: {output_every: 10}", "o.yaml").fusion.output_every, 10);
   EXPECT_NE(errorOf("fusion: {output_every: 0}").find("test.yaml: fusion.output_every: value 0 out of range"),
             std::string::npos) << errorOf("fusion: {output_every: 0}");
   EXPECT_NE(errorOf("fusion: {output_every: 2.5}").find("fusion.output_every: expected an integer"),
@@ -264,11 +264,11 @@ TEST(Config, TheReorderWindowIsNarrowerThanTheTimeJumpGuard) {
 }
 
 TEST(Config, OdometryGapKeysAreCheckedAndNamed) {
-  const auto c = common::parseSystemConfig("fusion: {max_odometry_gap: 0.5, odometry_gap_accel: 1.0, odometry_gap_yaw_rate: 0.1}", "g.yaml");
+  const auto c = app::parseSystemConfig("fusion: {max_odometry_gap: 0.5, odometry_gap_accel: 1.0, odometry_gap_yaw_rate: 0.1}", "g.yaml");
   EXPECT_EQ(c.fusion.max_odometry_gap, 0.5);
   EXPECT_EQ(c.fusion.odometry_gap_accel, 1.0);
   EXPECT_EQ(c.fusion.odometry_gap_yaw_rate, 0.1);
-  EXPECT_EQ(common::parseSystemConfig("fusion: {max_odometry_gap: 0}", "g.yaml").fusion.max_odometry_gap, 0.0);
+  EXPECT_EQ(app::parseSystemConfig("fusion: {max_odometry_gap: 0}", "g.yaml").fusion.max_odometry_gap, 0.0);
   EXPECT_NE(errorOf("fusion: {max_odometry_gap: -1}").find("test.yaml: fusion.max_odometry_gap: value -1 out of range"),
             std::string::npos) << errorOf("fusion: {max_odometry_gap: -1}");
   EXPECT_NE(errorOf("fusion: {odometry_gap_accel: .nan}").find("test.yaml: fusion.odometry_gap_accel: expected a finite number"),
@@ -279,11 +279,11 @@ TEST(Config, OdometryGapKeysAreCheckedAndNamed) {
 
 // The resume period is the fusion's own setting, not the simulated odometry's rate.
 TEST(Config, TheResumePeriodIsAFusionSettingNotTheSimulatorsRate) {
-  const auto c = common::parseSystemConfig("odometry: {rate_hz: 50}\nfusion: {odometry_period: 0.02}", "g.yaml");
-  EXPECT_EQ(common::engineConfig(c).odometry_gap.resume_period_us, 20000);
-  const auto d = common::parseSystemConfig("odometry: {rate_hz: 50}", "g.yaml");
-  EXPECT_EQ(common::engineConfig(d).odometry_gap.resume_period_us, 10000);  // the default, whatever the simulator
-  EXPECT_EQ(common::engineConfig(common::parseSystemConfig("fusion: {odometry_period: 0}", "g.yaml"))
+  const auto c = app::parseSystemConfig("odometry: {rate_hz: 50}\nfusion: {odometry_period: 0.02}", "g.yaml");
+  EXPECT_EQ(app::engineConfig(c).odometry_gap.resume_period_us, 20000);
+  const auto d = app::parseSystemConfig("odometry: {rate_hz: 50}", "g.yaml");
+  EXPECT_EQ(app::engineConfig(d).odometry_gap.resume_period_us, 10000);  // the default, whatever the simulator
+  EXPECT_EQ(app::engineConfig(app::parseSystemConfig("fusion: {odometry_period: 0}", "g.yaml"))
                 .odometry_gap.resume_period_us, 0);
   EXPECT_NE(errorOf("fusion: {odometry_period: -0.01}").find("test.yaml: fusion.odometry_period: value -0.01 out of range"),
             std::string::npos) << errorOf("fusion: {odometry_period: -0.01}");
@@ -292,7 +292,7 @@ TEST(Config, TheResumePeriodIsAFusionSettingNotTheSimulatorsRate) {
 // Lists of maps (GPS outages and jumps, INS motion segments and IMU dropouts): read item by
 // item; not a list, an unknown key in an item and an out-of-range value name the item.
 TEST(Config, ListsOfMapsAreReadItemByItemWithClearErrors) {
-  const auto cfg = common::parseSimSystemConfig(
+  const auto cfg = simconfig::parseSimSystemConfig(
       "gps: {outages: [{start: 5, duration: 2}, {start: 30, duration: 1}], jumps: [{at: 10, duration: 3, dx: 4, dy: -1}]}\n"
       "ins_sim: {imu_dropouts: [{start: 1, duration: 0.5}]}\n",
       "l.yaml");
@@ -314,7 +314,7 @@ TEST(Config, ListsOfMapsAreReadItemByItemWithClearErrors) {
 
 TEST(Config, MissingFileNamesTheFile) {
   try {
-    common::loadSystemConfig("/nonexistent/dir/scenario.yaml");
+    app::loadSystemConfig("/nonexistent/dir/scenario.yaml");
     FAIL() << "no error";
   } catch (const ConfigError& e) {
     EXPECT_EQ(std::string(e.what()), "/nonexistent/dir/scenario.yaml: cannot open config file (does it exist?)");
@@ -325,7 +325,7 @@ TEST(Config, ADirectoryOrADeviceIsNoConfigFile) {
   // A directory was read as an empty file (all defaults, exit 0); /dev/zero until memory ran out.
   auto errorLoading = [](const std::string& path) -> std::string {
     try {
-      common::loadSystemConfig(path);
+      app::loadSystemConfig(path);
     } catch (const ConfigError& e) {
       return e.what();
     }
@@ -358,21 +358,21 @@ TEST(Process, AnExistingOutputIsRefusedWithoutOverwrite) {
   std::ofstream((base / "full" / "report.json").string()) << "{}";
   std::ofstream((base / "file.lcmlog").string()) << "x";
   // Nothing there, or an empty directory: nothing to replace.
-  EXPECT_NO_THROW(common::refuseExistingOutput((base / "new.lcmlog").string(), false));
-  EXPECT_NO_THROW(common::refuseExistingOutput((base / "empty").string(), false));
-  EXPECT_NO_THROW(common::refuseExistingOutput("", false));
-  EXPECT_NO_THROW(common::refuseExistingOutput("/dev/null", false));  // a device is written to, not replaced
+  EXPECT_NO_THROW(app::refuseExistingOutput((base / "new.lcmlog").string(), false));
+  EXPECT_NO_THROW(app::refuseExistingOutput((base / "empty").string(), false));
+  EXPECT_NO_THROW(app::refuseExistingOutput("", false));
+  EXPECT_NO_THROW(app::refuseExistingOutput("/dev/null", false));  // a device is written to, not replaced
   try {
-    common::refuseExistingOutput((base / "file.lcmlog").string(), false, "--log");
+    app::refuseExistingOutput((base / "file.lcmlog").string(), false, "--log");
     ADD_FAILURE() << "an existing file was accepted";
-  } catch (const common::UsageError& e) {
+  } catch (const app::UsageError& e) {
     EXPECT_NE(std::string(e.what()).find("--log '" + (base / "file.lcmlog").string() + "' exists: give --overwrite"),
               std::string::npos) << e.what();
   }
-  EXPECT_THROW(common::refuseExistingOutput((base / "full").string(), false), common::UsageError);
-  EXPECT_THROW(common::prepareOutputDir((base / "full").string(), false), common::UsageError);
-  EXPECT_NO_THROW(common::refuseExistingOutput((base / "file.lcmlog").string(), true));
-  EXPECT_NO_THROW(common::prepareOutputDir((base / "full").string(), true));
+  EXPECT_THROW(app::refuseExistingOutput((base / "full").string(), false), app::UsageError);
+  EXPECT_THROW(app::prepareOutputDir((base / "full").string(), false), app::UsageError);
+  EXPECT_NO_THROW(app::refuseExistingOutput((base / "file.lcmlog").string(), true));
+  EXPECT_NO_THROW(app::prepareOutputDir((base / "full").string(), true));
   EXPECT_TRUE(fs::exists(base / "full" / "report.json"));  // --overwrite replaces files; it deletes none
   fs::remove_all(base);
 }
@@ -380,35 +380,35 @@ TEST(Process, AnExistingOutputIsRefusedWithoutOverwrite) {
 TEST(Process, RunProcessGivesTheSharedExitCodesVersionAndFooter) {
   auto run = [](std::vector<std::string> args, const std::function<int()>& body, std::string* help = nullptr) {
     CLI::App app{"test program"};
-    common::CommonOptions opts;
+    app::CommonOptions opts;
     opts.log_level = "off";
     std::string out;
-    common::addOutputOption(app, out, "output");
+    app::addOutputOption(app, out, "output");
     args.insert(args.begin(), "prog");
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
     testing::internal::CaptureStdout();
-    const int rc = common::runProcess(app, static_cast<int>(argv.size()), argv.data(), opts, "lcmloc-test", body);
+    const int rc = app::runProcess(app, static_cast<int>(argv.size()), argv.data(), opts, "lcmloc-test", body);
     const std::string printed = testing::internal::GetCapturedStdout();
     if (help) *help = printed;
     return rc;
   };
-  auto ok = [] { return common::kExitOk; };
+  auto ok = [] { return app::kExitOk; };
   std::string printed;
   EXPECT_EQ(run({"--version"}, ok, &printed), 0);
-  EXPECT_EQ(printed, "lcmloc-test " + common::version() + "\n");
+  EXPECT_EQ(printed, "lcmloc-test " + app::version() + "\n");
   EXPECT_EQ(run({"--help"}, ok, &printed), 0);
-  EXPECT_NE(printed.find(common::kExitCodesHelp), std::string::npos) << printed;
+  EXPECT_NE(printed.find(app::kExitCodesHelp), std::string::npos) << printed;
   EXPECT_NE(printed.find("-o,--output"), std::string::npos) << printed;
-  EXPECT_EQ(run({"--bogus"}, ok), common::kExitUsageError);
-  EXPECT_EQ(run({}, [] () -> int { throw common::UsageError("no"); }), 2);
-  EXPECT_EQ(run({}, [] () -> int { throw common::ConfigError("f.yaml", "k", "bad"); }), 2);
+  EXPECT_EQ(run({"--bogus"}, ok), app::kExitUsageError);
+  EXPECT_EQ(run({}, [] () -> int { throw app::UsageError("no"); }), 2);
+  EXPECT_EQ(run({}, [] () -> int { throw app::ConfigError("f.yaml", "k", "bad"); }), 2);
   EXPECT_EQ(run({}, [] () -> int { throw std::runtime_error("disk full"); }), 1);
-  EXPECT_EQ(run({}, [] { return common::kExitInputDamaged; }), 3);
-  EXPECT_EQ(common::kExitOk, 0);
-  EXPECT_EQ(common::kExitRuntimeError, 1);
-  EXPECT_EQ(common::kExitConfigError, 2);
-  EXPECT_EQ(common::kExitInputDamaged, 3);
+  EXPECT_EQ(run({}, [] { return app::kExitInputDamaged; }), 3);
+  EXPECT_EQ(app::kExitOk, 0);
+  EXPECT_EQ(app::kExitRuntimeError, 1);
+  EXPECT_EQ(app::kExitConfigError, 2);
+  EXPECT_EQ(app::kExitInputDamaged, 3);
 }
 
 TEST(Process, AnOutputDirectoryIsCheckedBeforeTheWork) {
@@ -417,12 +417,12 @@ TEST(Process, AnOutputDirectoryIsCheckedBeforeTheWork) {
   const fs::path base = fs::temp_directory_path() / ("lcmloc_outdir_" + std::to_string(::getpid()));
   fs::remove_all(base);
   fs::create_directories(base);
-  common::prepareOutputDir((base / "a" / "b").string(), false);
+  app::prepareOutputDir((base / "a" / "b").string(), false);
   EXPECT_TRUE(fs::is_directory(base / "a" / "b"));
   EXPECT_TRUE(fs::is_empty(base / "a" / "b"));  // the probe is removed
   std::ofstream((base / "file").string()) << "x";
   try {
-    common::prepareOutputDir((base / "file" / "sub").string(), true);
+    app::prepareOutputDir((base / "file" / "sub").string(), true);
     ADD_FAILURE() << "a directory under a file was accepted";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("output directory '" + (base / "file" / "sub").string() + "'"), std::string::npos)
@@ -433,11 +433,11 @@ TEST(Process, AnOutputDirectoryIsCheckedBeforeTheWork) {
 
 TEST(Config, FilterParametersFromAControlString) {
   const core::FilterConfig base;
-  const auto c = common::parseFilterConfig(YAML::Load("{type: ukf_calib, scale_std0: 0.05}"), base,
+  const auto c = app::parseFilterConfig(YAML::Load("{type: ukf_calib, scale_std0: 0.05}"), base,
                                            "FUSION_CONTROL", "parameters");
   EXPECT_EQ(c.type, "ukf_calib");
   EXPECT_EQ(c.scale_std0, 0.05);
-  EXPECT_THROW(common::parseFilterConfig(YAML::Load("{kapa: 1}"), base, "FUSION_CONTROL", "parameters"),
+  EXPECT_THROW(app::parseFilterConfig(YAML::Load("{kapa: 1}"), base, "FUSION_CONTROL", "parameters"),
                ConfigError);
 }
 
@@ -452,7 +452,7 @@ TEST(Convert, OdometryRejectsNaNInfAndOutOfRange) {
   m.steering = 0.1;
   m.has_steering = true;
   std::string why;
-  auto ok = common::toCore(m, &why);
+  auto ok = bus::toCore(m, &why);
   ASSERT_TRUE(ok);
   EXPECT_EQ(ok->utime, 1000);
   EXPECT_EQ(ok->delta_s, 0.015);
@@ -460,33 +460,33 @@ TEST(Convert, OdometryRejectsNaNInfAndOutOfRange) {
 
   auto bad = m;
   bad.delta_s = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_FALSE(common::toCore(bad, &why));
+  EXPECT_FALSE(bus::toCore(bad, &why));
   EXPECT_EQ(why, "delta_s is NaN");
   bad = m;
   bad.steering = std::numeric_limits<double>::infinity();
-  EXPECT_FALSE(common::toCore(bad, &why));
+  EXPECT_FALSE(bus::toCore(bad, &why));
   EXPECT_EQ(why, "steering is Inf");
   bad = m;
   bad.steering = 1.6;
-  EXPECT_FALSE(common::toCore(bad, &why));
+  EXPECT_FALSE(bus::toCore(bad, &why));
   EXPECT_NE(why.find("steering"), std::string::npos);
   bad = m;
   bad.utime = -5;
-  EXPECT_FALSE(common::toCore(bad, &why));
+  EXPECT_FALSE(bus::toCore(bad, &why));
   EXPECT_NE(why.find("utime"), std::string::npos);
 }
 
 TEST(Convert, RulerDetectionsOnlyAndValidated) {
-  models::RulerReading r;
+  sim::RulerReading r;
   r.utime = 2000;
   r.readings.assign(13, -0.45);
   r.detected = true;
   r.lateral_offset = -0.123;
   r.quality = 0.8;
-  const auto m = common::toLcm(r, 7);
+  const auto m = drivers::toLcm(r, 7);
   EXPECT_EQ(m.num_sensors, 13);
   std::string why = "x";
-  auto d = common::toCore(m, "MAGRULER_FAULT", &why);
+  auto d = bus::toCore(m, "MAGRULER_FAULT", &why);
   ASSERT_TRUE(d);
   EXPECT_EQ(d->lateral_offset, -0.123);
   EXPECT_EQ(d->sensor, "MAGRULER_FAULT");
@@ -494,22 +494,22 @@ TEST(Convert, RulerDetectionsOnlyAndValidated) {
 
   auto none = m;
   none.detected = false;
-  EXPECT_FALSE(common::toCore(none, "MAGRULER", &why));
+  EXPECT_FALSE(bus::toCore(none, "MAGRULER", &why));
   EXPECT_TRUE(why.empty());
   auto nan = m;
   nan.readings[4] = std::nan("");
-  EXPECT_FALSE(common::toCore(nan, "MAGRULER", &why));
+  EXPECT_FALSE(bus::toCore(nan, "MAGRULER", &why));
   EXPECT_EQ(why, "readings[4] is NaN");
   auto q = m;
   q.quality = 1.5;
-  EXPECT_FALSE(common::toCore(q, "MAGRULER", &why));
+  EXPECT_FALSE(bus::toCore(q, "MAGRULER", &why));
   EXPECT_NE(why.find("quality"), std::string::npos);
 }
 
 namespace {
 /// pose_t::encode's bytes of toLcm(s, filter, seq): what encodePose must give.
 std::vector<uint8_t> lcmGenBytes(const core::FilterState& s, const std::string& filter, int64_t seq) {
-  const lcmloc::pose_t m = common::toLcm(s, filter, seq);
+  const lcmloc::pose_t m = bus::toLcm(s, filter, seq);
   std::vector<uint8_t> b(static_cast<std::size_t>(m.getEncodedSize()));
   const int size = m.encode(b.data(), 0, static_cast<int>(b.size()));
   EXPECT_GT(size, 0);
@@ -552,7 +552,7 @@ TEST(Convert, EncodePoseGivesLcmGensBytesForEveryShapeOfState) {
   std::vector<uint8_t> out;  // reused, as the daemon does: a smaller state after a larger one
   int64_t seq = 1LL << 40;
   for (const auto& [state, filter] : cases) {
-    const std::size_t size = common::encodePose(state, filter, seq, out);
+    const std::size_t size = bus::encodePose(state, filter, seq, out);
     const auto want = lcmGenBytes(state, filter, seq);
     ASSERT_EQ(size, want.size()) << filter;
     EXPECT_TRUE(std::equal(want.begin(), want.end(), out.begin())) << filter;
@@ -573,28 +573,28 @@ TEST(Convert, ImuSamplesBeyondAnySensorsRangeAreRefused) {
   m.gyro[2] = 0.1;
   m.mag[0] = 0.2;
   std::string why;
-  ASSERT_TRUE(common::toCore(m, "IMU", &why)) << why;
+  ASSERT_TRUE(bus::toCore(m, "IMU", &why)) << why;
   auto strong = m;  // a hard hit and a fast spin are still samples
   strong.accel[0] = -150.0;
   strong.gyro[2] = 30.0;
-  EXPECT_TRUE(common::toCore(strong, "IMU", &why)) << why;
+  EXPECT_TRUE(bus::toCore(strong, "IMU", &why)) << why;
   auto a = m;
   a.accel[0] = 1e200;
-  EXPECT_FALSE(common::toCore(a, "IMU", &why));
+  EXPECT_FALSE(bus::toCore(a, "IMU", &why));
   EXPECT_NE(why.find("accel[0]"), std::string::npos) << why;
   EXPECT_NE(why.find("out of range"), std::string::npos) << why;
   auto g = m;
   g.gyro[1] = -500.0;
-  EXPECT_FALSE(common::toCore(g, "IMU", &why));
+  EXPECT_FALSE(bus::toCore(g, "IMU", &why));
   EXPECT_NE(why.find("gyro[1]"), std::string::npos) << why;
   auto b = m;
   b.mag[2] = 1e6;
-  EXPECT_FALSE(common::toCore(b, "IMU", &why));
+  EXPECT_FALSE(bus::toCore(b, "IMU", &why));
   EXPECT_NE(why.find("mag[2]"), std::string::npos) << why;
 }
 
 TEST(Convert, RoundTrips) {
-  models::TruthState t;
+  sim::TruthState t;
   t.utime = 123456;
   t.x = 1.5;
   t.y = -2.25;
@@ -602,7 +602,7 @@ TEST(Convert, RoundTrips) {
   t.speed = 1.4;
   t.steering = -0.2;
   t.distance = 17.0;
-  const auto back = common::toCore(common::toLcm(t, 9));
+  const auto back = drivers::toCore(drivers::toLcm(t, 9));
   EXPECT_EQ(back.utime, t.utime);
   EXPECT_EQ(back.x, t.x);
   EXPECT_EQ(back.heading, t.heading);
@@ -614,11 +614,11 @@ TEST(Convert, RoundTrips) {
   s.P = Eigen::MatrixXd::Random(5, 5);
   s.names = {"x", "y", "theta", "odo_scale", "steer_bias"};
   s.status = core::FilterStatus::Lockout;
-  const auto msg = common::toLcm(s, "ukf_calib", 4);
+  const auto msg = bus::toLcm(s, "ukf_calib", 4);
   EXPECT_EQ(msg.dim, 5);
   EXPECT_EQ(msg.filter, "ukf_calib");
   EXPECT_EQ(msg.status, lcmloc::pose_t::STATUS_LOCKOUT);
-  const auto s2 = common::toCore(msg);
+  const auto s2 = bus::toCore(msg);
   EXPECT_EQ(s2.x, s.x);
   EXPECT_EQ(s2.P, s.P);
   EXPECT_EQ(s2.names, s.names);
@@ -634,7 +634,7 @@ TEST(Convert, RoundTrips) {
   d.accepted = true;
   d.marker_id = 4;
   d.reason = "accepted";
-  const auto g = common::toLcm(d, "ukf_gated", 1);
+  const auto g = bus::toLcm(d, "ukf_gated", 1);
   EXPECT_EQ(g.dim, 2);
   EXPECT_EQ(g.innovation[1], -0.02);
   EXPECT_EQ(g.measurement_seq, 11);
@@ -646,7 +646,7 @@ TEST(Convert, RoundTrips) {
 // Transport over memq://
 
 TEST(Transport, PublishSubscribeTyped) {
-  common::Bus bus("memq://");
+  bus::Bus bus("memq://");
   std::vector<lcmloc::odometry_t> got;
   std::string channel;
   bus.subscribe<lcmloc::odometry_t>("ODO.*", [&](const std::string& ch, const lcmloc::odometry_t& m, int64_t) {
@@ -671,7 +671,7 @@ TEST(Transport, PublishSubscribeTyped) {
 TEST(Transport, DrainTakesWhatArrivedButStopsUnderAFlood) {
   // The daemon and the logger drained the bus at a stop with `while (handle(0) > 0)`: a sender
   // faster than them kept them from stopping (SIGTERM waited for the flood to end).
-  common::Bus bus("memq://");
+  bus::Bus bus("memq://");
   int handled = 0;
   bool flood = false;
   lcmloc::odometry_t m{};
@@ -691,7 +691,7 @@ TEST(Transport, DrainTakesWhatArrivedButStopsUnderAFlood) {
 }
 
 TEST(Transport, UndecodablePayloadIsCountedNotFatal) {
-  common::Bus bus("memq://");
+  bus::Bus bus("memq://");
   int good = 0;
   std::vector<std::string> errors;
   bus.subscribe<lcmloc::magruler_t>(
@@ -723,9 +723,9 @@ TEST(Transport, UndecodablePayloadIsCountedNotFatal) {
 
 TEST(Transport, BadUrlThrowsClearError) {
   try {
-    common::Bus bus("nonsense://nowhere");
+    bus::Bus bus("nonsense://nowhere");
     FAIL() << "no error";
-  } catch (const common::TransportError& e) {
+  } catch (const bus::TransportError& e) {
     EXPECT_NE(std::string(e.what()).find("cannot start LCM on 'nonsense://nowhere'"), std::string::npos);
   }
 }
@@ -798,7 +798,7 @@ TEST(Transport, CorruptLengthsInAMessageFailTheDecodeInsteadOfCrashing) {
 }
 
 TEST(LogThrottle, FirstFivePerKeyThenOneInAThousand) {
-  common::LogThrottle t;
+  app::LogThrottle t;
   std::vector<int> allowed;
   for (int i = 1; i <= 3000; ++i)
     if (t.allow("ODOMETRY")) allowed.push_back(i);
@@ -807,11 +807,11 @@ TEST(LogThrottle, FirstFivePerKeyThenOneInAThousand) {
 }
 
 TEST(Transport, InvalidChannelRegexThrowsInsteadOfCrashing) {
-  common::Bus bus("memq://");
+  bus::Bus bus("memq://");
   try {
     bus.subscribeRaw("([", [](const std::string&, const uint8_t*, std::size_t, int64_t) {});
     FAIL() << "no error";
-  } catch (const common::TransportError& e) {
+  } catch (const bus::TransportError& e) {
     EXPECT_NE(std::string(e.what()).find("'([': not a valid channel regex"), std::string::npos) << e.what();
   }
   int n = 0;  // the bus still works
@@ -828,12 +828,12 @@ TEST(Transport, InvalidChannelRegexThrowsInsteadOfCrashing) {
 // follows() takes the in-order message of the key observed last and nothing else: what it
 // refuses, observe() then judges as if follows() had not been asked.
 TEST(Process, SeqTrackerFollowsTakesOnlyTheNextSeqOfTheLastKey) {
-  common::SeqTracker t, u;  // u: observe() alone
+  bus::SeqTracker t, u;  // u: observe() alone
   EXPECT_FALSE(t.follows("A", 0)) << "no key yet";
   auto both = [&](const char* key, int64_t seq) {
     const bool took = t.follows(key, seq);
-    const common::SeqGap g = took ? common::SeqGap{} : t.observe(key, seq);
-    const common::SeqGap ref = u.observe(key, seq);
+    const bus::SeqGap g = took ? bus::SeqGap{} : t.observe(key, seq);
+    const bus::SeqGap ref = u.observe(key, seq);
     EXPECT_EQ(g.missing, ref.missing) << key << " " << seq;
     EXPECT_EQ(g.restarted, ref.restarted) << key << " " << seq;
     EXPECT_EQ(g.ignored, ref.ignored) << key << " " << seq;
@@ -859,11 +859,11 @@ TEST(Process, SeqTrackerFollowsTakesOnlyTheNextSeqOfTheLastKey) {
 }
 
 TEST(Process, SeqTrackerCountsGapsPerKey) {
-  common::SeqTracker t;
+  bus::SeqTracker t;
   auto missing = [&](const char* key, int64_t seq) { return t.observe(key, seq).missing; };
   EXPECT_EQ(missing("A", 5), 0);  // first message: no gap whatever its seq
   EXPECT_EQ(missing("A", 6), 0);
-  const common::SeqGap g = t.observe("A", 9);
+  const bus::SeqGap g = t.observe("A", 9);
   EXPECT_EQ(g.missing, 2);
   EXPECT_EQ(g.before_seq, 9);
   EXPECT_EQ(g.describe("A"), "A: 2 message(s) missing before seq 9");
@@ -872,7 +872,7 @@ TEST(Process, SeqTrackerCountsGapsPerKey) {
   EXPECT_EQ(missing("A", 9), 0);  // duplicate
   EXPECT_FALSE(t.observe("A", 10).restarted);
   EXPECT_FALSE(t.observe("A", 0).restarted);  // went back: said when the next message goes on from it
-  const common::SeqGap back = t.observe("A", 1);  // the sender started over
+  const bus::SeqGap back = t.observe("A", 1);  // the sender started over
   EXPECT_TRUE(back.restarted);
   EXPECT_EQ(back.missing, 0);
   EXPECT_EQ(back.describeRestart("A"),
@@ -883,11 +883,11 @@ TEST(Process, SeqTrackerCountsGapsPerKey) {
   EXPECT_EQ(t.gaps("B"), 1);
   EXPECT_EQ(t.gaps(), 3);
   // A jump far ahead, confirmed: up to kMaxSeqGap it is lost messages, beyond a new sequence.
-  const int64_t k = common::SeqTracker::kMaxSeqGap;
+  const int64_t k = bus::SeqTracker::kMaxSeqGap;
   EXPECT_EQ(missing("B", 3 + k), 0);
   EXPECT_EQ(missing("B", 4 + k), k);  // the bound
   EXPECT_EQ(missing("B", 6 + 2 * k), 0);  // one more: beyond it
-  const common::SeqGap beyond = t.observe("B", 7 + 2 * k);
+  const bus::SeqGap beyond = t.observe("B", 7 + 2 * k);
   EXPECT_EQ(beyond.missing, 0);
   EXPECT_TRUE(beyond.restarted);
   EXPECT_EQ(beyond.describeRestart("B"),
@@ -908,10 +908,10 @@ TEST(Process, SeqTrackerCountsGapsPerKey) {
 
 // A seq that broke the sequence and was not followed is said: which, after what, and why.
 TEST(Process, SeqTrackerSaysWhichSeqItIgnoredAndTakesBackASmallJumpThatWasALoneOutlier) {
-  common::SeqTracker t;
+  bus::SeqTracker t;
   for (int64_t s = 0; s <= 100; ++s) t.observe("A", s);
   EXPECT_FALSE(t.observe("A", 100 | (int64_t{1} << 30)).ignored);
-  const common::SeqGap g = t.observe("A", 101);
+  const bus::SeqGap g = t.observe("A", 101);
   EXPECT_TRUE(g.ignored);
   EXPECT_FALSE(g.restarted);
   EXPECT_EQ(g.missing, 0);
@@ -923,7 +923,7 @@ TEST(Process, SeqTrackerSaysWhichSeqItIgnoredAndTakesBackASmallJumpThatWasALoneO
   EXPECT_EQ(t.observe("A", 102).missing, 0);
   EXPECT_EQ(t.observe("A", 110).missing, 7);
   EXPECT_EQ(t.gaps(), 7);
-  const common::SeqGap back = t.observe("A", 103);
+  const bus::SeqGap back = t.observe("A", 103);
   EXPECT_TRUE(back.ignored);
   EXPECT_FALSE(back.restarted);
   EXPECT_EQ(back.uncounted, 7);
@@ -938,12 +938,12 @@ TEST(Process, SeqTrackerSaysWhichSeqItIgnoredAndTakesBackASmallJumpThatWasALoneO
   EXPECT_EQ(t.ignored(), 2);
   EXPECT_EQ(t.ignored("A"), 2);
   // Every other message lost (a burst): each small gap is counted, none is taken for an outlier.
-  common::SeqTracker lossy;
+  bus::SeqTracker lossy;
   for (int64_t s = 0; s < 100; s += 2) lossy.observe("B", s);
   EXPECT_EQ(lossy.gaps(), 49);
   EXPECT_EQ(lossy.ignored(), 0);
   // Keys are found by name however many there are.
-  common::SeqTracker many;
+  bus::SeqTracker many;
   for (int64_t s = 0; s < 3; ++s)
     for (int c = 0; c < 2000; ++c) many.observe("C" + std::to_string(c), s * 2);
   EXPECT_EQ(many.size(), 2000u);
@@ -957,12 +957,12 @@ TEST(Process, SeqTrackerSaysWhichSeqItIgnoredAndTakesBackASmallJumpThatWasALoneO
 // 2^31, ... gave 4294967294 gaps for 8 messages, and one seq with bit 30 flipped 1.07e9; a corrupt
 // seq that went back was a "restart" and the next good one a gap of its own.
 TEST(Process, SeqTrackerIgnoresALoneCorruptSeq) {
-  common::SeqTracker alternating;
+  bus::SeqTracker alternating;
   for (int i = 0; i < 8; ++i) alternating.observe("ODOMETRY", i % 2 ? int64_t{1} << 31 : 0);
   EXPECT_EQ(alternating.gaps(), 0);
   for (const int bit : {62, 40, 30, 20, 12, 5, 3, 1}) {  // one bit flipped in one message of a counting stream
     SCOPED_TRACE(bit);
-    common::SeqTracker t;
+    bus::SeqTracker t;
     int restarts = 0;
     for (int64_t s = 0; s < 200; ++s) {
       const auto g = t.observe("A", s == 100 ? s ^ (int64_t{1} << bit) : s);
@@ -971,7 +971,7 @@ TEST(Process, SeqTrackerIgnoresALoneCorruptSeq) {
     EXPECT_EQ(t.gaps(), 0);
     EXPECT_EQ(restarts, 0);
   }
-  common::SeqTracker junk;  // the audit's seqjunk stream
+  bus::SeqTracker junk;  // the audit's seqjunk stream
   for (const int64_t s : {int64_t{0}, int64_t{1} << 31, int64_t{0}, int64_t{1} << 31, INT64_MAX, INT64_MIN})
     junk.observe("ODOMETRY", s);
   EXPECT_EQ(junk.gaps(), 0);
@@ -982,17 +982,17 @@ TEST(Process, SeqTrackerIgnoresALoneCorruptSeq) {
 
 // A real loss or restart is still counted or said, once the next message goes on from the new seq.
 TEST(Process, SeqTrackerTakesABigJumpOrAStepBackWhenTheNextMessageGoesOnFromIt) {
-  common::SeqTracker t;
+  bus::SeqTracker t;
   for (int64_t s = 0; s < 10; ++s) t.observe("A", s);
   EXPECT_EQ(t.observe("A", 5010).missing, 0);  // 5000 missing, or a corrupt seq: not known yet
-  const common::SeqGap g = t.observe("A", 5011);  // goes on from it: 5000 lost
+  const bus::SeqGap g = t.observe("A", 5011);  // goes on from it: 5000 lost
   EXPECT_EQ(g.missing, 5000);
   EXPECT_EQ(g.before_seq, 5010);
   EXPECT_EQ(g.describe("A"), "A: 5000 message(s) missing before seq 5010");
   EXPECT_EQ(t.gaps(), 5000);
   EXPECT_EQ(t.observe("A", 5013).missing, 1);  // a small gap: at once
   EXPECT_FALSE(t.observe("A", 0).restarted);  // went back: not known yet
-  const common::SeqGap back = t.observe("A", 1);  // the sender started over
+  const bus::SeqGap back = t.observe("A", 1);  // the sender started over
   EXPECT_TRUE(back.restarted);
   EXPECT_EQ(back.missing, 0);
   EXPECT_EQ(back.last_seq, 5013);
@@ -1008,13 +1008,13 @@ TEST(Process, SeqTrackerTakesABigJumpOrAStepBackWhenTheNextMessageGoesOnFromIt) 
 }
 
 TEST(Process, PacerFollowsTheRealtimeFactor) {
-  common::Pacer fast(0.0);
+  app::Pacer fast(0.0);
   const auto t0 = std::chrono::steady_clock::now();
   EXPECT_TRUE(fast.waitUntil(0));
   EXPECT_TRUE(fast.waitUntil(3600000000LL));  // an hour of sim time, no wait
   EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(1));
 
-  common::Pacer x100(100.0);
+  app::Pacer x100(100.0);
   const auto t1 = std::chrono::steady_clock::now();
   EXPECT_TRUE(x100.waitUntil(1000000));
   EXPECT_TRUE(x100.waitUntil(1000000 + 20000000));  // 20 s of sim time at x100 = 200 ms wall
@@ -1022,12 +1022,12 @@ TEST(Process, PacerFollowsTheRealtimeFactor) {
 }
 
 TEST(Process, HeartbeatPublishesNameStateAndCounters) {
-  common::Bus bus("memq://");
+  bus::Bus bus("memq://");
   std::vector<lcmloc::heartbeat_t> got;
   bus.subscribe<lcmloc::heartbeat_t>("HEARTBEAT",
                                      [&](const std::string&, const lcmloc::heartbeat_t& m, int64_t) { got.push_back(m); });
   int64_t n = 0;
-  common::Heartbeat hb(bus, "HEARTBEAT", "test-proc", [&] { return common::Heartbeat::Counters{{"n", n}}; });
+  app::Heartbeat hb(bus, "HEARTBEAT", "test-proc", [&] { return app::Heartbeat::Counters{{"n", n}}; });
   n = 7;
   hb.tick();
   hb.tick();  // within the same second: nothing
@@ -1045,14 +1045,14 @@ TEST(Process, HeartbeatPublishesNameStateAndCounters) {
 }
 
 TEST(Printable, ControlCharactersAndInvalidUtf8BecomeQuestionMarks) {
-  EXPECT_EQ(common::printable("POSE_A.b-1"), "POSE_A.b-1");
-  EXPECT_EQ(common::printable("a\nb\x1b[2J\x07\x7f"), "a?b?[2J??");
+  EXPECT_EQ(app::printable("POSE_A.b-1"), "POSE_A.b-1");
+  EXPECT_EQ(app::printable("a\nb\x1b[2J\x07\x7f"), "a?b?[2J??");
   // C1 controls in UTF-8 (U+009B is CSI, ESC [ in one character), kept: text beyond them.
-  EXPECT_EQ(common::printable("\xc2\x9b" "2J\xc2\x9d" "0;x\xc2\x9c"), "?2J?0;x?");
-  EXPECT_EQ(common::printable("caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x9a\x97 \xc2\xa0"), "caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x9a\x97 \xc2\xa0");
+  EXPECT_EQ(app::printable("\xc2\x9b" "2J\xc2\x9d" "0;x\xc2\x9c"), "?2J?0;x?");
+  EXPECT_EQ(app::printable("caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x9a\x97 \xc2\xa0"), "caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x9a\x97 \xc2\xa0");
   // Not UTF-8: stray continuation and lead bytes, an overlong '/', a surrogate, a cut sequence.
-  EXPECT_EQ(common::printable("\xff\xfe\x80"), "???");
-  EXPECT_EQ(common::printable("\xc0\xaf"), "??");
-  EXPECT_EQ(common::printable("\xed\xa0\x80"), "???");
-  EXPECT_EQ(common::printable("ok\xe2\x82"), "ok??");
+  EXPECT_EQ(app::printable("\xff\xfe\x80"), "???");
+  EXPECT_EQ(app::printable("\xc0\xaf"), "??");
+  EXPECT_EQ(app::printable("\xed\xa0\x80"), "???");
+  EXPECT_EQ(app::printable("ok\xe2\x82"), "ok??");
 }

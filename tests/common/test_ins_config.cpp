@@ -11,7 +11,7 @@
 using namespace lcmloc;
 
 TEST(InsConfig, PaperFileLoads) {
-  const auto cfg = common::loadSimSystemConfig(LCMLOC_INS_YAML);
+  const auto cfg = simconfig::loadSimSystemConfig(LCMLOC_INS_YAML);
   EXPECT_EQ(cfg.fusion.filter.type, "odo_ins");
   EXPECT_EQ(cfg.fusion.shadow, std::vector<std::string>{"odo_ins_uncal"});
   EXPECT_DOUBLE_EQ(cfg.fusion.filter.ins.odo_markov, 0.001);
@@ -25,8 +25,8 @@ TEST(InsConfig, PaperFileLoads) {
   EXPECT_EQ(cfg.fusion.fix_gate.lockout_rejections, 2);
   EXPECT_DOUBLE_EQ(cfg.fusion.fix.max_condition, 100.0);
   // The paper's vision run re-initializes with every fix (no gate).
-  EXPECT_DOUBLE_EQ(common::loadSimSystemConfig(LCMLOC_INS_VISION_YAML).fusion.fix_gate.probability, 0.0);
-  const auto set = common::parseSimSystemConfig(
+  EXPECT_DOUBLE_EQ(simconfig::loadSimSystemConfig(LCMLOC_INS_VISION_YAML).fusion.fix_gate.probability, 0.0);
+  const auto set = simconfig::parseSimSystemConfig(
       "fusion: {landmark_fix: {gate_probability: 0.99, lockout_rejections: 0, max_condition: 1000}}\n", "t.yaml");
   EXPECT_DOUBLE_EQ(set.fusion.fix_gate.probability, 0.99);
   EXPECT_EQ(set.fusion.fix_gate.lockout_rejections, 0);
@@ -36,9 +36,9 @@ TEST(InsConfig, PaperFileLoads) {
 TEST(InsConfig, ErrorsNameTheKey) {
   auto expectError = [](const std::string& yaml, const std::string& key) {
     try {
-      common::parseSimSystemConfig(yaml, "t.yaml");
+      simconfig::parseSimSystemConfig(yaml, "t.yaml");
       ADD_FAILURE() << "accepted: " << yaml;
-    } catch (const common::ConfigError& e) {
+    } catch (const app::ConfigError& e) {
       EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
     }
   };
@@ -64,16 +64,16 @@ TEST(InsConvert, BearingsValidated) {
   m.bearings = {0.1, -0.2};
   m.bearing_std = 1e-4;
   std::string why;
-  auto b = common::toCore(m, "VISION", &why);
+  auto b = bus::toCore(m, "VISION", &why);
   ASSERT_TRUE(b.has_value()) << why;
   EXPECT_EQ(b->ids, (std::vector<int>{4, 5}));
   EXPECT_EQ(b->bearings, (std::vector<double>{0.1, -0.2}));
   EXPECT_EQ(b->sensor, "VISION");
   m.count = 3;
-  EXPECT_FALSE(common::toCore(m, "VISION", &why).has_value());
+  EXPECT_FALSE(bus::toCore(m, "VISION", &why).has_value());
   EXPECT_NE(why.find("count"), std::string::npos);
   m.count = 2;
   m.bearings[1] = NAN;
-  EXPECT_FALSE(common::toCore(m, "VISION", &why).has_value());
+  EXPECT_FALSE(bus::toCore(m, "VISION", &why).has_value());
   EXPECT_NE(why.find("NaN"), std::string::npos);
 }

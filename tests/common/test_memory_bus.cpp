@@ -5,7 +5,7 @@
 #include "lcmloc/odometry_t.hpp"
 
 using namespace lcmloc;
-using common::MemoryBus;
+using bus::MemoryBus;
 
 namespace {
 
@@ -66,7 +66,7 @@ TEST(MemoryBus, ChannelsMatchAsLcmMatchesThem) {
   EXPECT_EQ(received("(A|B)", {"A", "AX", "XB", "B"}), std::vector<std::string>({"A", "B"}));
   MemoryBus bus;
   EXPECT_THROW(bus.subscribeRaw("(POSE", [](const std::string&, const uint8_t*, std::size_t, int64_t) {}),
-               common::TransportError);
+               bus::TransportError);
 }
 
 TEST(MemoryBus, EveryMatchingSubscriptionGetsTheMessageInTheOrderSubscribed) {

@@ -41,8 +41,8 @@ TEST(ScenarioMap, AMapWrittenAndReadBackIsTheSameBitForBit) {
                                {9, 314.15926535897932, 5e300},
                                {10, 315.0, 5e300}};  // (a lone marker there would be far outside the rest)
   const std::string file = (fs::temp_directory_path() / ("lcmloc_map_" + std::to_string(::getpid()) + ".csv")).string();
-  common::csv::writeMap(file, map);
-  expectSameMap(common::csv::loadMap(file), map, "round trip");
+  app::csv::writeMap(file, map);
+  expectSameMap(app::csv::loadMap(file), map, "round trip");
   fs::remove(file);
 }
 
@@ -54,12 +54,12 @@ TEST(ScenarioMap, EveryShippedConfigWithMarkersNamesTheMapOfItsWorld) {
     // (the launcher's system files list processes: no world of their own)
     if (entry.path().extension() != ".yaml" || (file.size() >= 11 && file.substr(file.size() - 11) == "system.yaml"))
       continue;
-    const common::SimSystemConfig cfg = common::loadSimSystemConfig(entry.path().string());
-    const core::MarkerMap world = common::scenarioMap(cfg);
+    const simconfig::SimSystemConfig cfg = simconfig::loadSimSystemConfig(entry.path().string());
+    const core::MarkerMap world = drivers::scenarioMap(cfg);
     if (world.empty()) continue;
     const std::string& name = file;
     ASSERT_FALSE(cfg.fusion.map_file.empty()) << name << ": markers in the world, no fusion.map_file";
-    expectSameMap(common::csv::loadMap(cfg.fusion.map_file), world, name + ": " + cfg.fusion.map_file);
+    expectSameMap(app::csv::loadMap(cfg.fusion.map_file), world, name + ": " + cfg.fusion.map_file);
     ++checked;
   }
   }
@@ -75,7 +75,7 @@ std::string mapError(const std::string& content, std::string* file_out = nullptr
   if (file_out) *file_out = file;
   std::string error;
   try {
-    common::csv::loadMap(file);
+    app::csv::loadMap(file);
   } catch (const std::runtime_error& e) {
     error = e.what();
   }
@@ -130,12 +130,12 @@ TEST(MapFile, TheFarRuleUsesARobustSpread) {
   core::MarkerMap map;
   for (int i = 0; i < 101; ++i) map.push_back({i, 0.0, 2.0 * i});  // 200 m along y, centre (0, 100)
   map.push_back({500, 1e9, 1e9});                                  // a wrong row does not move it
-  const common::csv::MapSpread s = common::csv::mapSpread(map);
+  const app::csv::MapSpread s = app::csv::mapSpread(map);
   EXPECT_EQ(s.cx, 0.0);
   EXPECT_EQ(s.cy, 102.0);
   EXPECT_EQ(s.spread, 52.0);  // the 52nd of the distances 0, 2, 2, 4, 4, ...
-  EXPECT_EQ(common::csv::farMarker(map, s), 101);
+  EXPECT_EQ(app::csv::farMarker(map, s), 101);
   map.pop_back();
-  EXPECT_EQ(common::csv::farMarker(map, common::csv::mapSpread(map)), -1);
-  EXPECT_EQ(common::csv::farMarker({{1, 0, 0}, {2, 1e9, 0}}, common::csv::mapSpread({{1, 0, 0}, {2, 1e9, 0}})), -1);
+  EXPECT_EQ(app::csv::farMarker(map, app::csv::mapSpread(map)), -1);
+  EXPECT_EQ(app::csv::farMarker({{1, 0, 0}, {2, 1e9, 0}}, app::csv::mapSpread({{1, 0, 0}, {2, 1e9, 0}})), -1);
 }

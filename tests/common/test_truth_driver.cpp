@@ -1,4 +1,4 @@
-// common::TruthDriver, the GROUND_TRUTH input every simulated sensor driver shares, over memq://:
+// drivers::TruthDriver, the GROUND_TRUTH input every simulated sensor driver shares, over memq://:
 // one rule (truthProblem) refuses unusable ground truth before any sensor model sees it, counts
 // it ("bad_truth" in the heartbeat) and lets the samples after it through unharmed.
 #include <gtest/gtest.h>
@@ -41,7 +41,7 @@ lcmloc::ground_truth_t truth(int64_t k) {
   return t;
 }
 
-void drain(common::Bus& bus) {
+void drain(bus::Bus& bus) {
   for (int i = 0; i < 100000 && bus.handle(0) > 0; ++i) {  // memq: published is queued
   }
 }
@@ -49,15 +49,15 @@ void drain(common::Bus& bus) {
 /// Stops the driver (the stop flag stays set for the rest of this test process: every test
 /// drives its driver by handling the bus itself) and returns the counters of its "stopping"
 /// heartbeat.
-std::map<std::string, int64_t> stop(common::Bus& bus, common::TruthDriver& driver) {
+std::map<std::string, int64_t> stop(bus::Bus& bus, drivers::TruthDriver& driver) {
   std::map<std::string, int64_t> counters;
   std::string state;
   bus.subscribe<lcmloc::heartbeat_t>("HEARTBEAT", [&](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
     state = m.state;
     for (int i = 0; i < m.num_counters; ++i) counters[m.counter_names[i]] = m.counters[i];
   });
-  common::requestStop();
-  EXPECT_EQ(driver.run([] { return std::string("nothing out"); }), common::kExitOk);
+  app::requestStop();
+  EXPECT_EQ(driver.run([] { return std::string("nothing out"); }), app::kExitOk);
   drain(bus);
   EXPECT_EQ(state, "stopping");
   return counters;
@@ -66,20 +66,20 @@ std::map<std::string, int64_t> stop(common::Bus& bus, common::TruthDriver& drive
 }  // namespace
 
 TEST(TruthProblem, AcceptsValidSamplesUpToTheEdgesOfTheRanges) {
-  EXPECT_EQ(common::truthProblem(truth(0)), "");
+  EXPECT_EQ(drivers::truthProblem(truth(0)), "");
   auto t = truth(3);
   t.utime = 0;
-  EXPECT_EQ(common::truthProblem(t), "");
-  t.utime = common::kTruthUtimeLimit - 1;
-  EXPECT_EQ(common::truthProblem(t), "");
+  EXPECT_EQ(drivers::truthProblem(t), "");
+  t.utime = drivers::kTruthUtimeLimit - 1;
+  EXPECT_EQ(drivers::truthProblem(t), "");
   t = truth(3);
-  t.x = -common::kTruthLengthLimit;
-  t.y = common::kTruthLengthLimit;
-  t.distance = common::kTruthLengthLimit;
-  t.speed = -common::kTruthSpeedLimit;
+  t.x = -drivers::kTruthLengthLimit;
+  t.y = drivers::kTruthLengthLimit;
+  t.distance = drivers::kTruthLengthLimit;
+  t.speed = -drivers::kTruthSpeedLimit;
   t.heading = 100.0;  // the heading: finite is enough, the models wrap it
   t.steering = -1.5707;  // just inside -pi/2
-  EXPECT_EQ(common::truthProblem(t), "");
+  EXPECT_EQ(drivers::truthProblem(t), "");
 }
 
 TEST(TruthProblem, RefusesNonFiniteFieldsBadUtimesAndValuesNoVehicleReaches) {
@@ -94,45 +94,45 @@ TEST(TruthProblem, RefusesNonFiniteFieldsBadUtimesAndValuesNoVehicleReaches) {
     for (const double v : {kNaN, kInf, -kInf}) {
       auto t = truth(5);
       t.*f.member = v;
-      const std::string why = common::truthProblem(t);
+      const std::string why = drivers::truthProblem(t);
       EXPECT_NE(why.find("non-finite"), std::string::npos) << f.name << " = " << v << ": '" << why << "'";
       EXPECT_NE(why.find(f.name), std::string::npos) << why;
     }
   auto t = truth(5);
   t.x = kNaN;
-  EXPECT_EQ(common::truthProblem(t), "non-finite pose: x = nan");
-  for (const int64_t u : {int64_t{-1}, kMin, kMax, kMax - 5, common::kTruthUtimeLimit}) {
+  EXPECT_EQ(drivers::truthProblem(t), "non-finite pose: x = nan");
+  for (const int64_t u : {int64_t{-1}, kMin, kMax, kMax - 5, drivers::kTruthUtimeLimit}) {
     t = truth(5);
     t.utime = u;
-    EXPECT_NE(common::truthProblem(t).find("utime"), std::string::npos) << u;
+    EXPECT_NE(drivers::truthProblem(t).find("utime"), std::string::npos) << u;
   }
   for (const double s : {M_PI / 2, -M_PI / 2, 1e308}) {
     t = truth(5);
     t.steering = s;
-    EXPECT_NE(common::truthProblem(t).find("steering = "), std::string::npos) << s;
+    EXPECT_NE(drivers::truthProblem(t).find("steering = "), std::string::npos) << s;
   }
   for (const double d : {1e300, -1e300, 1.0001e9}) {
     t = truth(5);
     t.distance = d;
-    EXPECT_NE(common::truthProblem(t).find("distance"), std::string::npos) << d;
+    EXPECT_NE(drivers::truthProblem(t).find("distance"), std::string::npos) << d;
     t = truth(5);
     t.y = d;
-    EXPECT_NE(common::truthProblem(t).find("y = "), std::string::npos) << d;
+    EXPECT_NE(drivers::truthProblem(t).find("y = "), std::string::npos) << d;
   }
   t = truth(5);
   t.speed = 1e300;
-  EXPECT_NE(common::truthProblem(t).find("speed"), std::string::npos);
+  EXPECT_NE(drivers::truthProblem(t).find("speed"), std::string::npos);
 }
 
 // The audit's samples (NaN fields, INT64_MIN / INT64_MAX utimes, a 1e300 m distance) reached every
 // sensor model: an odometer stuck at NaN, IMU messages and GPS fixes with NaN, a fault injected at
 // the wrong place, signed overflow in the time arithmetic.
 TEST(TruthDriver, BadGroundTruthIsRefusedCountedAndNeverReachesTheModel) {
-  common::Bus bus("memq://");
-  const common::SimSystemConfig cfg;  // GROUND_TRUTH, HEARTBEAT, fusion.max_time_jump 1 s
+  bus::Bus bus("memq://");
+  const simconfig::SimSystemConfig cfg;  // GROUND_TRUTH, HEARTBEAT, fusion.max_time_jump 1 s
   std::vector<lcmloc::ground_truth_t> seen;
   int restarts = 0;
-  common::TruthDriver driver(
+  drivers::TruthDriver driver(
       bus, cfg, "test-driver", [&](const std::string&, const lcmloc::ground_truth_t& m) { seen.push_back(m); },
       [&] { ++restarts; });
   std::map<int64_t, lcmloc::ground_truth_t> bad;  // by seq
@@ -176,22 +176,22 @@ TEST(TruthDriver, BadGroundTruthIsRefusedCountedAndNeverReachesTheModel) {
 // End to end through the driver frame, as lcmloc-odometry runs it: one NaN distance made the
 // odometer publish 9.2e15 m once and 0 ever after, with no log line and no counter.
 TEST(TruthDriver, OdometryIncrementsAreRightAfterANaNDistance) {
-  common::Bus bus("memq://");
-  common::SimSystemConfig cfg;
+  bus::Bus bus("memq://");
+  simconfig::SimSystemConfig cfg;
   auto& oc = cfg.scenario.odometry;  // 100 Hz, 1 mm ticks
   oc.scale_error = 0.0;
   oc.slip_std = 0.0;
-  std::optional<models::OdometrySensor> sensor;
+  std::optional<sim::OdometrySensor> sensor;
   auto start = [&] { sensor.emplace(oc, 2.5, 7); };
   start();
   std::vector<lcmloc::odometry_t> out;
   bus.subscribe<lcmloc::odometry_t>(cfg.channels.odometry,
                                     [&](const std::string&, const lcmloc::odometry_t& m, int64_t) { out.push_back(m); });
-  common::TruthDriver driver(
+  drivers::TruthDriver driver(
       bus, cfg, "lcmloc-odometry",
       [&](const std::string&, const lcmloc::ground_truth_t& m) {
-        if (auto s = sensor->sample(common::toCore(m)))
-          bus.publish(cfg.channels.odometry, common::toLcm(*s, driver.nextSeq()));
+        if (auto s = sensor->sample(drivers::toCore(m)))
+          bus.publish(cfg.channels.odometry, drivers::toLcm(*s, driver.nextSeq()));
       },
       start);
   for (int64_t k = 0; k < 200; ++k) {

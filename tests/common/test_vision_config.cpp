@@ -11,8 +11,8 @@ using namespace lcmloc;
 namespace {
 std::string errorOf(const std::string& yaml) {
   try {
-    common::parseSimSystemConfig(yaml, "t.yaml");
-  } catch (const common::ConfigError& e) {
+    simconfig::parseSimSystemConfig(yaml, "t.yaml");
+  } catch (const app::ConfigError& e) {
     return e.what();
   }
   return "";
@@ -20,7 +20,7 @@ std::string errorOf(const std::string& yaml) {
 }  // namespace
 
 TEST(VisionConfig, SectionAndLandmarkMapParsed) {
-  const auto cfg = common::parseSimSystemConfig(R"(
+  const auto cfg = simconfig::parseSimSystemConfig(R"(
 vision: {rate_hz: 5, bearing_std: 2.0e-4, resolution: 0, seed: 17, max_range: 800}
 landmarks:
   - {id: 3, x: 10.5, y: -20}
@@ -42,7 +42,7 @@ channels: {vision: CAMERA}
   EXPECT_EQ(cfg.scenario.landmarks[1].x, -1000.0);
   EXPECT_EQ(cfg.channels.vision, "CAMERA");
   // Defaults: the paper's sensor (30", 14"), no map.
-  const auto d = common::parseSimSystemConfig("{}", "t.yaml");
+  const auto d = simconfig::parseSimSystemConfig("{}", "t.yaml");
   EXPECT_NEAR(d.scenario.vision.bearing_std * 206264.806, 30.0, 1e-6);
   EXPECT_NEAR(d.scenario.vision.resolution * 206264.806, 14.0, 1e-6);
   EXPECT_TRUE(d.scenario.landmarks.empty());

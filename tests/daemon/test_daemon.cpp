@@ -37,8 +37,8 @@ lcmloc::odometry_t odometry(int64_t seq, int64_t utime) {
 
 class DaemonTest : public ::testing::Test {
  protected:
-  common::SystemConfig cfg_ = common::loadSystemConfig(LCMLOC_PAPER_YAML);
-  common::MemoryBus bus_;
+  app::SystemConfig cfg_ = app::loadSystemConfig(LCMLOC_PAPER_YAML);
+  bus::MemoryBus bus_;
 
   /// Odometry seq from..to (inclusive) at 100 Hz on the seq's time (kT0 + seq * kStep), each
   /// delivered at once.
@@ -166,12 +166,12 @@ TEST_F(DaemonTest, AnOdometryGapIsBridgedAndReported) {
   // Bridged at the last speed (10 m/s): the position goes on across the gap, with a larger
   // covariance than before it.
   // The same drive without the gap, for comparison.
-  common::MemoryBus whole_bus;
+  bus::MemoryBus whole_bus;
   fusion::FusionDaemon whole(cfg_, whole_bus);
   for (int64_t k = 0; k <= 99; ++k) whole_bus.inject(cfg_.channels.odometry, odometry(k, kT0 + k * kStep));
   whole_bus.deliverAll();
   whole.shutdown();
-  auto at = [&](const common::MemoryBus& bus, int64_t seq) {
+  auto at = [&](const bus::MemoryBus& bus, int64_t seq) {
     for (const auto& pose : bus.decoded<lcmloc::pose_t>(cfg_.channels.pose))
       if (pose.utime == kT0 + seq * kStep) return pose;
     ADD_FAILURE() << "no POSE at seq " << seq;
@@ -278,7 +278,7 @@ TEST_F(DaemonTest, AHandOverStartsFromTheRunningDaemonsLastPose) {
       << started[0].detail;
   bus_.inject(cfg_.channels.odometry, odometry(1, kT0 + kStep));
   while (bus_.queued() > 0) runner.step(0);
-  EXPECT_EQ(runner.finish(), common::kExitOk);
+  EXPECT_EQ(runner.finish(), app::kExitOk);
   const auto p = poses(cfg_.channels.pose);
   ASSERT_EQ(p.size(), 1u);
   EXPECT_NEAR(p[0].state[0], 50.0 + 0.1 * std::cos(0.3), 1e-3);
@@ -300,7 +300,7 @@ TEST_F(DaemonTest, APoseThisDaemonDidNotPublishIsReportedAsAnotherDaemons) {
   while (bus_.queued() > 0) runner.step(0);
   EXPECT_EQ(runner.daemon().foreignOutputs(), 1);
   ASSERT_EQ(events("foreign_output").size(), 1u);
-  EXPECT_EQ(runner.finish(), common::kExitOk);
+  EXPECT_EQ(runner.finish(), app::kExitOk);
   EXPECT_EQ(status().back().event, "stopped");
   const auto hb = bus_.decoded<lcmloc::heartbeat_t>(cfg_.channels.heartbeat);
   ASSERT_FALSE(hb.empty());
@@ -319,7 +319,7 @@ TEST_F(DaemonTest, TheCheckpointHoldsTheActiveStateAtTheStop) {
     EXPECT_NE(events("started").at(0).detail.find("no checkpoint yet"), std::string::npos);
     for (int64_t k = 0; k < 20; ++k) bus_.inject(cfg_.channels.odometry, odometry(k, kT0 + k * kStep));
     while (bus_.queued() > 0) runner.step(0);
-    EXPECT_EQ(runner.finish(), common::kExitOk);
+    EXPECT_EQ(runner.finish(), app::kExitOk);
   }
   const auto ck = fusion::readCheckpoint(ro.checkpoint);
   ASSERT_TRUE(ck.has_value());

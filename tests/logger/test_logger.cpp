@@ -19,7 +19,7 @@
 
 using namespace std::chrono_literals;
 namespace fs = std::filesystem;
-using lcmloc::common::Bus;
+using lcmloc::bus::Bus;
 
 namespace {
 

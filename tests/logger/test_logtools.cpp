@@ -435,7 +435,7 @@ TEST_F(LogTools, CutAsALibraryKeepsTheUtimeWindowAndReportsDamage) {
   o.channels = {"ODOMETRY"};
   o.from_utime = kT0 + 100000;
   o.to_utime = kT0 + 190000;
-  ASSERT_EQ(lcmloc::logtool::cut(log, path("window.lcmlog"), o), lcmloc::common::kExitOk);
+  ASSERT_EQ(lcmloc::logtool::cut(log, path("window.lcmlog"), o), lcmloc::app::kExitOk);
   std::vector<int64_t> seqs;
   lcm::LogFile in(path("window.lcmlog"), "r");
   ASSERT_TRUE(in.good());
@@ -451,14 +451,14 @@ TEST_F(LogTools, CutAsALibraryKeepsTheUtimeWindowAndReportsDamage) {
   lcmloc::logtool::CutOptions empty;
   empty.from = 0.5;
   empty.to = 0.2;
-  EXPECT_THROW(lcmloc::logtool::cut(log, path("empty.lcmlog"), empty), lcmloc::common::ConfigError);
+  EXPECT_THROW(lcmloc::logtool::cut(log, path("empty.lcmlog"), empty), lcmloc::app::ConfigError);
 
   // Cut short inside the event that starts at starts[40]: everything before it is kept.
   const std::string truncated = path("truncated.lcmlog");
   fs::copy_file(log, truncated);
   fs::resize_file(truncated, static_cast<std::uintmax_t>(starts[40] + 10));
   ASSERT_EQ(lcmloc::logtool::cut(truncated, path("kept.lcmlog"), lcmloc::logtool::CutOptions{}),
-            lcmloc::common::kExitInputDamaged);
+            lcmloc::app::kExitInputDamaged);
   lcm::LogFile kept(path("kept.lcmlog"), "r");
   ASSERT_TRUE(kept.good());
   int64_t n = 0;
@@ -484,18 +484,18 @@ TEST_F(LogTools, TheCutCommandRunsInProcessAndRefusesAnExistingOutputWithoutOver
   lcmloc::logtool::addLogOptions(app, c);
   app.parse("cut " + log + " -o " + out + " --from 0.2 --to 0.5 -c ODOM.*", false);
   ASSERT_EQ(c.subcommand, lcmloc::logtool::Subcommand::Cut);
-  ASSERT_EQ(lcmloc::logtool::runLogCommand(c), lcmloc::common::kExitOk);
+  ASSERT_EQ(lcmloc::logtool::runLogCommand(c), lcmloc::app::kExitOk);
   EXPECT_EQ(count(out), 30);  // ODOMETRY seq 20 .. 50, 50 missing
 
   c.cut = lcmloc::logtool::CutOptions{};  // the whole log
-  EXPECT_THROW(lcmloc::logtool::runLogCommand(c), lcmloc::common::UsageError);
+  EXPECT_THROW(lcmloc::logtool::runLogCommand(c), lcmloc::app::UsageError);
   EXPECT_EQ(count(out), 30);
   c.overwrite = true;
-  ASSERT_EQ(lcmloc::logtool::runLogCommand(c), lcmloc::common::kExitOk);
+  ASSERT_EQ(lcmloc::logtool::runLogCommand(c), lcmloc::app::kExitOk);
   EXPECT_EQ(count(out), 135);
 
   c.log_path = path("missing.lcmlog");
-  EXPECT_THROW(lcmloc::logtool::runLogCommand(c), lcmloc::common::ConfigError);
+  EXPECT_THROW(lcmloc::logtool::runLogCommand(c), lcmloc::app::ConfigError);
 }
 
 // A CSV on stdout that cannot be written (a full disk behind a redirection, a closed pipe) was

@@ -100,18 +100,18 @@ class RecorderTest : public ::testing::Test {
 
   fs::path dir_;
   logger::RecorderOptions opts_;
-  common::MemoryBus bus_;
+  bus::MemoryBus bus_;
 };
 
 }  // namespace
 
 TEST_F(RecorderTest, ANewFileStartsBeforeOneWouldExceedMaxFileBytes) {
-  const auto event_bytes = static_cast<int64_t>(28 + std::string("ODOMETRY").size() + common::MemoryBus::encode(odometry(0)).size());
+  const auto event_bytes = static_cast<int64_t>(28 + std::string("ODOMETRY").size() + bus::MemoryBus::encode(odometry(0)).size());
   opts_.writer.max_file_bytes = 3 * event_bytes;  // three events fit, the fourth starts a new file
   logger::Recorder rec(opts_, bus_);
   odo(0, 9);
   run(rec);
-  EXPECT_EQ(rec.finish(), common::kExitOk);
+  EXPECT_EQ(rec.finish(), app::kExitOk);
   const auto files = rec.files();
   ASSERT_EQ(files.size(), 4u);
   EXPECT_EQ(seqsPerFile(files), (Seqs{{0, 1, 2}, {3, 4, 5}, {6, 7, 8}, {9}}));
@@ -130,7 +130,7 @@ TEST_F(RecorderTest, ARequestStartsANewFileAfterWhatCameBefore) {
   rec.requestRotate();  // SIGHUP
   odo(3, 4);
   run(rec);
-  EXPECT_EQ(rec.finish(), common::kExitOk);
+  EXPECT_EQ(rec.finish(), app::kExitOk);
   EXPECT_EQ(seqsPerFile(rec.files()), (Seqs{{0, 1, 2}, {3, 4}}));
 }
 
@@ -143,7 +143,7 @@ TEST_F(RecorderTest, ANewFileStartsAfterMaxFileSeconds) {
   std::this_thread::sleep_for(std::chrono::milliseconds(60));
   odo(1, 1);
   run(rec);
-  EXPECT_EQ(rec.finish(), common::kExitOk);
+  EXPECT_EQ(rec.finish(), app::kExitOk);
   EXPECT_EQ(seqsPerFile(rec.files()), (Seqs{{0}, {1}}));
 }
 
@@ -157,7 +157,7 @@ TEST_F(RecorderTest, AMessageTheQueueCannotTakeIsDroppedCountedAndReported) {
   bus_.inject("BIG", big);
   odo(1, 1);
   run(rec);
-  EXPECT_EQ(rec.finish(), common::kExitOk);
+  EXPECT_EQ(rec.finish(), app::kExitOk);
 
   // The status published at the stop (before the writer finished what was queued: written
   // is the writer's count, below).
@@ -183,7 +183,7 @@ TEST_F(RecorderTest, MessagesLostUpstreamAreGapsNotDrops) {
   odo(0, 1);
   odo(5, 6);  // 2, 3, 4 never came
   run(rec);
-  EXPECT_EQ(rec.finish(), common::kExitOk);
+  EXPECT_EQ(rec.finish(), app::kExitOk);
   const auto s = lastStatus();
   EXPECT_EQ(s.gaps, 3);
   EXPECT_EQ(s.dropped, 0);
@@ -197,7 +197,7 @@ TEST_F(RecorderTest, TheLogEndsWithTheLoggersOwnLastStatus) {
   logger::Recorder rec(opts_, bus_);
   odo(0, 4);
   run(rec);
-  EXPECT_EQ(rec.finish(), common::kExitOk);
+  EXPECT_EQ(rec.finish(), app::kExitOk);
   const auto events = readLog(rec.files().front());
   ASSERT_GE(events.size(), 8u);  // 5 ODOMETRY, a heartbeat and a status at the start, the last status
   ASSERT_EQ(events.back().channel, "LOGGER_STATUS");

@@ -11,7 +11,7 @@
 #include "lcmloc/sim/world.hpp"
 
 using namespace lcmloc;
-using namespace lcmloc::models;
+using namespace lcmloc::sim;
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;

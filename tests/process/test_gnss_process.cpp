@@ -26,7 +26,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-bool waitFor(lcmloc::common::Bus& bus, const std::function<bool()>& pred, std::chrono::milliseconds timeout) {
+bool waitFor(lcmloc::bus::Bus& bus, const std::function<bool()>& pred, std::chrono::milliseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   while (!pred() && std::chrono::steady_clock::now() < deadline) bus.handle(50);
   return pred();
@@ -56,7 +56,7 @@ TEST_F(GnssProcess, GpsfakeGpsdDriverFusionEndToEnd) {
 datum: {latitude: -33.883, longitude: 151.195, altitude: 0.0}
 gps: {source: gpsd, gpsd_host: localhost, gpsd_port: ")" + std::to_string(port) + R"("}
 )");
-  lcmloc::common::Bus bus(url_);
+  lcmloc::bus::Bus bus(url_);
   std::vector<lcmloc::gps_fix_t> fixes;
   std::vector<lcmloc::gate_decision_t> decisions;
   std::vector<lcmloc::pose_t> poses;
@@ -90,7 +90,7 @@ gps: {source: gpsd, gpsd_host: localhost, gpsd_port: ")" + std::to_string(port) 
   ASSERT_TRUE(waitFor(bus, [&] { return decisions.size() + 1 >= fixes.size(); }, 5s)) << fusion.output();
 
   // The NMEA log drives east at 5 m/s from (100, 50) m; no fix at 12:00:12 and 12:00:13.
-  const lcmloc::common::LocalFrame frame({-33.883, 151.195, 0.0});
+  const lcmloc::bus::LocalFrame frame({-33.883, 151.195, 0.0});
   auto truthX = [](int64_t utime) { return 100.0 + 5.0 * static_cast<double>((utime / 1000000) % 60); };
   int with_fix = 0, without = 0;
   std::vector<int64_t> fix_utimes;
@@ -188,7 +188,7 @@ vehicle: {speed: 5.0, accel: 2.0, weave_amplitude: 0.0}
 gps: {rate_hz: 2.0, error: 2.0}
 fusion: {filter: {type: tvekf, initial_pose: [0.0, 0.0, 0.0], p0_diag: [1.0, 1.0, 0.01]}}
 )");
-  lcmloc::common::Bus bus(url_);
+  lcmloc::bus::Bus bus(url_);
   lcmloc::ground_truth_t last_truth{};
   lcmloc::pose_t last_pose{};
   int imu = 0, gps = 0, gate_gps = 0, gate_imu = 0;

@@ -19,7 +19,7 @@ using namespace std::chrono_literals;
 
 namespace {
 
-bool waitFor(lcmloc::common::Bus& bus, const std::function<bool()>& pred, std::chrono::milliseconds timeout) {
+bool waitFor(lcmloc::bus::Bus& bus, const std::function<bool()>& pred, std::chrono::milliseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   while (!pred() && std::chrono::steady_clock::now() < deadline) bus.handle(50);
   return pred();
@@ -30,7 +30,7 @@ class InsProcess : public ProcessFixture {};
 }  // namespace
 
 TEST_F(InsProcess, FusionRunsOdoInsOnImuAndOdometryAndTakesALandmarkFix) {
-  lcmloc::common::Bus bus(url_);
+  lcmloc::bus::Bus bus(url_);
   std::vector<lcmloc::pose_t> poses;
   std::vector<lcmloc::ground_truth_t> truth;
   std::vector<lcmloc::gate_decision_t> decisions;

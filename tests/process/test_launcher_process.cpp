@@ -26,7 +26,7 @@ class LauncherTest : public ProcessFixture {
  protected:
   void SetUp() override {
     ProcessFixture::SetUp();
-    bus_ = std::make_unique<lcmloc::common::Bus>(url_);
+    bus_ = std::make_unique<lcmloc::bus::Bus>(url_);
     bus_->subscribe<lcmloc::heartbeat_t>("HEARTBEAT", [this](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
       if (m.state == "running") pids_[m.process].insert(m.pid);
     });
@@ -76,7 +76,7 @@ class LauncherTest : public ProcessFixture {
     return ss.str();
   }
 
-  std::unique_ptr<lcmloc::common::Bus> bus_;
+  std::unique_ptr<lcmloc::bus::Bus> bus_;
   std::map<std::string, std::set<int>> pids_;  // running heartbeats: process -> pids
 };
 

@@ -40,7 +40,7 @@ class ProcessTest : public ProcessFixture {
 };
 
 /// Handles bus messages until pred() or the timeout; returns pred().
-bool waitFor(lcmloc::common::Bus& bus, const std::function<bool()>& pred, std::chrono::milliseconds timeout) {
+bool waitFor(lcmloc::bus::Bus& bus, const std::function<bool()>& pred, std::chrono::milliseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   while (!pred() && std::chrono::steady_clock::now() < deadline) bus.handle(50);
   return pred();
@@ -119,7 +119,7 @@ TEST_F(ProcessTest, LauncherRunsTheSystemAndTheLogHasEveryChannelWithoutGaps) {
 TEST_F(ProcessTest, ARestartedSimulatorGivesTheSameEstimatesAgainWithoutRestartingTheRest) {
   const std::string scenario =
       writeFile("scenario.yaml", "scenario: {realtime_factor: 10}\nfusion: {reorder_window: 0.5}\n");
-  lcmloc::common::Bus bus(url_);
+  lcmloc::bus::Bus bus(url_);
   std::map<std::string, std::set<int>> alive;  // process -> pids seen
   std::vector<lcmloc::pose_t> poses;
   std::vector<lcmloc::fusion_status_t> status;
@@ -170,7 +170,7 @@ TEST_F(ProcessTest, ARestartedSimulatorGivesTheSameEstimatesAgainWithoutRestarti
 
 TEST_F(ProcessTest, DaemonSurvivesBadInputAndReportsEachOnStatus) {
   Child daemon(LCMLOC_FUSION, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML}, path("fusion.out"));
-  lcmloc::common::Bus bus(url_);
+  lcmloc::bus::Bus bus(url_);
   bool ready = false;
   std::vector<lcmloc::fusion_status_t> status;
   int64_t last_pose_utime = -1;
@@ -264,7 +264,7 @@ TEST_F(ProcessTest, LoggerFlushesOnSigtermAndReportsGaps) {
   Child logger(LCMLOC_LOGGER, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML, "--output", log, "--channel",
                                "TEST_.*"},
                path("logger.out"));
-  lcmloc::common::Bus bus(url_);
+  lcmloc::bus::Bus bus(url_);
   int64_t logger_received = -1;
   bus.subscribe<lcmloc::heartbeat_t>("HEARTBEAT", [&](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
     if (m.pid != logger.pid()) return;
@@ -299,11 +299,11 @@ TEST_F(ProcessTest, LoggerFlushesOnSigtermAndReportsGaps) {
   EXPECT_NE(out.find("2 sequence gaps"), std::string::npos) << out;
 }
 
-// A sensor driver (every one shares common::TruthDriver) counts every GROUND_TRUTH message
+// A sensor driver (every one shares drivers::TruthDriver) counts every GROUND_TRUTH message
 // missing, warns about the first five gaps only, and numbers its own output without gaps.
 TEST_F(ProcessTest, DriverCountsEveryTruthGapWarnsAboutTheFirstFiveAndNumbersItsOutput) {
   Child driver(LCMLOC_ODOMETRY, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML}, path("odometry.out"));
-  lcmloc::common::Bus bus(url_);
+  lcmloc::bus::Bus bus(url_);
   std::map<std::string, int64_t> counters;
   std::string state;
   bus.subscribe<lcmloc::heartbeat_t>("HEARTBEAT", [&](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
@@ -351,13 +351,13 @@ TEST_F(ProcessTest, DriverCountsEveryTruthGapWarnsAboutTheFirstFiveAndNumbersIts
 // after a crash) keeps the first: it writes NAME-001 and says so; --overwrite replaces it.
 TEST_F(ProcessTest, LoggerKeepsAnEarlierRecordingUnlessToldToOverwrite) {
   const std::string log = path("keep.lcmlog");
-  lcmloc::common::Bus bus(url_);
+  lcmloc::bus::Bus bus(url_);
   auto record = [&](const std::vector<std::string>& extra, int64_t seq, const std::string& name) {
     std::vector<std::string> args{"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML, "--output", log, "--channel", "TEST_.*"};
     args.insert(args.end(), extra.begin(), extra.end());
     Child logger(LCMLOC_LOGGER, args, path(name));
     int64_t received = -1;
-    lcmloc::common::Bus watch(url_);
+    lcmloc::bus::Bus watch(url_);
     watch.subscribe<lcmloc::heartbeat_t>("HEARTBEAT", [&](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
       if (m.pid != logger.pid()) return;
       for (int i = 0; i < m.num_counters; ++i)
@@ -528,7 +528,7 @@ TEST_F(ProcessTest, LauncherTakesOnlyItsOwnChildrensHeartbeatsAsReady) {
   std::ifstream("/proc/sys/kernel/pid_max") >> pid_max;
   // While `one` (no heartbeat) is waited for: "running" heartbeats of other processes with the
   // next 30,000 pids (on this machine's pid_max of 32768: every pid), `two`'s among them.
-  lcmloc::common::Bus bus(url_);
+  lcmloc::bus::Bus bus(url_);
   lcmloc::heartbeat_t hb{};
   hb.process = "lcmloc-elsewhere";
   hb.state = "running";
@@ -573,7 +573,7 @@ TEST_F(ProcessTest, LauncherStartsACrashedProcessAgainAndTheDaemonGoesOnFromItsC
                          ", --checkpoint-period, 0.1], restart: 1}\n" +
                          "  - {name: odometry, executable: " + LCMLOC_ODOMETRY + "}\n" +
                          "  - {name: sim, executable: " + LCMLOC_SIM + ", until_exit: true}\n");
-  lcmloc::common::Bus bus(url_);
+  lcmloc::bus::Bus bus(url_);
   std::set<int> fusion_pids;
   std::vector<lcmloc::pose_t> poses;
   std::vector<lcmloc::fusion_status_t> status;

@@ -28,7 +28,7 @@
 
 using namespace std::chrono_literals;
 namespace fs = std::filesystem;
-using lcmloc::common::Bus;
+using lcmloc::bus::Bus;
 
 namespace {
 
@@ -114,7 +114,7 @@ class ReplayProcessTest : public ProcessFixture {
   }
   /// A config with the oval track's marker map, and a synthetic log of `seconds` on it (full.lcmlog).
   std::pair<std::string, std::string> ovalConfigAndLog(double seconds) {
-    auto cfg = lcmloc::common::loadSimSystemConfig(LCMLOC_PAPER_YAML);
+    auto cfg = lcmloc::simconfig::loadSimSystemConfig(LCMLOC_PAPER_YAML);
     cfg.scenario = lcmloc::replay::ovalScenario(cfg.scenario, lcmloc::replay::OvalTrack{}, seconds);
     // The daemon and the replay need the oval's marker map: a config file with that path.
     std::string segs;
@@ -124,8 +124,8 @@ class ReplayProcessTest : public ProcessFixture {
     const std::string config = writeFile(
         "oval.yaml", "path: {segments: [" + segs + "]}\nmarkers: {count: " + std::to_string(cfg.scenario.markers.count) +
                          ", spacing: 2.0, first_at: 2.0}\nfusion: {shadow: [], map_file: oval_map.csv}\n");
-    const auto loaded = lcmloc::common::loadSimSystemConfig(config);
-    lcmloc::common::writeScenarioMap(loaded, loaded.fusion.map_file);  // the daemon's map: the oval's markers
+    const auto loaded = lcmloc::simconfig::loadSimSystemConfig(config);
+    lcmloc::drivers::writeScenarioMap(loaded, loaded.fusion.map_file);  // the daemon's map: the oval's markers
     const std::string log = path("full.lcmlog");
     lcmloc::replay::writeSyntheticLog(loaded.scenario, seconds, log, loaded.channels);
     return {config, log};

@@ -25,7 +25,7 @@ class VisionProcess : public ProcessFixture {
  protected:
   /// Publishes ground truth at 100 Hz of message time (a pose per sample from pose(k)) until
   /// `want` VISION messages arrived or the time runs out; returns the truth sent, by utime.
-  std::map<int64_t, lcmloc::ground_truth_t> drive(lcmloc::common::Bus& bus, std::vector<lcmloc::landmark_bearings_t>& got,
+  std::map<int64_t, lcmloc::ground_truth_t> drive(lcmloc::bus::Bus& bus, std::vector<lcmloc::landmark_bearings_t>& got,
                                                  std::size_t want,
                                                  const std::function<void(int, lcmloc::ground_truth_t&)>& pose) {
     std::map<int64_t, lcmloc::ground_truth_t> sent;
@@ -57,7 +57,7 @@ landmarks:
   - {id: 7, x: -700, y: -700}
   - {id: 9, x: 5000, y: 5000}
 )");
-  lcmloc::common::Bus bus(url_);
+  lcmloc::bus::Bus bus(url_);
   std::vector<lcmloc::landmark_bearings_t> got;
   bus.subscribe<lcmloc::landmark_bearings_t>(
       "VISION", [&](const std::string&, const lcmloc::landmark_bearings_t& m, int64_t) { got.push_back(m); });
@@ -104,7 +104,7 @@ TEST_F(VisionProcess, PaperSensorNoiseAndResolution) {
 vision: {rate_hz: 100, seed: 3}
 landmarks: [{id: 1, x: 0, y: 577.35}, {id: 2, x: 500, y: -288.675}, {id: 3, x: -500, y: -288.675}]
 )");
-  lcmloc::common::Bus bus(url_);
+  lcmloc::bus::Bus bus(url_);
   std::vector<lcmloc::landmark_bearings_t> got;
   bus.subscribe<lcmloc::landmark_bearings_t>(
       "VISION", [&](const std::string&, const lcmloc::landmark_bearings_t& m, int64_t) { got.push_back(m); });

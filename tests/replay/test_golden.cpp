@@ -115,7 +115,7 @@ TEST(Golden, CommittedLogsReplayToTheRecordedOutputByteForByte) {
     o.input = (kDir / (name + ".lcmlog")).string();
     o.output = (tmp / (name + ".lcmlog")).string();
     o.progress_period_s = 0;
-    const replay::ReplayResult r = replay::replayLog(common::loadSystemConfig(yaml), o);
+    const replay::ReplayResult r = replay::replayLog(app::loadSystemConfig(yaml), o);
     ASSERT_FALSE(r.damaged);  // (nor is expected.txt rewritten from a damaged log)
     ASSERT_GT(r.written, 0);
     const std::string got = summarize(name, o.output);

@@ -23,21 +23,21 @@ TEST(InsReplay, OdoInsAndLandmarkFixFromALog) {
   const fs::path dir = fs::temp_directory_path() / ("lcmloc_ins_replay_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const std::string in = (dir / "in.lcmlog").string(), out = (dir / "out.lcmlog").string();
-  auto cfg = common::parseSystemConfig(
+  auto cfg = app::parseSystemConfig(
       "fusion:\n  filter: {type: odo_ins}\n  landmarks:\n"
       "    - {id: 1, x: 0.0, y: 577.35}\n    - {id: 2, x: -500.0, y: -288.68}\n    - {id: 3, x: 500.0, y: -288.68}\n"
       "  landmark_fix: {gate_probability: 0}\n",  // a fix 50 m off is taken (no gate)
       "test.yaml");
-  models::InsSimConfig sc;
+  sim::InsSimConfig sc;
   sc.duration = 4.0;  // standing 2 s, then the hard start
-  models::InsSim sim(sc, 1000000);
+  sim::InsSim sim(sc, 1000000);
   int64_t last = 0, seq = 0;
   {
     testlog::LogWriter log(in);
     while (!sim.finished()) {
       const auto s = sim.step();
-      if (s.odometry) log.add("ODOMETRY", common::toLcm(*s.odometry, seq), s.odometry->input.utime);
-      if (s.imu) log.add("IMU", common::toLcm(*s.imu, seq), s.imu->utime);
+      if (s.odometry) log.add("ODOMETRY", drivers::toLcm(*s.odometry, seq), s.odometry->input.utime);
+      if (s.imu) log.add("IMU", drivers::toLcm(*s.imu, seq), s.imu->utime);
       ++seq;
       last = s.truth.utime;
     }
@@ -100,9 +100,9 @@ TEST(InsReplay, OdoInsAndLandmarkFixFromALog) {
 // pose. Before odo_ins took an unknown velocity as 0 m/s (0.01 m/s sure) and ran up to 230 m off
 // within 40 s of the switch.
 TEST(InsReplay, SwitchFromDeadReckoningToOdoInsAtSpeedDrivesOn) {
-  models::InsSimConfig sc;
+  sim::InsSimConfig sc;
   sc.duration = 120.0;
-  models::InsSim sim(sc, 1000000);
+  sim::InsSim sim(sc, 1000000);
   core::EngineConfig ec;
   ec.filter.type = "dead_reckoning";
   ec.filter.ins.latitude = sc.latitude;

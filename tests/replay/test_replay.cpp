@@ -63,11 +63,11 @@ class ReplayTest : public ::testing::Test {
     dir_ = fs::temp_directory_path() / ("lcmloc_replay_" + std::to_string(::getpid()) + "_" + info->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    cfg_ = common::loadSimSystemConfig(LCMLOC_PAPER_YAML);
+    cfg_ = simconfig::loadSimSystemConfig(LCMLOC_PAPER_YAML);
     cfg_.scenario = replay::ovalScenario(cfg_.scenario, replay::OvalTrack{}, 60.0);
     cfg_.fusion.shadow.clear();
     cfg_.fusion.map_file = path("map.csv");  // the daemon's map: the oval's markers
-    common::writeScenarioMap(cfg_, cfg_.fusion.map_file);
+    drivers::writeScenarioMap(cfg_, cfg_.fusion.map_file);
     log_ = path("in.lcmlog");
     stats_ = replay::writeSyntheticLog(cfg_.scenario, 60.0, log_, cfg_.channels);
   }
@@ -75,7 +75,7 @@ class ReplayTest : public ::testing::Test {
     if (!HasFailure()) fs::remove_all(dir_);
   }
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  replay::ReplayResult run(const std::string& in, const std::string& out, const common::SimSystemConfig& cfg) {
+  replay::ReplayResult run(const std::string& in, const std::string& out, const simconfig::SimSystemConfig& cfg) {
     replay::ReplayOptions o;
     o.input = in;
     o.output = out;
@@ -84,7 +84,7 @@ class ReplayTest : public ::testing::Test {
   }
 
   fs::path dir_;
-  common::SimSystemConfig cfg_;
+  simconfig::SimSystemConfig cfg_;
   std::string log_;
   replay::SyntheticLogStats stats_;
 };
@@ -462,7 +462,7 @@ TEST_F(ReplayTest, ReadingAheadOnAThreadGivesWhatReadingInLineGives) {
 // held before (the replay's items are reused, block after block): a detection, a refused message,
 // an odometry input.
 TEST(DaemonIntakeTest, ConvertsOdometryInPlaceIntoAnItemOfAnyKind) {
-  const common::SimSystemConfig cfg = common::loadSimSystemConfig(LCMLOC_PAPER_YAML);
+  const simconfig::SimSystemConfig cfg = simconfig::loadSimSystemConfig(LCMLOC_PAPER_YAML);
   fusion::DaemonIntake intake(cfg);
   fusion::IntakeItem item;
   lcmloc::magruler_t r{};

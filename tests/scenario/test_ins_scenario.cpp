@@ -12,7 +12,7 @@ using namespace lcmloc;
 namespace {
 ins_experiment::RunResult runShort(const std::string& start, uint64_t seed, double duration = 300.0,
                                    std::vector<std::pair<double, double>> dropouts = {}) {
-  models::InsSimConfig c;
+  sim::InsSimConfig c;
   c.seed = seed;
   c.duration = duration;
   c.start = start;
@@ -68,7 +68,7 @@ TEST(InsScenario, DeterministicForASeed) {
 TEST(InsScenario, LandmarkFixesReinitializeAndThePoseKeepsUpWithTheInsBetweenFixes) {
   // The landmarks and vision sensor of config/ins_vision_paper.yaml: a triangle 1000 m apart
   // around the route at y = 3000 m, 1 Hz, 30" noise, 650 m range.
-  models::InsSimConfig c;
+  sim::InsSimConfig c;
   c.seed = 1;
   c.duration = 260.0;  // the route of the 3600 s run up to 220 s
   c.start = "hard";
@@ -109,15 +109,15 @@ namespace {
 /// Returns the filter's state at the end and the truth at t_join and at the end.
 struct MidDrive {
   core::FilterState end;
-  models::TruthState join, truth_end;
+  sim::TruthState join, truth_end;
 };
 MidDrive joinWhileMoving(double t_join, bool reset, int odometry_divider = 1) {
-  models::InsSimConfig c;
+  sim::InsSimConfig c;
   c.seed = 6;
   c.duration = t_join + 20.0;
   c.start = "hard";
   c.odometry_divider = odometry_divider;
-  models::InsSim sim(c, 1000000);
+  sim::InsSim sim(c, 1000000);
   core::EngineConfig ec;
   ec.filter.type = "odo_ins";
   ec.filter.ins.odo_markov = c.scale_markov;
@@ -134,7 +134,7 @@ MidDrive joinWhileMoving(double t_join, bool reset, int odometry_divider = 1) {
   if (reset) e.emplace(ec, core::MarkerMap{}, out);
   int64_t seq = 0;
   while (!sim.finished()) {
-    const models::InsSimStep st = sim.step();
+    const sim::InsSimStep st = sim.step();
     const double t = (st.truth.utime - 1000000) * 1e-6;
     if (t >= t_join && r.join.utime == 0) {
       r.join = st.truth;

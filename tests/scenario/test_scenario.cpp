@@ -15,7 +15,7 @@
 #include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
-using namespace lcmloc::models;
+using namespace lcmloc::sim;
 using namespace lcmloc::scenario;
 
 namespace {
@@ -192,7 +192,7 @@ TEST(RealisticEncoders, CalibratedFilterDoesNotLockOut) {
 // centimetres (docs/paper_000_reading.md, "Sparser markers"; lcmloc-montecarlo measured 78 cm and
 // 4.3 cm medians over 50 seeds).
 TEST(SparseMarkers, CalibratedFilterWithSmallerHeadingNoiseHoldsTenMetreSpacing) {
-  const auto sys = common::loadSimSystemConfig(LCMLOC_OVAL_YAML);
+  const auto sys = simconfig::loadSimSystemConfig(LCMLOC_OVAL_YAML);
   ScenarioConfig sc = sys.scenario;
   sc.markers = respaced(sc.markers, 10.0);
   ASSERT_EQ(sc.markers.count, 32);  // 2 m .. 312 m

@@ -51,12 +51,12 @@ TEST(CtlCommand, EachSubcommandMakesItsControlMessage) {
   EXPECT_THROW(ctl::makeCommand(c), CLI::ValidationError);  // --param and --params, not both
   c.kind = ctl::Command::Reset;
   EXPECT_EQ(ctl::makeCommand(c).command, lcmloc::fusion_control_t::CMD_RESET);
-  EXPECT_NE(ctl::kExitRefused, common::kExitInputDamaged);  // its own codes come after the shared ones
-  EXPECT_GT(ctl::kExitNoAnswer, common::kExitInputDamaged);
+  EXPECT_NE(ctl::kExitRefused, app::kExitInputDamaged);  // its own codes come after the shared ones
+  EXPECT_GT(ctl::kExitNoAnswer, app::kExitInputDamaged);
 }
 
 TEST(ReplayCommand, OverridesTheFilterAndTheShadows) {
-  common::SimSystemConfig cfg;
+  simconfig::SimSystemConfig cfg;
   cfg.fusion.shadow = {"dead_reckoning"};
   replay::CommandOptions o;
   o.filter = "ukf";
@@ -69,7 +69,7 @@ TEST(ReplayCommand, OverridesTheFilterAndTheShadows) {
   EXPECT_TRUE(replay::applyOverrides(cfg, o).fusion.shadow.empty());
   o = {};
   o.filter = "no_such_filter";
-  EXPECT_THROW(replay::applyOverrides(cfg, o), common::ConfigError);
+  EXPECT_THROW(replay::applyOverrides(cfg, o), app::ConfigError);
 }
 
 TEST(ReplayCommand, RefusesAMissingInputAndAnExistingOutput) {
@@ -78,15 +78,15 @@ TEST(ReplayCommand, RefusesAMissingInputAndAnExistingOutput) {
   fs::create_directories(dir);
   std::ofstream(dir / "in.lcmlog") << "";
   std::ofstream(dir / "out.lcmlog") << "kept";
-  const common::SimSystemConfig cfg;
+  const simconfig::SimSystemConfig cfg;
   replay::CommandOptions o;
-  EXPECT_THROW(replay::runCommand(cfg, o), common::UsageError);  // neither given
+  EXPECT_THROW(replay::runCommand(cfg, o), app::UsageError);  // neither given
   o.input = (dir / "missing.lcmlog").string();
   o.output = (dir / "new.lcmlog").string();
-  EXPECT_THROW(replay::runCommand(cfg, o), common::UsageError);
+  EXPECT_THROW(replay::runCommand(cfg, o), app::UsageError);
   o.input = (dir / "in.lcmlog").string();
   o.output = (dir / "out.lcmlog").string();
-  EXPECT_THROW(replay::runCommand(cfg, o), common::UsageError);
+  EXPECT_THROW(replay::runCommand(cfg, o), app::UsageError);
   std::ifstream in(dir / "out.lcmlog");
   std::string kept;
   in >> kept;
@@ -101,18 +101,18 @@ TEST(ExperimentCommands, RefuseAnExistingOutputBeforeAnyWork) {
   fs::create_directories(dir / "out");
   std::ofstream(dir / "out" / "report.json") << "{}";
   const auto before = fs::last_write_time(dir / "out" / "report.json");
-  const common::SimSystemConfig cfg;
+  const simconfig::SimSystemConfig cfg;
   landmark_experiment::CommandOptions lo;
   lo.output = (dir / "out").string();
   lo.experiment.runs = 1;
-  EXPECT_THROW(landmark_experiment::runCommand(cfg, lo), common::UsageError);
+  EXPECT_THROW(landmark_experiment::runCommand(cfg, lo), app::UsageError);
   ins_experiment::CommandOptions io;
   io.output = (dir / "out").string();
   io.duration = 1;
-  EXPECT_THROW(ins_experiment::runCommand(cfg, io), common::UsageError);
+  EXPECT_THROW(ins_experiment::runCommand(cfg, io), app::UsageError);
   io.output = (dir / "fresh").string();
   io.log = (dir / "out" / "report.json").string();  // an existing --log
-  EXPECT_THROW(ins_experiment::runCommand(cfg, io), common::UsageError);
+  EXPECT_THROW(ins_experiment::runCommand(cfg, io), app::UsageError);
   EXPECT_FALSE(fs::exists(dir / "fresh"));
   EXPECT_EQ(fs::last_write_time(dir / "out" / "report.json"), before);
   EXPECT_EQ(std::distance(fs::directory_iterator(dir / "out"), fs::directory_iterator()), 1);

@@ -519,10 +519,10 @@ TEST_F(EvaluateTest, GpsFixTruthNeedsADatum) {
   {
     LogWriter w(file("run.lcmlog"));
     // Fixes at the datum and 0.001 deg east; poses on the line between them.
-    common::Datum datum;
+    bus::Datum datum;
     datum.latitude = -33.883;
     datum.longitude = 151.195;
-    const common::LocalFrame frame(datum);
+    const bus::LocalFrame frame(datum);
     double east = 0, north = 0, up = 0;
     frame.toLocal(-33.883, 151.196, 0.0, east, north, up);
     ASSERT_NEAR(east, 92.5, 0.5);

@@ -151,7 +151,7 @@ class EvaluateReplayTest : public ::testing::Test {
            ("lcmloc_test_evaluate_replay_" + std::to_string(::getpid()) + "_" + info->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    cfg_ = common::loadSimSystemConfig(kConfig);
+    cfg_ = simconfig::loadSimSystemConfig(kConfig);
   }
   void TearDown() override { fs::remove_all(dir_); }
   std::string file(const std::string& name) const { return (dir_ / name).string(); }
@@ -175,7 +175,7 @@ class EvaluateReplayTest : public ::testing::Test {
   }
 
   fs::path dir_;
-  common::SimSystemConfig cfg_;
+  simconfig::SimSystemConfig cfg_;
 };
 
 /// The report's entry of `name` in the list `list` (by `key`); null when missing.
@@ -189,7 +189,7 @@ nlohmann::json gateOf(const nlohmann::json& j, const std::string& filter) { retu
 nlohmann::json faultsOf(const nlohmann::json& j, const std::string& filter) { return entry(j["faults"]["by_filter"], "filter", filter); }
 
 TEST_F(EvaluateReplayTest, MarkerMapOfTheTestWorld) {
-  const auto map = models::makeMarkerMap(models::Path(cfg_.scenario.path), cfg_.scenario.markers);
+  const auto map = sim::makeMarkerMap(sim::Path(cfg_.scenario.path), cfg_.scenario.markers);
   ASSERT_EQ(map.size(), 5u);
   EXPECT_NEAR(map[2].x, 0.0, 1e-9);
   EXPECT_NEAR(map[2].y, 6.0, 1e-9);

@@ -15,7 +15,7 @@
 using namespace lcmloc;
 
 TEST(GpsExperiment, ConvergesFromOriginAndBeatsRawGps) {
-  auto cfg = common::loadSimSystemConfig(LCMLOC_GPS_PAPER_YAML);
+  auto cfg = simconfig::loadSimSystemConfig(LCMLOC_GPS_PAPER_YAML);
   ASSERT_NEAR(cfg.scenario.path.x0, 150.0, 1e-9);
   ASSERT_NEAR(cfg.fusion.filter.initial_pose[0], 0.0, 1e-9);
   std::vector<core::FilterConfig> filters;
@@ -43,7 +43,7 @@ TEST(GpsExperiment, ConvergesFromOriginAndBeatsRawGps) {
 }
 
 TEST(GpsExperiment, DeadReckoningNeverConvergesAndHasNoSteadyStateInTheReport) {
-  auto cfg = common::loadSimSystemConfig(LCMLOC_GPS_PAPER_YAML);
+  auto cfg = simconfig::loadSimSystemConfig(LCMLOC_GPS_PAPER_YAML);
   core::FilterConfig f = cfg.fusion.filter;
   f.type = "dead_reckoning";  // starts 158 m off and never sees a fix
   gps_experiment::Options opt;
@@ -62,7 +62,7 @@ TEST(GpsExperiment, DeadReckoningNeverConvergesAndHasNoSteadyStateInTheReport) {
 }
 
 TEST(GpsExperiment, ExtendedPathRepeatsTheSegmentsUntilTheDriveIsLongEnough) {
-  auto cfg = common::loadSimSystemConfig(LCMLOC_GPS_PAPER_YAML);
+  auto cfg = simconfig::loadSimSystemConfig(LCMLOC_GPS_PAPER_YAML);
   const auto& sc = cfg.scenario;
   double lap = 0;
   for (const auto& s : sc.path.segments) lap += s.length;
@@ -77,7 +77,7 @@ TEST(GpsExperiment, ExtendedPathRepeatsTheSegmentsUntilTheDriveIsLongEnough) {
 
 // A small version of the steady-state Monte Carlo (the command runs 100 seeds over 240 s).
 TEST(GpsExperiment, MonteCarloScoresEverySeedAtEveryRateAfterSettling) {
-  auto cfg = common::loadSimSystemConfig(LCMLOC_GPS_PAPER_YAML);
+  auto cfg = simconfig::loadSimSystemConfig(LCMLOC_GPS_PAPER_YAML);
   std::vector<core::FilterConfig> filters;
   for (const char* t : {"ukf_gps", "dead_reckoning"}) {
     core::FilterConfig f = cfg.fusion.filter;

@@ -230,7 +230,7 @@ TEST(Import, OptionsBoundForTheConfigAreRefusedWithTheFlagAndNothingIsWritten) {
     try {
       import::importDirectory(o);
       ADD_FAILURE() << flag << ": accepted";
-    } catch (const common::ConfigError& e) {
+    } catch (const app::ConfigError& e) {
       EXPECT_EQ(std::string(e.what()).rfind(flag + ":", 0), 0u) << e.what();
     }
     EXPECT_FALSE(fs::exists(d / "out")) << flag;
@@ -310,20 +310,20 @@ TEST(Import, GoodFilesOfEveryKindBecomeALogMapAndConfig) {
   EXPECT_TRUE(odo[4].has_steering);
   EXPECT_NEAR(odo[4].delta_theta, 1.0 * std::tan(0.1) / 2.0, 1e-12);
   // local GPS x,y go out as lat/lon about the datum and come back as x,y in the fusion
-  const common::LocalFrame frame(o.datum);
+  const bus::LocalFrame frame(o.datum);
   std::vector<core::GpsInput> fixes;
   logio::scanLog(r.log_path, [&](const logio::RawEvent& e) {
     lcmloc::gps_fix_t m;
     if (*e.channel == "GPS" && m.decode(e.data, 0, e.size) == e.size)
-      if (auto in = common::toCore(m, "GPS", frame)) fixes.push_back(*in);
+      if (auto in = bus::toCore(m, "GPS", frame)) fixes.push_back(*in);
   });
   ASSERT_EQ(fixes.size(), 3u);
   EXPECT_NEAR(fixes[0].x, 2.1, 1e-6);
   EXPECT_NEAR(fixes[0].y, 0.3, 1e-6);
   EXPECT_DOUBLE_EQ(fixes[0].position_std, 0.5);
-  const auto cfg = common::loadSystemConfig(r.config_path);
+  const auto cfg = app::loadSystemConfig(r.config_path);
   EXPECT_EQ(cfg.fusion.filter.type, "ukf_landmarks");
-  EXPECT_EQ(common::csv::loadMap(cfg.fusion.map_file).size(), 4u);
+  EXPECT_EQ(app::csv::loadMap(cfg.fusion.map_file).size(), 4u);
   EXPECT_NEAR(cfg.fusion.filter.initial_pose[0], 2.0, 1e-9);  // first ground-truth row
 }
 
@@ -483,7 +483,7 @@ TEST(Import, ImportedLandmarkRunReplaysToTheTruth) {
   o.initial_pose = core::Vec3(2.2, -0.2, M_PI / 2 + 0.05);  // off the truth
   const auto r = import::importDirectory(o);
   ASSERT_TRUE(r.usable());
-  auto cfg = common::loadSystemConfig(r.config_path);
+  auto cfg = app::loadSystemConfig(r.config_path);
   cfg.fusion.filter.p0_diag = core::Vec3(0.1, 0.1, 0.01);
   replay::ReplayOptions ro;
   ro.input = r.log_path;
@@ -570,7 +570,7 @@ TEST(MagnetGrid, OneWrongTimeIsRefusedAloneAndBadFlagsAreNamed) {
     try {
       import::importMagnetGrid(bad);
       ADD_FAILURE() << flag << ": accepted";
-    } catch (const common::ConfigError& e) {
+    } catch (const app::ConfigError& e) {
       EXPECT_EQ(std::string(e.what()).rfind(flag + ":", 0), 0u) << e.what();
     }
     EXPECT_FALSE(fs::exists(d / "out")) << flag;
@@ -595,7 +595,7 @@ TEST(MagnetGrid, OneWrongTimeIsRefusedAloneAndBadFlagsAreNamed) {
   bad.out_dir = d.string();
   fs::copy_file(d / "run.txt", d / "map.csv");
   bad.input = (d / "map.csv").string();
-  EXPECT_THROW(import::importMagnetGrid(bad), common::ConfigError);
+  EXPECT_THROW(import::importMagnetGrid(bad), app::ConfigError);
   EXPECT_EQ(fs::file_size(d / "map.csv"), fs::file_size(d / "run.txt"));
   EXPECT_EQ(import::importMagnetGrid(mo).odometry, 196);
 }
@@ -642,7 +642,7 @@ TEST(MagnetGrid, TheReedBitOrderIsTheOneTheLoopDataSupports) {
 }
 
 TEST(Import, ConfigKeysForLandmarksAndTheMapFile) {
-  const auto cfg = common::parseSystemConfig(
+  const auto cfg = app::parseSystemConfig(
       "fusion:\n  map_file: map.csv\n  filter:\n    type: ukf_landmarks\n    pw_turn: 0.01\n"
       "    landmarks: {range_std: 0.2, bearing_std: 0.03, beacon_std: 0.3}\n"
       "channels: {landmarks: CAM, beacons: UWB}\n",
@@ -654,9 +654,9 @@ TEST(Import, ConfigKeysForLandmarksAndTheMapFile) {
   EXPECT_EQ(cfg.channels.landmarks, "CAM");
   EXPECT_EQ(cfg.channels.beacons, "UWB");
   try {
-    common::parseSystemConfig("fusion:\n  filter:\n    landmarks: {range_sd: 0.2}\n", "x.yaml");
+    app::parseSystemConfig("fusion:\n  filter:\n    landmarks: {range_sd: 0.2}\n", "x.yaml");
     FAIL() << "unknown key accepted";
-  } catch (const common::ConfigError& e) {
+  } catch (const app::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("fusion.filter.landmarks.range_sd"), std::string::npos) << e.what();
   }
 }
@@ -688,33 +688,33 @@ TEST(Import, TheCommandRunsInProcessAndRefusesAnExistingOutputWithoutOverwrite) 
   CLI::App app;
   import::addImportOptions(app, c);
   app.parse(d.string() + " -o " + out + " --initial-pose 1 2 0.5 --show-refused 0", false);
-  common::SystemConfig cfg;
+  app::SystemConfig cfg;
   cfg.channels.odometry = "WHEELS";
-  ASSERT_EQ(import::runImport(cfg, c), common::kExitOk);
+  ASSERT_EQ(import::runImport(cfg, c), app::kExitOk);
   const auto n = channelCounts(out + "/run.lcmlog");
   EXPECT_EQ(n.count("ODOMETRY"), 0u);
   EXPECT_EQ(n.at("WHEELS"), 20);
   EXPECT_EQ(n.at("LANDMARKS"), 20);
   EXPECT_EQ(n.at("GROUND_TRUTH"), 21);
-  EXPECT_EQ(common::csv::loadMap(out + "/map.csv").size(), 4u);
-  const auto written = common::loadSystemConfig(out + "/config.yaml");
+  EXPECT_EQ(app::csv::loadMap(out + "/map.csv").size(), 4u);
+  const auto written = app::loadSystemConfig(out + "/config.yaml");
   EXPECT_DOUBLE_EQ(written.fusion.filter.initial_pose[0], 1.0);
   EXPECT_DOUBLE_EQ(written.fusion.filter.initial_pose[1], 2.0);
   EXPECT_DOUBLE_EQ(written.fusion.filter.initial_pose[2], 0.5);
 
   // Again without --overwrite: refused (exit 2) before anything is read or written.
   write(d / "odometry.csv", "time,delta_s,delta_theta\n100.1,0.05,0.025\n");
-  EXPECT_THROW(import::runImport(cfg, c), common::UsageError);
+  EXPECT_THROW(import::runImport(cfg, c), app::UsageError);
   EXPECT_EQ(channelCounts(out + "/run.lcmlog").at("WHEELS"), 20);
   c.overwrite = true;
-  ASSERT_EQ(import::runImport(cfg, c), common::kExitOk);
+  ASSERT_EQ(import::runImport(cfg, c), app::kExitOk);
   EXPECT_EQ(channelCounts(out + "/run.lcmlog").at("WHEELS"), 1);
 
   const auto bad = tempDir("command_bad");
   write(bad / "odometry.csv", "time,delta_s,delta_theta\nx,1,2\n");
   import::ImportCommand nothing;
   nothing.io.dir = bad.string();
-  EXPECT_EQ(import::runImport(cfg, nothing), common::kExitRuntimeError);
+  EXPECT_EQ(import::runImport(cfg, nothing), app::kExitRuntimeError);
 }
 
 TEST(Import, LandmarkAndBeaconMessagesAreValidatedOnTheWayIn) {
@@ -724,27 +724,27 @@ TEST(Import, LandmarkAndBeaconMessagesAreValidatedOnTheWayIn) {
   m.range = 3.0;
   m.bearing = 0.5;
   std::string why;
-  auto o = common::toCore(m, "CAM", &why);
+  auto o = bus::toCore(m, "CAM", &why);
   ASSERT_TRUE(o);
   EXPECT_EQ(o->sensor, "CAM");
   EXPECT_EQ(o->landmark_id, -1);
   m.range = NAN;
-  EXPECT_FALSE(common::toCore(m, "CAM", &why));
+  EXPECT_FALSE(bus::toCore(m, "CAM", &why));
   EXPECT_NE(why.find("range is NaN"), std::string::npos);
   m.range = 3.0;
   m.bearing = 4.0;
-  EXPECT_FALSE(common::toCore(m, "CAM", &why));
+  EXPECT_FALSE(bus::toCore(m, "CAM", &why));
   m.bearing = 0.5;
   m.landmark_id = -2;
-  EXPECT_FALSE(common::toCore(m, "CAM", &why));
+  EXPECT_FALSE(bus::toCore(m, "CAM", &why));
   lcmloc::beacon_range_t b{};
   b.utime = 1;
   b.beacon_id = 4;
   b.range = -0.1;
-  EXPECT_FALSE(common::toCore(b, "UWB", &why));
+  EXPECT_FALSE(bus::toCore(b, "UWB", &why));
   b.range = 2.0;
-  ASSERT_TRUE(common::toCore(b, "UWB", &why));
-  EXPECT_EQ(common::toCore(b, "UWB", &why)->beacon_id, 4);
+  ASSERT_TRUE(bus::toCore(b, "UWB", &why));
+  EXPECT_EQ(bus::toCore(b, "UWB", &why)->beacon_id, 4);
 }
 
 TEST(Import, TheDocumentedExampleDirectoryImportsAndScores) {
@@ -758,7 +758,7 @@ TEST(Import, TheDocumentedExampleDirectoryImportsAndScores) {
   EXPECT_TRUE(r.refusals.empty());
   EXPECT_EQ(r.map_size, 9);
   EXPECT_EQ(r.filter, "ukf_landmarks");
-  const auto cfg = common::loadSystemConfig(r.config_path);
+  const auto cfg = app::loadSystemConfig(r.config_path);
   replay::ReplayOptions ro;
   ro.input = r.log_path;
   ro.output = (d / "out" / "est.lcmlog").string();
@@ -841,7 +841,7 @@ TEST(Import, TheConfigGetsTheNoiseFittedAgainstTheTruth) {
   const auto r = import::importDirectory(o);
   ASSERT_FALSE(r.noise_fit.empty());
   EXPECT_NE(r.noise_fit[0].find("landmark range"), std::string::npos) << r.noise_fit[0];
-  const auto cfg = common::loadSystemConfig(r.config_path);
+  const auto cfg = app::loadSystemConfig(r.config_path);
   EXPECT_NEAR(cfg.fusion.filter.landmarks.range_std, 0.3, 0.03);
   EXPECT_NEAR(cfg.fusion.filter.landmarks.bearing_std, 0.05, 0.005);
   EXPECT_NE(import::importSummary(r, 0).find("noise fit: landmark bearing"), std::string::npos);
@@ -850,7 +850,7 @@ TEST(Import, TheConfigGetsTheNoiseFittedAgainstTheTruth) {
   o.fit_noise = false;
   const auto plain = import::importDirectory(o);
   EXPECT_TRUE(plain.noise_fit.empty());
-  const auto defaults = common::loadSystemConfig(plain.config_path);
+  const auto defaults = app::loadSystemConfig(plain.config_path);
   EXPECT_EQ(defaults.fusion.filter.landmarks.range_std, core::FilterConfig{}.landmarks.range_std);
   EXPECT_EQ(defaults.fusion.filter.pw_diag, core::FilterConfig{}.pw_diag);
 }

@@ -65,7 +65,7 @@ bool refused(const import::ImportResult& r, const std::string& name, int64_t lin
 std::string usageError(const import::ImportOptions& o) {
   try {
     import::importDirectory(o);
-  } catch (const common::UsageError& e) {
+  } catch (const app::UsageError& e) {
     return e.what();
   }
   return "";
@@ -235,7 +235,7 @@ TEST(ImportFormats, ImuRowsBecomeImuMessagesAndAnImuWithoutMagnetometerTurnsItOf
   EXPECT_EQ(m[3].gyro[2], 0.2);
   EXPECT_EQ(m[3].mag[0], 0.0);
   for (std::size_t i = 0; i < m.size(); ++i) EXPECT_EQ(m[i].seq, static_cast<int64_t>(i));
-  auto cfg = common::loadSystemConfig(r.config_path);
+  auto cfg = app::loadSystemConfig(r.config_path);
   EXPECT_FALSE(cfg.fusion.filter.gnss.use_magnetometer);  // mag 0 must not be read as a heading
   // With a magnetometer: its values, and the config leaves it on; a filter that takes the
   // magnetometer makes a gate decision on every IMU row in the replay.
@@ -252,7 +252,7 @@ TEST(ImportFormats, ImuRowsBecomeImuMessagesAndAnImuWithoutMagnetometerTurnsItOf
   EXPECT_EQ(m[0].mag[1], 0.01);
   EXPECT_EQ(m[0].mag[2], -0.4);
   EXPECT_EQ(m[0].accel[0], 0.1);
-  cfg = common::loadSystemConfig(r.config_path);
+  cfg = app::loadSystemConfig(r.config_path);
   EXPECT_TRUE(cfg.fusion.filter.gnss.use_magnetometer);
   const fs::path est = d / "out" / "est.lcmlog";
   auto [code, text] = runCommand(LCMLOC_REPLAY_BIN,
@@ -290,7 +290,7 @@ TEST(ImportFormats, AGroundTruthOfPositionOnlyIsScoredOnThePosition) {
   ASSERT_EQ(gt.size(), 201u);
   EXPECT_TRUE(std::isnan(gt[5].heading));
   EXPECT_NEAR(gt[5].x, 1.0 + 0.25 * std::cos(th0), 1e-9);
-  const auto cfg = common::loadSystemConfig(r.config_path);
+  const auto cfg = app::loadSystemConfig(r.config_path);
   EXPECT_NEAR(cfg.fusion.filter.initial_pose[0], 1.0, 1e-12);
   EXPECT_NEAR(cfg.fusion.filter.initial_pose[1], -2.0, 1e-12);
   EXPECT_NEAR(cfg.fusion.filter.initial_pose[2], th0, 1e-9);  // direction of travel
@@ -393,8 +393,8 @@ TEST(ImportFormats, TheWrittenConfigIsReadBackByTheReplaysLoaderAndReplays) {
     const auto r = import::importDirectory(o);
     ASSERT_TRUE(r.usable());
     EXPECT_TRUE(r.refusals.empty()) << r.refusals.front().reason;
-    common::SystemConfig cfg;
-    ASSERT_NO_THROW(cfg = common::loadSystemConfig(r.config_path));
+    app::SystemConfig cfg;
+    ASSERT_NO_THROW(cfg = app::loadSystemConfig(r.config_path));
     EXPECT_DOUBLE_EQ(cfg.fusion.filter.initial_pose[2], c.expected_heading);
     EXPECT_LE(std::abs(cfg.fusion.filter.initial_pose[2]), pi);
     EXPECT_EQ(cfg.fusion.filter.initial_pose[0], c.x0);  // read back exactly
@@ -424,6 +424,6 @@ TEST(ImportFormats, TheWrittenConfigIsReadBackByTheReplaysLoaderAndReplays) {
   o.out_dir = (d / "out").string();
   const auto r = import::importDirectory(o);
   EXPECT_TRUE(refused(r, "truth.csv", 2, "more than 10000 km from the origin"));
-  EXPECT_NO_THROW(common::loadSystemConfig(r.config_path));
+  EXPECT_NO_THROW(app::loadSystemConfig(r.config_path));
   fs::remove_all(d);
 }

@@ -40,7 +40,7 @@ std::pair<int, std::string> runExperimentCommand(const std::string& args, const 
   return runCommand(LCMLOC_LANDMARK_EXPERIMENT_BIN, args, dir);
 }
 Result smallRun(uint64_t seed) {
-  const auto cfg = common::loadSimSystemConfig(LCMLOC_LANDMARK_YAML);
+  const auto cfg = simconfig::loadSimSystemConfig(LCMLOC_LANDMARK_YAML);
   Options o;
   o.runs = 200;
   o.seed = seed;
@@ -51,7 +51,7 @@ Result smallRun(uint64_t seed) {
 TEST(LandmarkExperiment, BothMethodsReachTheCramerRaoBound) {
   const Result r = smallRun(5);
   ASSERT_EQ(r.cases.size(), 4u);
-  EXPECT_NEAR(r.sigma_effective / models::kArcSec, 30.27, 0.01);  // 30" noise, 14" steps
+  EXPECT_NEAR(r.sigma_effective / sim::kArcSec, 30.27, 0.01);  // 30" noise, 14" steps
   for (const auto& c : r.cases) {
     EXPECT_LT(c.condition, 3.0) << c.name;
     // Bound at the centre: position sigma * r * sqrt(2/3) per axis, heading sigma / sqrt(3).
@@ -83,8 +83,8 @@ TEST(LandmarkExperiment, PaperFitsLandmarksApartAndHeadingFitsNeither) {
   EXPECT_NEAR(get(r, "apart_centre").crb_within_paper, 0.725, 0.01);
   // Paper's 20" (2 sigma) is below the bound (35") at either reading: it implies ~17" noise.
   EXPECT_GT(2 * apart.heading_std, 1.4 * r.options.paper_heading_2sigma);
-  EXPECT_GT(r.implied_bearing_std / models::kArcSec, 14.0);
-  EXPECT_LT(r.implied_bearing_std / models::kArcSec, 21.0);
+  EXPECT_GT(r.implied_bearing_std / sim::kArcSec, 14.0);
+  EXPECT_LT(r.implied_bearing_std / sim::kArcSec, 21.0);
   EXPECT_NE(r.conclusion.find("apart"), std::string::npos);
 }
 
@@ -128,7 +128,7 @@ TEST(LandmarkExperiment, DeterministicAndReportWritten) {
 }
 
 TEST(LandmarkExperiment, SensorOutOfRangeRefusedWithReason) {
-  auto cfg = common::loadSimSystemConfig(LCMLOC_LANDMARK_YAML);
+  auto cfg = simconfig::loadSimSystemConfig(LCMLOC_LANDMARK_YAML);
   cfg.scenario.vision.max_range = 800.0;  // sees all three only when they are 577 m away
   Options o;
   o.runs = 5;
@@ -181,9 +181,9 @@ TEST(LandmarkExperiment, CommandWritesReportAndRefusesBadInput) {
 
 namespace {
 /// 300 observations along a 60 m line through the centre of the "1000 m apart" triangle.
-std::vector<Observation> lineObservations(std::vector<models::Landmark>* lms) {
+std::vector<Observation> lineObservations(std::vector<sim::Landmark>* lms) {
   *lms = triangleLandmarks(Reading::kApart, 1000.0);
-  models::VisionSensor s(models::VisionSensorConfig{}, *lms, 21);
+  sim::VisionSensor s(sim::VisionSensorConfig{}, *lms, 21);
   std::vector<Observation> obs;
   for (int k = 0; k < 300; ++k) {
     Observation o;
@@ -199,7 +199,7 @@ std::vector<Observation> lineObservations(std::vector<models::Landmark>* lms) {
 }  // namespace
 
 TEST(LandmarkExperiment, RecordedObservationsAgainstTheBound) {
-  std::vector<models::Landmark> lms;
+  std::vector<sim::Landmark> lms;
   auto obs = lineObservations(&lms);
   obs[7].sample.ids.pop_back();  // a two-landmark observation: refused by the fix
   obs[7].sample.bearings.pop_back();
@@ -226,19 +226,19 @@ TEST(LandmarkExperiment, CommandSolvesARecordedLog) {
   const fs::path dir = fs::temp_directory_path() / "lcmloc_landmark_experiment_log";
   fs::remove_all(dir);
   fs::create_directories(dir);
-  std::vector<models::Landmark> lms;
+  std::vector<sim::Landmark> lms;
   const auto obs = lineObservations(&lms);
   {
     testlog::LogWriter log((dir / "run.lcmlog").string());
     auto write = [&](const std::string& ch, const auto& msg, int64_t utime) { log.add(ch, msg, utime); };
     for (std::size_t k = 0; k < obs.size(); ++k) {
-      models::TruthState t;
+      sim::TruthState t;
       t.utime = obs[k].utime;
       t.x = obs[k].x;
       t.y = obs[k].y;
       t.heading = obs[k].heading;
-      if (k != 5) write("GROUND_TRUTH", common::toLcm(t, static_cast<int64_t>(k)), t.utime);  // one without truth
-      write("VISION", common::toLcm(obs[k].sample, static_cast<int64_t>(k)), t.utime);
+      if (k != 5) write("GROUND_TRUTH", drivers::toLcm(t, static_cast<int64_t>(k)), t.utime);  // one without truth
+      write("VISION", drivers::toLcm(obs[k].sample, static_cast<int64_t>(k)), t.utime);
     }
   }
   std::string map = "landmarks:\n";

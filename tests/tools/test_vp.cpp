@@ -37,12 +37,12 @@ vp::ImportOptions csvsIn(const fs::path& d) {
   return o;
 }
 
-/// The message of the common::ConfigError f throws ("" and a failure when it throws none).
+/// The message of the app::ConfigError f throws ("" and a failure when it throws none).
 template <typename F>
 std::string configError(F&& f) {
   try {
     f();
-  } catch (const common::ConfigError& e) {
+  } catch (const app::ConfigError& e) {
     return e.what();
   }
   ADD_FAILURE() << "accepted";
@@ -124,8 +124,8 @@ TEST(VpImport, BadRowsAreRefusedWithLineNumbersAndTheRestConverted) {
   EXPECT_EQ(gps[1].first, "GPS_HELDOUT");
   EXPECT_EQ(gps[2].first, "GPS");
   EXPECT_EQ(gps[2].second.seq, 1);  // consecutive on GPS: the daemon counts no gap
-  const common::LocalFrame frame(o.datum);
-  const auto in = common::toCore(gps[2].second, "GPS", frame);
+  const bus::LocalFrame frame(o.datum);
+  const auto in = bus::toCore(gps[2].second, "GPS", frame);
   ASSERT_TRUE(in.has_value());
   EXPECT_NEAR(in->x, 12.0, 1e-6);
   EXPECT_NEAR(in->y, 21.0, 1e-6);
@@ -177,7 +177,7 @@ TEST(VpImport, AnOutputThatIsAnInputIsRefused) {
     try {
       vp::importVictoriaPark(o);
       ADD_FAILURE() << out << " overwritten";
-    } catch (const common::ConfigError& e) {
+    } catch (const app::ConfigError& e) {
       EXPECT_NE(std::string(e.what()).find("--output: '" + out.string() + "' is the input file"), std::string::npos)
           << e.what();
     }
@@ -294,7 +294,7 @@ TEST(VpExperiment, OptionsAreCheckedBeforeAnythingIsWritten) {
   const auto d = tempDir("experiment_options");
   write(d / "vp_odometry.csv", "time_ms,speed_mps,steering_rad\n1000.0,2.0,0.1\n1025.0,2.0,0.1\n");
   write(d / "vp_gps.csv", "time_ms,Lo_m,La_m\n1000.0,10.0,20.0\n1020.0,11.0,20.0\n");
-  const auto cfg = common::loadSystemConfig(LCMLOC_VP_YAML);
+  const auto cfg = app::loadSystemConfig(LCMLOC_VP_YAML);
   vp::ImportOptions o;
   o.odometry_csv = (d / "vp_odometry.csv").string();
   o.gps_csv = (d / "vp_gps.csv").string();
@@ -326,7 +326,7 @@ TEST(VpExperiment, OptionsAreCheckedBeforeAnythingIsWritten) {
   // The config's GPS channel as the held-out channel: the same check as lcmloc-import-vp's.
   auto gps_heldout = cfg;
   gps_heldout.channels.gps = o.heldout_channel;
-  EXPECT_THROW(vp::checkExperimentOptions(gps_heldout, o, eo), common::ConfigError);
+  EXPECT_THROW(vp::checkExperimentOptions(gps_heldout, o, eo), app::ConfigError);
 
   // The command line: exit 2 before the output directory is made.
   const std::string bin = LCMLOC_VP_EXPERIMENT_BIN;
@@ -359,7 +359,7 @@ TEST(VpExperiment, ShortSliceOfTheRealDrive) {
   const std::string dir = LCMLOC_VP_DIR;
   if (!fs::exists(dir + "/vp_odometry.csv") || !fs::exists(dir + "/vp_gps.csv"))
     GTEST_SKIP() << "Victoria Park files not found in " << dir << " (CMake LCMLOC_VP_DIR)";
-  const auto cfg = common::loadSystemConfig(LCMLOC_VP_YAML);
+  const auto cfg = app::loadSystemConfig(LCMLOC_VP_YAML);
   vp::ImportOptions o;
   o.odometry_csv = dir + "/vp_odometry.csv";
   o.gps_csv = dir + "/vp_gps.csv";

@@ -13,8 +13,8 @@ using namespace lcmloc;
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-convert: converts a public data set's files into the CSV import format (then: lcmloc-import "
                "OUT -o RUN)"};
-  common::CommonOptions opts;
-  common::addOfflineOptions(app, opts, "unused");
+  app::CommonOptions opts;
+  app::addOfflineOptions(app, opts, "unused");
   std::string dir, out;
   bool overwrite = false;
   int robot = 1;
@@ -24,17 +24,17 @@ int main(int argc, char** argv) {
   auto* uwb = app.add_subcommand("uwb-labyrinth", "TU Chemnitz UWB Labyrinth (Indoor_UWB_Input.txt, Indoor_UWB_GT.txt)");
   uwb->add_option("--dir", dir, "data set directory")->required();
   for (auto* s : {mrclam, uwb}) {
-    common::addOutputOption(*s, out, "output directory (CSV files for lcmloc-import)")->required();
-    common::addOverwriteFlag(*s, overwrite);
+    app::addOutputOption(*s, out, "output directory (CSV files for lcmloc-import)")->required();
+    app::addOverwriteFlag(*s, overwrite);
   }
   app.require_subcommand(1);
-  return common::runProcess(app, argc, argv, opts, "lcmloc-convert", [&] {
-    if (!std::filesystem::is_directory(dir)) throw common::UsageError("--dir " + dir + ": not a directory");
-    common::prepareOutputDir(out, overwrite);
+  return app::runProcess(app, argc, argv, opts, "lcmloc-convert", [&] {
+    if (!std::filesystem::is_directory(dir)) throw app::UsageError("--dir " + dir + ": not a directory");
+    app::prepareOutputDir(out, overwrite);
     const auto c = mrclam->parsed() ? convert::convertMrclam(dir, robot, out) : convert::convertUwbLabyrinth(dir, out);
     for (const auto& f : c.files) std::printf("%-16s %-13s %8ld rows\n", f.name.c_str(), f.kind.c_str(), f.rows);
     for (const auto& n : c.notes) std::printf("note: %s\n", n.c_str());
     std::printf("next: lcmloc-import %s -o RUN\n", out.c_str());
-    return common::kExitOk;
+    return app::kExitOk;
   });
 }

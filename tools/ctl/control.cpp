@@ -74,7 +74,7 @@ lcmloc::fusion_control_t makeCommand(const Command& c) {
   return cmd;
 }
 
-int send(const common::SystemConfig& cfg, const std::string& lcm_url, lcmloc::fusion_control_t cmd, double timeout,
+int send(const app::SystemConfig& cfg, const std::string& lcm_url, lcmloc::fusion_control_t cmd, double timeout,
          int64_t utime) {
   // The command's seq tells its answer from those of other commands (several tools at once):
   // the process id in the low 22 bits (Linux's pid_max is at most 2^22), the wall clock in us
@@ -85,7 +85,7 @@ int send(const common::SystemConfig& cfg, const std::string& lcm_url, lcmloc::fu
             (static_cast<int64_t>(::getpid()) & ((int64_t{1} << 22) - 1));
   const std::string tag = cfg.channels.control + " seq " + std::to_string(cmd.seq);
 
-  common::Bus bus(lcm_url);
+  bus::Bus bus(lcm_url);
   int64_t newest = -1;       // the daemon's own POSE / FUSION_STATUS
   bool daemon_seen = false;  // a POSE or FUSION_STATUS: sensors alone do not answer commands
   std::vector<int64_t> input_times;  // ODOMETRY / IMU while waiting (bounded by --timeout)
@@ -124,12 +124,12 @@ int send(const common::SystemConfig& cfg, const std::string& lcm_url, lcmloc::fu
   using Clock = std::chrono::steady_clock;
   const auto deadline = Clock::now() + std::chrono::duration<double>(timeout);
   if (utime < 0) {
-    while (!daemon_seen && Clock::now() < deadline && !common::stopRequested()) bus.handle(50);
+    while (!daemon_seen && Clock::now() < deadline && !app::stopRequested()) bus.handle(50);
     bus.drain();
     if (!daemon_seen) {
       spdlog::error("no {} or {} on the bus within {:.1f} s: is lcmloc-fusion running and receiving inputs? "
                     "(or give --utime)", cfg.channels.pose, cfg.channels.status, timeout);
-      return common::kExitRuntimeError;
+      return app::kExitRuntimeError;
     }
     const int64_t jump = std::llround(cfg.fusion.max_time_jump * 1e6);  // 0: no guard
     int64_t ignored = 0, ignored_max = 0;
@@ -152,15 +152,15 @@ int send(const common::SystemConfig& cfg, const std::string& lcm_url, lcmloc::fu
     if (__builtin_add_overflow(newest, window, &utime)) {
       spdlog::error("the newest message time on the bus ({}) is too close to the end of the int64 range for a "
                     "command after it: give --utime", newest);
-      return common::kExitRuntimeError;
+      return app::kExitRuntimeError;
     }
   }
   cmd.utime = utime;
   sent = true;
-  if (!bus.publish(cfg.channels.control, cmd)) return common::kExitRuntimeError;
+  if (!bus.publish(cfg.channels.control, cmd)) return app::kExitRuntimeError;
   spdlog::info("sent to {} at utime {} (seq {})", cfg.channels.control, utime, cmd.seq);
   const auto answer_deadline = Clock::now() + std::chrono::duration<double>(timeout);
-  while (!answer && Clock::now() < answer_deadline && !common::stopRequested()) bus.handle(50);
+  while (!answer && Clock::now() < answer_deadline && !app::stopRequested()) bus.handle(50);
   if (!answer) {
     std::cout << fmt::format("no answer within {:.1f} s (the daemon applies a command once its inputs are newer "
                              "than the command by the reorder window)\n", timeout);
@@ -168,9 +168,9 @@ int send(const common::SystemConfig& cfg, const std::string& lcm_url, lcmloc::fu
   }
   std::string detail = answer->detail;  // without the "CHANNEL seq N: " naming this command
   if (const auto at = detail.find(tag + ": "); at != std::string::npos) detail.erase(at, tag.size() + 2);
-  std::cout << fmt::format("{}: {} (filter {})\n", answer->event, common::printable(detail),
-                           common::printable(answer->filter));
-  return answer->event == "ack" ? common::kExitOk : kExitRefused;
+  std::cout << fmt::format("{}: {} (filter {})\n", answer->event, app::printable(detail),
+                           app::printable(answer->filter));
+  return answer->event == "ack" ? app::kExitOk : kExitRefused;
 }
 
 }  // namespace lcmloc::ctl

@@ -11,17 +11,17 @@ int main(int argc, char** argv) {
                "FUSION_STATUS."};
   app.footer("lcmloc-ctl's own exit codes: 4 no answer within --timeout, 5 the daemon refused the command "
              "(1: no daemon on the bus).");
-  common::CommonOptions opts;
-  common::addCommonOptions(app, opts);
+  app::CommonOptions opts;
+  app::addCommonOptions(app, opts);
   double timeout = 5.0;
   int64_t utime = -1;
   app.add_option("--timeout", timeout, "[s] to wait for the daemon (its time, then its answer)")
-      ->check(lcmloc::common::positive())
-      ->check(lcmloc::common::wallSeconds());
+      ->check(lcmloc::app::positive())
+      ->check(lcmloc::app::wallSeconds());
   app.add_option("--utime", utime,
                  "message time of the command [us] (default: one reorder window after the newest ODOMETRY, IMU, "
                  "POSE or FUSION_STATUS on the bus)")
-      ->check(lcmloc::common::nonNegative());
+      ->check(lcmloc::app::nonNegative());
   app.require_subcommand(1);
   app.fallthrough();  // the options above may come after the subcommand too (set-pose 1 2 0 --timeout 1)
 
@@ -35,8 +35,8 @@ int main(int argc, char** argv) {
   sp->add_option("pose", c.pose, "X Y THETA")->expected(3)->required();
   sp->add_option("--std", c.stddev, "1-sigma of x [m], y [m], theta [rad]")->expected(3);
 
-  return common::runProcess(app, argc, argv, opts, "lcmloc-ctl", [&]() -> int {
-    const auto cfg = common::loadSystemConfig(opts.config);
+  return app::runProcess(app, argc, argv, opts, "lcmloc-ctl", [&]() -> int {
+    const auto cfg = app::loadSystemConfig(opts.config);
     c.kind = app.got_subcommand(sw) ? ctl::Command::Switch
              : app.got_subcommand(sp) ? ctl::Command::SetPose : ctl::Command::Reset;
     return ctl::send(cfg, opts.lcm_url, ctl::makeCommand(c), timeout, utime);

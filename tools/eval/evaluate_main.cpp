@@ -15,12 +15,12 @@ int main(int argc, char** argv) {
                "to evaluate, 2 bad options or config, 3 done from a damaged log (its intact events; each damaged "
                "place reported)."};
   eval::EvaluateCommand command;
-  common::CommonOptions opts;
+  app::CommonOptions opts;
   eval::addEvaluateOptions(app, command);
-  common::addOfflineOptions(app, opts,
+  app::addOfflineOptions(app, opts,
                             "system config (YAML): its channels.pose, channels.ground_truth, channels.gate and "
                             "datum are the defaults of --pose-channel, --truth-channel, --gate-channel and --datum");
-  return common::runProcess(app, argc, argv, opts, "lcmloc-evaluate", [&] {
+  return app::runProcess(app, argc, argv, opts, "lcmloc-evaluate", [&] {
     command.config_path = opts.config;
     return eval::runEvaluate(command);
   });

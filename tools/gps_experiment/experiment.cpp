@@ -17,7 +17,7 @@
 namespace lcmloc::gps_experiment {
 namespace {
 
-const models::TruthState* truthAt(const std::vector<models::TruthState>& truth, int64_t utime) {
+const sim::TruthState* truthAt(const std::vector<sim::TruthState>& truth, int64_t utime) {
   // truth is sampled on a fixed grid starting at truth.front().utime
   if (truth.size() < 2) return nullptr;
   const int64_t dt = truth[1].utime - truth[0].utime;
@@ -42,14 +42,14 @@ int64_t settledFrom(const std::vector<scenario::TrackPoint>& track, const Option
   return start;
 }
 
-Result run(const models::ScenarioConfig& sc, const std::vector<core::FilterConfig>& filters,
+Result run(const sim::ScenarioConfig& sc, const std::vector<core::FilterConfig>& filters,
            const Options& opt) {
   Result r;
   r.scenario = scenario::runScenario(sc, filters);
   const auto& truth = r.scenario.truth;
   const int64_t t0 = truth.front().utime;
   // Error of a fix against the truth at its time (nullopt: no fix, or no truth sample then).
-  auto fixError = [&](const models::GpsFixSample& g) -> std::optional<double> {
+  auto fixError = [&](const sim::GpsFixSample& g) -> std::optional<double> {
     const auto* t = g.has_fix ? truthAt(truth, g.utime) : nullptr;
     if (!t) return std::nullopt;
     return std::hypot(g.x - t->x, g.y - t->y);

@@ -55,8 +55,8 @@ void summarize(McGroup& g) {
 
 }  // namespace
 
-models::PathConfig extendedPath(const models::ScenarioConfig& sc, double min_drive_s) {
-  models::PathConfig p = sc.path;
+sim::PathConfig extendedPath(const sim::ScenarioConfig& sc, double min_drive_s) {
+  sim::PathConfig p = sc.path;
   double lap = 0;
   for (const auto& s : sc.path.segments) lap += s.length;
   if (lap <= 0 || sc.vehicle.speed <= 0) return p;
@@ -68,10 +68,10 @@ models::PathConfig extendedPath(const models::ScenarioConfig& sc, double min_dri
   return p;
 }
 
-McResult monteCarlo(const models::ScenarioConfig& base, const std::vector<core::FilterConfig>& filters,
+McResult monteCarlo(const sim::ScenarioConfig& base, const std::vector<core::FilterConfig>& filters,
                     const MonteCarloOptions& opt, const std::function<void(int, int)>& progress) {
   McResult r;
-  models::ScenarioConfig sc = base;
+  sim::ScenarioConfig sc = base;
   sc.path = extendedPath(base, opt.min_drive_s);
   for (const auto& s : sc.path.segments) r.path_m += s.length;
   for (double rate : opt.rates_hz)

@@ -11,7 +11,7 @@ std::vector<core::FilterConfig> filterConfigs(const std::vector<std::string>& ty
   for (const auto& t : types) {
     YAML::Node n;
     n["type"] = t;
-    filters.push_back(common::parseFilterConfig(n, base, "--filters", "fusion.filter"));
+    filters.push_back(app::parseFilterConfig(n, base, "--filters", "fusion.filter"));
   }
   return filters;
 }

@@ -13,11 +13,11 @@ int main(int argc, char** argv) {
       "(ODOMETRY, LANDMARKS, BEACONS, GPS, GROUND_TRUTH, IMU), OUT/map.csv and OUT/config.yaml for lcmloc-replay. "
       "Refused rows are listed with file, line and reason. Exit 2 when a *.csv file is none of the formats (the "
       "formats are listed), 1 when nothing usable was read."};
-  common::CommonOptions opts;
-  common::addCommonOptions(app, opts);
+  app::CommonOptions opts;
+  app::addCommonOptions(app, opts);
   import::ImportCommand command;
   import::addImportOptions(app, command);
-  return common::runProcess(app, argc, argv, opts, "lcmloc-import", [&]() -> int {
-    return import::runImport(common::loadSystemConfig(opts.config), command);
+  return app::runProcess(app, argc, argv, opts, "lcmloc-import", [&]() -> int {
+    return import::runImport(app::loadSystemConfig(opts.config), command);
   });
 }

@@ -13,15 +13,15 @@ int main(int argc, char** argv) {
       "counts -> differential-drive ODOMETRY, reed byte -> one MAGRULER detection per magnet pass with its lateral "
       "offset, the 55 mm grid -> map.csv, config.yaml), replay with the gated ruler UKF (and a dead-reckoning "
       "shadow), write OUT/<run>/report.json and track.png; OUT/summary.json over the runs. docs/magnet_grid.md."};
-  common::CommonOptions opts;
-  common::addOfflineOptions(app, opts,
+  app::CommonOptions opts;
+  app::addOfflineOptions(app, opts,
                             "system YAML file (checked when given; unused otherwise: each run writes its own config.yaml)");
   import::MagnetGridCommand c;
   c.data = LCMLOC_MAGNET_GRID_DIR;
   app.add_option("--data", c.data, "data directory (<run>.txt files)")->capture_default_str();
   app.add_option("--run", c.runs, "run name(s) (default: all six) or paths to run files");
-  common::addOutputOption(app, c.output, "output directory (OUT/<run>/..., OUT/summary.json)")->capture_default_str();
-  common::addOverwriteFlag(app, c.overwrite);
+  app::addOutputOption(app, c.output, "output directory (OUT/<run>/..., OUT/summary.json)")->capture_default_str();
+  app::addOverwriteFlag(app, c.overwrite);
   app.add_flag("--import-only", c.import_only,
                "only write OUT/<run>/run.lcmlog, map.csv, config.yaml (for lcmloc-replay)");
   app.add_option("--bit0", c.grid.bit0, "side of reed bit 0: right or left")->capture_default_str()
@@ -35,8 +35,8 @@ int main(int argc, char** argv) {
   app.add_option("--pw-turn", c.grid.pw_turn, "heading variance per radian turned [rad^2/rad]")->capture_default_str();
   app.add_option("--reach", c.grid.reach, "association window beyond the reed row [m]")->capture_default_str();
 
-  return common::runProcess(app, argc, argv, opts, "lcmloc-magnet-grid", [&]() -> int {
-    if (!opts.config.empty()) common::loadSystemConfig(opts.config);
+  return app::runProcess(app, argc, argv, opts, "lcmloc-magnet-grid", [&]() -> int {
+    if (!opts.config.empty()) app::loadSystemConfig(opts.config);
     return import::runMagnetGridCommand(c);
   });
 }

@@ -14,31 +14,31 @@
 
 namespace lcmloc::ins_experiment {
 
-int runCommand(const common::SimSystemConfig& cfg, const CommandOptions& o) {
+int runCommand(const simconfig::SimSystemConfig& cfg, const CommandOptions& o) {
   Options eo = o.experiment;
-  common::refuseExistingOutput(o.log, o.overwrite, "--log");
-  common::prepareOutputDir(o.output, o.overwrite);
+  app::refuseExistingOutput(o.log, o.overwrite, "--log");
+  app::prepareOutputDir(o.output, o.overwrite);
   auto ic = cfg.ins_sim;
   if (o.duration > 0) ic.duration = o.duration;
   if (o.seed) ic.seed = o.seed;
   if (eo.fixes) {
     if (cfg.scenario.landmarks.empty())
-      throw common::ConfigError(cfg.file, "landmarks", "--fixes needs a landmark map (list of {id, x, y})");
+      throw app::ConfigError(cfg.file, "landmarks", "--fixes needs a landmark map (list of {id, x, y})");
     eo.vision = cfg.scenario.vision;
     eo.landmarks = cfg.scenario.landmarks;
     eo.fix = cfg.fusion.fix;
     eo.fix_gate = cfg.fusion.fix_gate;
     eo.vision_seed = cfg.scenario.vision.seed ? cfg.scenario.vision.seed
-                                              : models::componentSeed(cfg.scenario.seed, "vision");
+                                              : sim::componentSeed(cfg.scenario.seed, "vision");
   }
   std::vector<RunResult> runs;
   for (std::size_t i = 0; i < o.starts.size(); ++i) {
     const std::string& s = o.starts[i];
-    if (!models::insStartValid(s)) {
+    if (!sim::insStartValid(s)) {
       spdlog::error("--starts: unknown start '{}' (valid: hard, gentle, gentle_turn, gentle_stopgo, steady)", s);
-      return common::kExitConfigError;
+      return app::kExitConfigError;
     }
-    models::InsSimConfig c = ic;
+    sim::InsSimConfig c = ic;
     c.start = s;
     std::unique_ptr<lcm::LogFile> lf;
     int64_t ev = 0, truth_seq = 0, imu_seq = 0, odo_seq = 0;
@@ -48,7 +48,7 @@ int runCommand(const common::SimSystemConfig& cfg, const CommandOptions& o) {
       if (!parent.empty()) std::filesystem::create_directories(parent);
       lf = std::make_unique<lcm::LogFile>(o.log, "w");
       if (!lf->good()) throw std::runtime_error("cannot create '" + o.log + "'");
-      sink = [&](const models::InsSimStep& st) {
+      sink = [&](const sim::InsSimStep& st) {
         auto write = [&](const std::string& ch, const auto& msg, int64_t utime) {
           std::vector<uint8_t> buf(msg.getEncodedSize());
           msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
@@ -60,9 +60,9 @@ int runCommand(const common::SimSystemConfig& cfg, const CommandOptions& o) {
           le.data = buf.data();
           if (lf->writeEvent(&le) != 0) throw std::runtime_error("cannot write '" + o.log + "'");
         };
-        if (st.odometry) write(cfg.channels.odometry, common::toLcm(*st.odometry, odo_seq++), st.truth.utime);
-        if (st.imu) write(cfg.channels.imu, common::toLcm(*st.imu, imu_seq++), st.truth.utime);
-        write(cfg.channels.ground_truth, common::toLcm(st.truth, truth_seq++), st.truth.utime);
+        if (st.odometry) write(cfg.channels.odometry, drivers::toLcm(*st.odometry, odo_seq++), st.truth.utime);
+        if (st.imu) write(cfg.channels.imu, drivers::toLcm(*st.imu, imu_seq++), st.truth.utime);
+        write(cfg.channels.ground_truth, drivers::toLcm(st.truth, truth_seq++), st.truth.utime);
       };
     }
     const std::string name = s + "_start";
@@ -95,7 +95,7 @@ int runCommand(const common::SimSystemConfig& cfg, const CommandOptions& o) {
   }
   std::printf("report: %s/report.json%s\n", o.output.c_str(),
               plotted ? ", figures fig1_scale.png, fig1b_scale_run.png, fig2_position.png" : " (gnuplot failed: no figures)");
-  return common::kExitOk;
+  return app::kExitOk;
 }
 
 }  // namespace lcmloc::ins_experiment

@@ -19,13 +19,13 @@
 
 namespace lcmloc::ins_experiment {
 
-RunResult run(const std::string& name, const models::InsSimConfig& cfg, const core::FilterConfig& base,
+RunResult run(const std::string& name, const sim::InsSimConfig& cfg, const core::FilterConfig& base,
               int64_t start_utime, const Options& opt, const StepSink& sink,
               const std::function<void(double)>& progress) {
   RunResult r;
   r.name = name;
   r.start = cfg.start;
-  models::InsSim sim(cfg, start_utime);
+  sim::InsSim sim(cfg, start_utime);
 
   core::EngineConfig ec;
   ec.filter = base;
@@ -36,9 +36,9 @@ RunResult run(const std::string& name, const models::InsSimConfig& cfg, const co
   ec.filter.initial_pose = core::Vec3(0.0, 0.0, cfg.heading);
   ec.shadow = {"odo_ins_uncal"};
   ec.reorder_window_us = 0;  // inputs are produced in order
-  std::optional<models::VisionSensor> vision;
+  std::optional<sim::VisionSensor> vision;
   if (opt.fixes) {
-    ec.landmarks = models::landmarkMap(opt.landmarks);
+    ec.landmarks = sim::landmarkMap(opt.landmarks);
     ec.fix = opt.fix;
     ec.fix_gate = opt.fix_gate;
     vision.emplace(opt.vision, opt.landmarks, opt.vision_seed);
@@ -52,7 +52,7 @@ RunResult run(const std::string& name, const models::InsSimConfig& cfg, const co
   };
   core::FusionEngine engine(ec, {}, out);
   // Vision at this step's truth; three bearings: the fix, with the errors before and after it.
-  auto fix = [&](const models::InsSimStep& st, int64_t& seq) {
+  auto fix = [&](const sim::InsSimStep& st, int64_t& seq) {
     const auto obs = vision->sample(st.truth);
     if (!obs || obs->ids.size() != 3) return;
     auto err = [&](const char* f) {
@@ -78,7 +78,7 @@ RunResult run(const std::string& name, const models::InsSimConfig& cfg, const co
     r.fixes.push_back(p);
   };
 
-  const models::InsSimStep s0 = sim.initial();
+  const sim::InsSimStep s0 = sim.initial();
   if (sink) sink(s0);
   if (vision) vision->sample(s0.truth);  // as lcmloc-vision: the first observation at the first truth
   int64_t odo_seq = 0, imu_seq = 0, vision_seq = 0;
@@ -91,7 +91,7 @@ RunResult run(const std::string& name, const models::InsSimConfig& cfg, const co
   double one_order_candidate = -1, std_candidate = -1, std_at_start = 0;
   std::vector<double> k_err_after_10;  // |scale error| from 10 s after the motion started
   int64_t k_below_after_10 = 0;
-  models::InsSimStep st;
+  sim::InsSimStep st;
   while (!sim.finished()) {
     st = sim.step();
     if (sink) sink(st);
@@ -199,7 +199,7 @@ RunResult run(const std::string& name, const models::InsSimConfig& cfg, const co
   return r;
 }
 
-bool writeReport(const std::vector<RunResult>& runs, const models::InsSimConfig& cfg, const Options& opt,
+bool writeReport(const std::vector<RunResult>& runs, const sim::InsSimConfig& cfg, const Options& opt,
                  const std::string& dir) {
   namespace fs = std::filesystem;
   fs::create_directories(dir);

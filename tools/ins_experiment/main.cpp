@@ -12,27 +12,27 @@ using namespace lcmloc;
 
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-ins-experiment: odometry/INS scale calibration vs traditional integration (seeds/004 §II)"};
-  common::CommonOptions opts;
-  opts.config = common::configDir() + "/ins_paper.yaml";
-  common::addCommonOptions(app, opts);
+  app::CommonOptions opts;
+  opts.config = app::configDir() + "/ins_paper.yaml";
+  app::addCommonOptions(app, opts);
   ins_experiment::CommandOptions o;
-  common::addOutputOption(app, o.output, "output directory (report.json, figures)")->capture_default_str();
+  app::addOutputOption(app, o.output, "output directory (report.json, figures)")->capture_default_str();
   app.add_option("--starts", o.starts, "runs: start profiles (hard, gentle, gentle_turn, gentle_stopgo, steady)")
       ->delimiter(',')->capture_default_str();
   app.add_option("--duration", o.duration, "override ins_sim.duration [s]")
-      ->check(CLI::Range(common::kInsSimDuration.lo, common::kInsSimDuration.hi));
-  app.add_option("--seed", o.seed, "override ins_sim.seed")->check(common::seed());
+      ->check(CLI::Range(simconfig::kInsSimDuration.lo, simconfig::kInsSimDuration.hi));
+  app.add_option("--seed", o.seed, "override ins_sim.seed")->check(app::seed());
   app.add_option("--calibration-stage", o.experiment.calibration_stage,
                  "dead reckoning freezes the scale estimate this long after the start [s]")
       ->capture_default_str()
-      ->check(common::nonNegative());
+      ->check(app::nonNegative());
   app.add_flag("--fixes", o.experiment.fixes,
                "three-landmark fixes: lcmloc-vision's model (config `vision`, top-level `landmarks`) "
                "re-initializes both filters; the report gives the error before/after each fix");
   app.add_option("--log", o.log, "write the sensor log of the first run (GROUND_TRUTH, IMU, ODOMETRY) to this file");
-  common::addOverwriteFlag(app, o.overwrite);
+  app::addOverwriteFlag(app, o.overwrite);
 
-  return common::runProcess(app, argc, argv, opts, "lcmloc-ins-experiment", [&] {
-    return ins_experiment::runCommand(common::loadSimSystemConfig(opts.config), o);
+  return app::runProcess(app, argc, argv, opts, "lcmloc-ins-experiment", [&] {
+    return ins_experiment::runCommand(simconfig::loadSimSystemConfig(opts.config), o);
   });
 }

@@ -23,7 +23,7 @@ namespace lcmloc::landmark_experiment {
 /// non-finite messages are counted and skipped; a VISION message with no truth at its time too.
 /// A damaged log is read up to and past the damage (eval's reader); each damaged place is logged
 /// and *damaged set.
-std::vector<Observation> readObservations(const std::string& path, const common::ChannelConfig& ch,
+std::vector<Observation> readObservations(const std::string& path, const app::ChannelConfig& ch,
                                                       bool* damaged) {
   std::map<int64_t, lcmloc::ground_truth_t> truth;
   std::vector<lcmloc::landmark_bearings_t> vision;
@@ -44,7 +44,7 @@ std::vector<Observation> readObservations(const std::string& path, const common:
       }
       vision.push_back(m);
     }
-  }, &common::stopFlag());
+  }, &app::stopFlag());
   for (const auto& i : scan.issues) spdlog::warn("DAMAGE in {}: {}", path, i.describe());
   if (scan.interrupted) spdlog::warn("{}: interrupted after {} events: solving those", path, scan.events_read);
   *damaged = scan.damaged;
@@ -75,17 +75,17 @@ std::vector<Observation> readObservations(const std::string& path, const common:
   return obs;
 }
 
-int runCommand(const common::SimSystemConfig& cfg, CommandOptions o) {
+int runCommand(const simconfig::SimSystemConfig& cfg, CommandOptions o) {
   if (std::hypot(o.off_centre[0], o.off_centre[1]) >= 0.9)
-    throw common::ConfigError("--off-centre", "",
+    throw app::ConfigError("--off-centre", "",
                               fmt::format("{},{} is not inside 0.9 circumradius (the danger circle is at 1)",
                                           o.off_centre[0], o.off_centre[1]));
-  common::prepareOutputDir(o.output, o.overwrite);
+  app::prepareOutputDir(o.output, o.overwrite);
   const auto& v = cfg.scenario.vision;
-  o.experiment.seed = o.seed ? o.seed : v.seed ? v.seed : models::componentSeed(cfg.scenario.seed, "vision");
+  o.experiment.seed = o.seed ? o.seed : v.seed ? v.seed : sim::componentSeed(cfg.scenario.seed, "vision");
   o.experiment.ins_offset = Eigen::Vector2d(o.ins_offset[0], o.ins_offset[1]);
   o.experiment.off_centre = Eigen::Vector2d(o.off_centre[0], o.off_centre[1]);
-  o.experiment.ins_heading_error = o.heading_arcmin * 60.0 * models::kArcSec;
+  o.experiment.ins_heading_error = o.heading_arcmin * 60.0 * sim::kArcSec;
   const auto t0 = std::chrono::steady_clock::now();
   auto last = t0;
   o.experiment.progress = [&](int64_t done, int64_t total) {
@@ -96,9 +96,9 @@ int runCommand(const common::SimSystemConfig& cfg, CommandOptions o) {
   };
   if (o.log.empty())
     spdlog::info("{} runs per case, seed {}, noise {:.1f}\", resolution {:.1f}\", distance {} m", o.experiment.runs,
-                 o.experiment.seed, v.bearing_std / models::kArcSec, v.resolution / models::kArcSec, o.experiment.distance);
+                 o.experiment.seed, v.bearing_std / sim::kArcSec, v.resolution / sim::kArcSec, o.experiment.distance);
   if (!o.log.empty() && cfg.scenario.landmarks.empty())
-    throw common::ConfigError(cfg.file, "landmarks", "--log needs the landmark map of the recorded run");
+    throw app::ConfigError(cfg.file, "landmarks", "--log needs the landmark map of the recorded run");
   bool damaged = false;
   const auto r = o.log.empty() ? run(v, o.experiment)
                                : runObservations(cfg.scenario.landmarks,
@@ -109,7 +109,7 @@ int runCommand(const common::SimSystemConfig& cfg, CommandOptions o) {
   std::printf("%d %s solved in %.2f s; report: %s/report.json%s\n", r.options.runs,
               o.log.empty() ? "runs x 4 cases" : "observations", elapsed, o.output.c_str(),
               plotted ? ", figures <case>.png" : " (gnuplot failed: no figures)");
-  return damaged ? common::kExitInputDamaged : common::kExitOk;
+  return damaged ? app::kExitInputDamaged : app::kExitOk;
 }
 
 }  // namespace lcmloc::landmark_experiment

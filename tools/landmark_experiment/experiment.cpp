@@ -27,7 +27,7 @@ using Vec2 = Eigen::Vector2d;
 
 namespace {
 
-constexpr double kAs = 1.0 / models::kArcSec;  // rad -> arc seconds
+constexpr double kAs = 1.0 / sim::kArcSec;  // rad -> arc seconds
 
 /// Centroid of the triangle of the three lines through lms[i] with azimuths az[i] (clockwise
 /// from north); false when two lines are parallel.
@@ -113,9 +113,9 @@ std::string fmt(const char* f, double a) {
 
 std::string readingName(Reading r) { return r == Reading::kFromVehicle ? "from_vehicle" : "apart"; }
 
-std::vector<models::Landmark> triangleLandmarks(Reading r, double distance) {
+std::vector<sim::Landmark> triangleLandmarks(Reading r, double distance) {
   const double R = r == Reading::kFromVehicle ? distance : distance / std::sqrt(3.0);
-  std::vector<models::Landmark> lms;
+  std::vector<sim::Landmark> lms;
   for (int i = 0; i < 3; ++i) {
     const double az = i * 2.0 * M_PI / 3.0;  // clockwise from north: N, ESE, WSW
     lms.push_back({i + 1, R * std::sin(az), R * std::cos(az)});
@@ -123,7 +123,7 @@ std::vector<models::Landmark> triangleLandmarks(Reading r, double distance) {
   return lms;
 }
 
-Result run(const models::VisionSensorConfig& vision, const Options& opt) {
+Result run(const sim::VisionSensorConfig& vision, const Options& opt) {
   if (opt.runs < 1) throw std::invalid_argument("runs: must be >= 1");
   if (!(opt.distance > 0) || !std::isfinite(opt.distance)) throw std::invalid_argument("distance: must be > 0");
   if (!opt.ins_offset.allFinite() || !std::isfinite(opt.ins_heading_error) || !std::isfinite(opt.true_heading) ||
@@ -134,7 +134,7 @@ Result run(const models::VisionSensorConfig& vision, const Options& opt) {
   Result res;
   res.options = opt;
   res.vision = vision;
-  res.sigma_effective = models::VisionSensor::effectiveStd(vision);
+  res.sigma_effective = sim::VisionSensor::effectiveStd(vision);
   const int64_t total = 4LL * opt.runs;
   int64_t done = 0;
   const int64_t step = std::max<int64_t>(1, total / 20);
@@ -154,11 +154,11 @@ Result run(const models::VisionSensorConfig& vision, const Options& opt) {
       c.crb_heading_std = std::sqrt(c.crb(2, 2));
       c.crb_within_paper = boxProbability(c.crb.topLeftCorner<2, 2>(), opt.paper_position);
 
-      const auto map = models::landmarkMap(lms);
+      const auto map = sim::landmarkMap(lms);
       fix::FixOptions fo;
       fo.sigma_bearing = res.sigma_effective;
-      models::VisionSensor sensor(vision, lms, models::componentSeed(opt.seed, "landmark_experiment/" + c.name));
-      const double heading_ccw = models::toFixHeading(opt.true_heading);  // self-inverse
+      sim::VisionSensor sensor(vision, lms, sim::componentSeed(opt.seed, "landmark_experiment/" + c.name));
+      const double heading_ccw = sim::toFixHeading(opt.true_heading);  // self-inverse
       const Vec2 p_ins = c.vehicle + opt.ins_offset;
       const double psi_ins = core::wrapAngle(opt.true_heading + opt.ins_heading_error);
       c.methods = {MethodStats{}, MethodStats{}, MethodStats{}, MethodStats{}};
@@ -167,8 +167,8 @@ Result run(const models::VisionSensorConfig& vision, const Options& opt) {
       c.methods[2].method = "gauss_newton";
       c.methods[3].method = "uncorrected";
       for (int k = 0; k < opt.runs; ++k) {
-        const models::VisionSample s = sensor.observe(c.vehicle.x(), c.vehicle.y(), heading_ccw, k);
-        const auto b = models::toFixBearings(s);
+        const sim::VisionSample s = sensor.observe(c.vehicle.x(), c.vehicle.y(), heading_ccw, k);
+        const auto b = sim::toFixBearings(s);
         const fix::FixResult r[3] = {fix::triangleFix(map, b, p_ins, psi_ins, fo),
                                      fix::leastSquaresFix(map, b, p_ins, psi_ins, fo),
                                      fix::gaussNewtonFix(map, b, p_ins, psi_ins, fo)};
@@ -242,10 +242,10 @@ Result run(const models::VisionSensorConfig& vision, const Options& opt) {
   return res;
 }
 
-Result runObservations(const std::vector<models::Landmark>& lms, const std::vector<Observation>& obs,
+Result runObservations(const std::vector<sim::Landmark>& lms, const std::vector<Observation>& obs,
                        const Options& opt) {
   if (obs.empty()) throw std::invalid_argument("no observations");
-  const auto map = models::landmarkMap(lms);
+  const auto map = sim::landmarkMap(lms);
   Result res;
   res.options = opt;
   res.options.runs = static_cast<int>(obs.size());
@@ -268,8 +268,8 @@ Result runObservations(const std::vector<models::Landmark>& lms, const std::vect
   for (std::size_t k = 0; k < obs.size(); ++k) {
     const auto& o = obs[k];
     const Vec2 p(o.x, o.y);
-    const double psi = models::toFixHeading(o.heading);
-    const auto b = models::toFixBearings(o.sample);
+    const double psi = sim::toFixHeading(o.heading);
+    const auto b = sim::toFixBearings(o.sample);
     const fix::FixResult r[2] = {fix::triangleFix(map, b, p + opt.ins_offset, psi + opt.ins_heading_error, fo),
                                  fix::leastSquaresFix(map, b, p + opt.ins_offset, psi + opt.ins_heading_error, fo)};
     for (int m = 0; m < 2; ++m) {

@@ -16,16 +16,16 @@ int main(int argc, char** argv) {
       "the landmarks are placed by the experiment (equilateral triangle, both readings of the distance), "
       "not taken from the config's `landmarks` map. A damaged --log is solved up to and past the damage, each "
       "damaged place reported (exit 3)."};
-  common::CommonOptions opts;
-  opts.config = common::configDir() + "/landmark_paper.yaml";
-  common::addCommonOptions(app, opts);
+  app::CommonOptions opts;
+  opts.config = app::configDir() + "/landmark_paper.yaml";
+  app::addCommonOptions(app, opts);
   landmark_experiment::CommandOptions o;
   app.add_option("--runs", o.experiment.runs, "Monte Carlo runs per case (10000 for stable statistics)")
       ->check(CLI::Range(1, 10000000))->capture_default_str();
   app.add_option("--seed", o.seed, "override the seed (default: vision.seed, else derived from scenario.seed)")
-      ->check(common::seed());
-  common::addOutputOption(app, o.output, "output directory (report.json, figures)")->capture_default_str();
-  common::addOverwriteFlag(app, o.overwrite);
+      ->check(app::seed());
+  app::addOutputOption(app, o.output, "output directory (report.json, figures)")->capture_default_str();
+  app::addOverwriteFlag(app, o.overwrite);
   app.add_option("--distance", o.experiment.distance, "the paper's landmark distance [m]")
       ->check(CLI::Range(1.0, 1e6))->capture_default_str();
   app.add_option("--ins-offset", o.ins_offset, "INS position error east,north [m]")
@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
   app.add_option("--off-centre", o.off_centre, "off-centre vehicle east,north as fractions of the circumradius")
       ->delimiter(',')->expected(2)->capture_default_str();
 
-  return common::runProcess(app, argc, argv, opts, "lcmloc-landmark-experiment", [&] {
-    return landmark_experiment::runCommand(common::loadSimSystemConfig(opts.config), o);
+  return app::runProcess(app, argc, argv, opts, "lcmloc-landmark-experiment", [&] {
+    return landmark_experiment::runCommand(simconfig::loadSimSystemConfig(opts.config), o);
   });
 }

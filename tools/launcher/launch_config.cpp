@@ -11,8 +11,8 @@ namespace lcmloc::launcher {
 
 LaunchConfig loadLaunchConfig(const std::string& path) {
   namespace fs = std::filesystem;
-  using common::ConfigError;
-  const std::string text = common::readConfigFile(path, "system file");
+  using app::ConfigError;
+  const std::string text = app::readConfigFile(path, "system file");
   YAML::Node doc;
   try {
     doc = YAML::Load(text);
@@ -21,7 +21,7 @@ LaunchConfig loadLaunchConfig(const std::string& path) {
   }
   LaunchConfig cfg;
   cfg.file = path;
-  common::KeyReader r(doc, path, "");
+  app::KeyReader r(doc, path, "");
   r.get("scenario", cfg.scenario);
   r.get("drain_time", cfg.drain_time, 0.0, 3600.0);
   r.get("stop_timeout", cfg.stop_timeout, 0.1, 3600.0);
@@ -43,7 +43,7 @@ LaunchConfig loadLaunchConfig(const std::string& path) {
   for (std::size_t i = 0; i < procs.size(); ++i) {
     const std::string kp = "processes[" + std::to_string(i) + "]";
     ProcessSpec p;
-    common::KeyReader pr(procs[i], path, kp);
+    app::KeyReader pr(procs[i], path, kp);
     pr.get("name", p.name);
     pr.get("executable", p.executable);
     pr.getStrings("args", p.args);

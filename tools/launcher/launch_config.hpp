@@ -39,9 +39,9 @@ struct LaunchConfig {
   std::vector<ProcessSpec> processes;
 };
 
-/// Heartbeats come once per common::Heartbeat::kPeriodSeconds (1 s): a shorter timeout than two
+/// Heartbeats come once per app::Heartbeat::kPeriodSeconds (1 s): a shorter timeout than two
 /// periods would take a late or lost heartbeat for a hung process.
-inline constexpr double kMinHeartbeatTimeout = 2.0 * common::Heartbeat::kPeriodSeconds;
+inline constexpr double kMinHeartbeatTimeout = 2.0 * app::Heartbeat::kPeriodSeconds;
 
 /// Reads a system file; relative scenario paths are relative to the file. Throws ConfigError.
 LaunchConfig loadLaunchConfig(const std::string& path);

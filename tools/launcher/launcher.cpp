@@ -142,17 +142,17 @@ class Launcher {
       : cfg_(std::move(cfg)), scenario_(std::move(scenario)), url_(std::move(url)) {}
 
   int run() {
-    const auto sys = common::loadSimSystemConfig(scenario_);  // validate every section before starting anything
+    const auto sys = simconfig::loadSimSystemConfig(scenario_);  // validate every section before starting anything
     for (const auto& spec : cfg_.processes) {
       children_.emplace_back();
       children_.back().spec = spec;
     }
-    std::optional<common::Bus> bus;
+    std::optional<bus::Bus> bus;
     try {
       bus.emplace(url_);
-    } catch (const common::TransportError&) {
+    } catch (const bus::TransportError&) {
       // A SIGTERM right at start-up interrupts LCM's start (its self-test): that is a stop.
-      if (!common::stopRequested()) throw;
+      if (!app::stopRequested()) throw;
     }
     // Only our own children's heartbeats count, from their start on: a heartbeat of another
     // process (on another host its pid may be any number) cannot make a child ready before it
@@ -175,7 +175,7 @@ class Launcher {
     std::optional<Clock::time_point> drain_until;
     auto last_pass = Clock::now();
     auto next_reminder = Clock::now() + secs(kNonCriticalReminder);
-    while (ok && !common::stopRequested()) {
+    while (ok && !app::stopRequested()) {
       hb_->tick();
       bus->handle(100);
       const auto now = Clock::now();
@@ -216,7 +216,7 @@ class Launcher {
       }
       if (drain_until && Clock::now() >= *drain_until) break;
     }
-    if (common::stopRequested()) spdlog::info("stop requested (signal {}): stopping all", common::stopSignal());
+    if (app::stopRequested()) spdlog::info("stop requested (signal {}): stopping all", app::stopSignal());
     if (hb_) hb_->publish("stopping");
     stopAll();
     return summary();
@@ -227,9 +227,9 @@ class Launcher {
     return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
   }
 
-  bool startAll(common::Bus& bus) {
+  bool startAll(bus::Bus& bus) {
     for (auto& c : children_) {
-      if (common::stopRequested()) return false;
+      if (app::stopRequested()) return false;
       c.pid = spawn(c, scenario_, url_);
       c.running = true;
       c.ready = false;
@@ -237,7 +237,7 @@ class Launcher {
       spdlog::info("started {} (pid {})", c.spec.name, c.pid);
       const auto deadline = Clock::now() + secs(cfg_.ready_timeout);
       bool ended = false;
-      while (!c.ready && Clock::now() < deadline && !common::stopRequested()) {
+      while (!c.ready && Clock::now() < deadline && !app::stopRequested()) {
         hb_->tick();
         bus.handle(50);
         if ((ended = reap(c, false))) break;
@@ -250,7 +250,7 @@ class Launcher {
         giveUp(c, "ended during start-up (" + describeStatus(c) + ")");
         continue;
       }
-      if (!c.ready && cfg_.ready_timeout > 0 && !common::stopRequested())
+      if (!c.ready && cfg_.ready_timeout > 0 && !app::stopRequested())
         spdlog::warn("{}: no heartbeat within {:.1f} s; continuing{}", c.spec.name, cfg_.ready_timeout,
                      cfg_.heartbeat_timeout > 0 ? " (its heartbeat is watched from its first one on)" : "");
       c.warned_silent = true;
@@ -359,7 +359,7 @@ class Launcher {
 
   int summary() const {
     bool any_failed = false;
-    const bool stopped = common::stopRequested();
+    const bool stopped = app::stopRequested();
     for (const auto& c : children_) {
       if (c.pid < 0) {
         // (not started because of a stop request: nothing failed; because another failed: counted)
@@ -373,16 +373,16 @@ class Launcher {
                    bad ? "FAILED" : "ok", bad && !c.spec.critical ? " (not critical)" : "",
                    c.restarts ? fmt::format("  (started again {} time(s))", c.restarts) : "");
     }
-    return any_failed ? common::kExitRuntimeError : common::kExitOk;
+    return any_failed ? app::kExitRuntimeError : app::kExitOk;
   }
 
   LaunchConfig cfg_;
   std::string scenario_, url_;
   std::vector<Child> children_;
-  std::optional<common::Heartbeat> hb_;
+  std::optional<app::Heartbeat> hb_;
   /// The launcher's heartbeat counters: children in the system file, running now, failed for good
   /// (non-critical ones given up), started again so far.
-  common::Heartbeat::Counters counters() const {
+  app::Heartbeat::Counters counters() const {
     int64_t running = 0, given_up = 0, restarts = 0;
     for (const auto& c : children_) {
       running += c.running;
@@ -403,16 +403,16 @@ int run(LaunchConfig cfg, const std::string& scenario, const std::string& url) {
 int launch(const std::string& system, const std::string& config, const std::string& lcm_url) {
   auto cfg = loadLaunchConfig(system);
   std::string scenario = !config.empty() ? config : cfg.scenario;
-  if (scenario.empty()) scenario = common::defaultConfigPath();
+  if (scenario.empty()) scenario = app::defaultConfigPath();
   scenario = std::filesystem::absolute(scenario).string();
-  const std::string url = common::withReceiveBuffer(lcm_url, cfg.recv_buf_size);
+  const std::string url = bus::withReceiveBuffer(lcm_url, cfg.recv_buf_size);
   spdlog::info("system {}: {} processes, scenario {}, LCM {}", system, cfg.processes.size(), scenario, url);
   if (url != lcm_url)
     spdlog::info("recv_buf_size={} added to the LCM URL for every child (the kernel's default UDP receive buffer "
                  "drops bursts; a recv_buf_size in --lcm-url is kept; recv_buf_size: 0 in {} leaves the URL as "
                  "given)",
                  cfg.recv_buf_size, system);
-  const long long asked = common::receiveBufferOf(url), rmem_max = common::kernelRmemMax();
+  const long long asked = bus::receiveBufferOf(url), rmem_max = bus::kernelRmemMax();
   if (asked > 0 && rmem_max >= 0 && rmem_max < asked)
     spdlog::warn("the kernel caps UDP receive buffers at net.core.rmem_max = {} bytes, less than the "
                  "recv_buf_size={} asked for: bursts may be lost (LCM says so too); as root: sysctl -w "

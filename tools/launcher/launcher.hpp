@@ -4,7 +4,7 @@
 // for heartbeat_timeout is hung, and stopped), starts a child that ended unexpectedly again when
 // its `restart` allows, and stops them in reverse order when the until_exit process (the
 // simulator) has finished, when a critical child fails for good, or on a stop request
-// (common::stopRequested). A non-critical child that fails for good is reported and the others
+// (app::stopRequested). A non-critical child that fails for good is reported and the others
 // keep running.
 #include <string>
 
@@ -13,7 +13,7 @@
 namespace lcmloc::launcher {
 
 /// Runs the system cfg, every child with --config scenario --lcm-url url. Returns
-/// common::kExitOk, or kExitRuntimeError if any child failed (in its last run).
+/// app::kExitOk, or kExitRuntimeError if any child failed (in its last run).
 int run(LaunchConfig cfg, const std::string& scenario, const std::string& url);
 
 /// Loads the system file, takes config (the scenario for every child; "" = the system file's

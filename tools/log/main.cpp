@@ -14,12 +14,12 @@ int main(int argc, char** argv) {
   CLI::App app{"lcmloc-log: look inside LCM logs (ours or lcm-logger's): info, to-csv, cut.\n"
                "A truncated or damaged log is read up to and past the damage, which is reported with its\n"
                "byte offset and event number (exit 3: the command's work is done with the intact events)."};
-  common::CommonOptions opts;
-  common::addOfflineOptions(app, opts, "system YAML file (checked when given; the log tools need no settings)");
+  app::CommonOptions opts;
+  app::addOfflineOptions(app, opts, "system YAML file (checked when given; the log tools need no settings)");
   logtool::LogCommand command;
   logtool::addLogOptions(app, command);
-  return common::runProcess(app, argc, argv, opts, "lcmloc-log", [&] {
-    if (!opts.config.empty()) common::loadSystemConfig(opts.config);
+  return app::runProcess(app, argc, argv, opts, "lcmloc-log", [&] {
+    if (!opts.config.empty()) app::loadSystemConfig(opts.config);
     return logtool::runLogCommand(command);
   });
 }

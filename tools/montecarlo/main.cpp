@@ -12,13 +12,13 @@
 int main(int argc, char** argv) {
   lcmloc::montecarlo::Options o;
   CLI::App app{"Monte Carlo of the magnetic-ruler scenario: N seeded in-process runs per filter"};
-  lcmloc::common::CommonOptions common;
-  lcmloc::common::addOfflineOptions(app, common, "system YAML file (default: built-in paper scenario)")
+  lcmloc::app::CommonOptions common;
+  lcmloc::app::addOfflineOptions(app, common, "system YAML file (default: built-in paper scenario)")
       ->check(CLI::ExistingFile);
   lcmloc::montecarlo::addOptions(app, o);
-  return lcmloc::common::runProcess(app, argc, argv, common, "lcmloc-montecarlo", [&] {
+  return lcmloc::app::runProcess(app, argc, argv, common, "lcmloc-montecarlo", [&] {
     o.config = common.config;
-    lcmloc::common::prepareOutputDir(std::filesystem::path(o.out).parent_path().string(), true);  // (the report file itself: --overwrite)
+    lcmloc::app::prepareOutputDir(std::filesystem::path(o.out).parent_path().string(), true);  // (the report file itself: --overwrite)
     return lcmloc::montecarlo::run(o);
   });
 }

@@ -12,13 +12,13 @@ int main(int argc, char** argv) {
       "daemon's outputs (POSE, POSE_<TYPE>, GATE, FUSION_STATUS) to an output log, byte-identical to what the "
       "daemon publishes live. A damaged input log is replayed up to and past the damage, each damaged place "
       "reported (exit 3)."};
-  common::CommonOptions opts;
-  common::addCommonOptions(app, opts);
+  app::CommonOptions opts;
+  app::addCommonOptions(app, opts);
   replay::CommandOptions o;
   replay::BenchOptions& bo = o.bench_options;
   app.add_option("log", o.input, "input LCM log file");
-  common::addOutputOption(app, o.output, "output LCM log (the daemon's outputs)");
-  common::addOverwriteFlag(app, o.overwrite);
+  app::addOutputOption(app, o.output, "output LCM log (the daemon's outputs)");
+  app::addOverwriteFlag(app, o.overwrite);
   app.add_option("--filter", o.filter, "override fusion.filter.type (" + core::filterTypeList() + ")");
   auto* o_shadow =
       app.add_option("--shadow", o.shadow, "override fusion.shadow: comma-separated filter types (POSE_<TYPE>)");
@@ -29,27 +29,27 @@ int main(int argc, char** argv) {
                "read the log and apply it in one thread (by default a second thread reads, decodes and validates "
                "ahead); the output is the same either way");
   app.add_option("--progress", o.progress_s, "[s, wall] between progress lines; 0 = none")
-      ->capture_default_str()->check(common::wallSeconds());
+      ->capture_default_str()->check(app::wallSeconds());
   app.add_flag("--bench", o.bench,
                "benchmark instead: generate a synthetic log, measure read+decode, dead_reckoning and ukf_gated "
                "replay (messages/s, medians)");
   app.add_option("--bench-duration", bo.duration_s, "[s] message time of the synthetic log (at most a day)")
-      ->capture_default_str()->check(common::positive())
+      ->capture_default_str()->check(app::positive())
       ->check(CLI::Validator(
           [](std::string& s) { return std::stod(s) <= 86400.0 ? std::string() : s + " s is more than a day (86400 s)"; },
           "<= 86400"));
   app.add_option("--bench-reps", bo.repetitions, "repetitions (medians are reported)")
-      ->capture_default_str()->check(common::positive());
+      ->capture_default_str()->check(app::positive());
   app.add_option("--bench-dir", bo.dir, "where the synthetic log and bench.json go")->capture_default_str();
   app.add_flag("--bench-keep-log", bo.keep_log, "reuse the synthetic log of an earlier run if present");
   app.add_option("--bench-output-every", bo.output_every, "fusion.output_every of the batched rows (1 = none)")
-      ->capture_default_str()->check(common::positive());
+      ->capture_default_str()->check(app::positive());
   app.add_option("--bench-case", bo.cases,
                  "measure only these cases (their keys in bench.json, e.g. ukf_gated_output_every_10; repeatable); "
                  "read+decode is measured beside each");
   app.footer("--lcm-url is accepted for uniformity and unused: the replay reads and writes files only.");
 
-  return common::runProcess(app, argc, argv, opts, "lcmloc-replay", [&] {
-    return replay::runCommand(replay::applyOverrides(common::loadSimSystemConfig(opts.config), o), o);
+  return app::runProcess(app, argc, argv, opts, "lcmloc-replay", [&] {
+    return replay::runCommand(replay::applyOverrides(simconfig::loadSimSystemConfig(opts.config), o), o);
   });
 }

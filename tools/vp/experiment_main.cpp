@@ -18,16 +18,16 @@ int main(int argc, char** argv) {
       "lcmloc-vp-experiment: imports the Victoria Park files with every k-th GPS fix held out, replays the log "
       "through the fusion daemon's code once per filter and scores each fused track at the held-out fixes "
       "(RMSE, median, p95, max); writes report.json, drive.png and error.png."};
-  common::CommonOptions opts;
-  opts.config = common::configDir() + "/victoria_park.yaml";
-  common::addCommonOptions(app, opts);
+  app::CommonOptions opts;
+  opts.config = app::configDir() + "/victoria_park.yaml";
+  app::addCommonOptions(app, opts);
   vp::ImportOptions io;
   vp::ExperimentOptions eo;
   std::string dir = LCMLOC_VP_DIR;
   bool no_init = false, overwrite = false;
   app.add_option("--dir", dir, "data directory holding vp_odometry.csv and vp_gps.csv")->capture_default_str();
-  common::addOutputOption(app, eo.out_dir, "output directory (report.json, figures)")->capture_default_str();
-  common::addOverwriteFlag(app, overwrite);
+  app::addOutputOption(app, eo.out_dir, "output directory (report.json, figures)")->capture_default_str();
+  app::addOverwriteFlag(app, overwrite);
   app.add_option("--filters", eo.filters, "filters to run")->delimiter(',')->capture_default_str();
   app.add_option("--holdout-every", io.holdout_every,
                  "hold every k-th fix out, k >= 2 (the filters get the others and are scored at these)")
@@ -36,19 +36,19 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--max-rows", io.max_rows,
                  "a slice: the first N odometry rows and the GPS rows of their time span (0 = all)")
-      ->capture_default_str()->check(lcmloc::common::nonNegative());
+      ->capture_default_str()->check(lcmloc::app::nonNegative());
   app.add_option("--gps-std", io.gps_std, "position_std written into the fixes [m] (0 = gnss.gps_std)")
       ->capture_default_str()
-      ->check(lcmloc::common::nonNegative());
+      ->check(lcmloc::app::nonNegative());
   app.add_flag("--no-gps-init", no_init, "start from fusion.filter.initial_pose instead of the first fixes");
 
-  return common::runProcess(app, argc, argv, opts, "lcmloc-vp-experiment", [&]() -> int {
-    const auto cfg = common::loadSystemConfig(opts.config);
+  return app::runProcess(app, argc, argv, opts, "lcmloc-vp-experiment", [&]() -> int {
+    const auto cfg = app::loadSystemConfig(opts.config);
     vp::checkExperimentOptions(cfg, io, eo);  // before the output directory is made
-    common::prepareOutputDir(eo.out_dir, overwrite);
+    app::prepareOutputDir(eo.out_dir, overwrite);
     io.odometry_csv = dir + "/vp_odometry.csv";
     io.gps_csv = dir + "/vp_gps.csv";
-    io.stop = [] { return common::stopRequested(); };
+    io.stop = [] { return app::stopRequested(); };
     eo.init_from_gps = !no_init;
     const auto r = vp::runExperiment(cfg, io, eo);
     std::printf("%-16s %8s %8s %10s %10s %10s %10s %8s %8s %8s\n", "filter", "poses", "scored", "rmse[m]",
@@ -59,6 +59,6 @@ int main(int argc, char** argv) {
                   s.max_m, static_cast<long long>(s.gps_rejected), static_cast<long long>(s.lockouts),
                   static_cast<long long>(s.relocalized));
     std::printf("report: %s/report.json, figures drive.png, error.png (%.1f s)\n", eo.out_dir.c_str(), r.seconds);
-    return common::kExitOk;
+    return app::kExitOk;
   });
 }

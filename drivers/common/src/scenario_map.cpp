@@ -3,12 +3,15 @@
 #include "lcmloc/app/csv.hpp"
 #include "lcmloc/sim/world.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::drivers {
 
-core::MarkerMap scenarioMap(const SimSystemConfig& cfg) {
-  return models::makeMarkerMap(models::Path(cfg.scenario.path), cfg.scenario.markers);
+// Built on the application layer (configuration, process helpers).
+using namespace lcmloc::app;
+
+core::MarkerMap scenarioMap(const simconfig::SimSystemConfig& cfg) {
+  return sim::makeMarkerMap(sim::Path(cfg.scenario.path), cfg.scenario.markers);
 }
 
-void writeScenarioMap(const SimSystemConfig& cfg, const std::string& path) { csv::writeMap(path, scenarioMap(cfg)); }
+void writeScenarioMap(const simconfig::SimSystemConfig& cfg, const std::string& path) { csv::writeMap(path, scenarioMap(cfg)); }
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::drivers

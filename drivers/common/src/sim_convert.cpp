@@ -1,9 +1,9 @@
 #include "lcmloc/drivers/sim_convert.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::drivers {
 
-models::TruthState toCore(const lcmloc::ground_truth_t& m) {
-  models::TruthState s;
+sim::TruthState toCore(const lcmloc::ground_truth_t& m) {
+  sim::TruthState s;
   s.utime = m.utime;
   s.x = m.x;
   s.y = m.y;
@@ -14,7 +14,7 @@ models::TruthState toCore(const lcmloc::ground_truth_t& m) {
   return s;
 }
 
-lcmloc::ground_truth_t toLcm(const models::TruthState& s, int64_t seq) {
+lcmloc::ground_truth_t toLcm(const sim::TruthState& s, int64_t seq) {
   lcmloc::ground_truth_t m;
   m.utime = s.utime;
   m.seq = seq;
@@ -27,7 +27,7 @@ lcmloc::ground_truth_t toLcm(const models::TruthState& s, int64_t seq) {
   return m;
 }
 
-lcmloc::odometry_t toLcm(const models::OdometrySample& s, int64_t seq) {
+lcmloc::odometry_t toLcm(const sim::OdometrySample& s, int64_t seq) {
   lcmloc::odometry_t m;
   m.utime = s.input.utime;
   m.seq = seq;
@@ -39,7 +39,7 @@ lcmloc::odometry_t toLcm(const models::OdometrySample& s, int64_t seq) {
   return m;
 }
 
-lcmloc::magruler_t toLcm(const models::RulerReading& r, int64_t seq) {
+lcmloc::magruler_t toLcm(const sim::RulerReading& r, int64_t seq) {
   lcmloc::magruler_t m;
   m.utime = r.utime;
   m.seq = seq;
@@ -51,7 +51,7 @@ lcmloc::magruler_t toLcm(const models::RulerReading& r, int64_t seq) {
   return m;
 }
 
-lcmloc::imu_t toLcm(const models::ImuSample& s, int64_t seq) {
+lcmloc::imu_t toLcm(const sim::ImuSample& s, int64_t seq) {
   lcmloc::imu_t m;
   m.utime = s.utime;
   m.seq = seq;
@@ -63,7 +63,7 @@ lcmloc::imu_t toLcm(const models::ImuSample& s, int64_t seq) {
   return m;
 }
 
-lcmloc::gps_fix_t toLcm(const models::GpsFixSample& f, const LocalFrame& frame, int64_t seq) {
+lcmloc::gps_fix_t toLcm(const sim::GpsFixSample& f, const bus::LocalFrame& frame, int64_t seq) {
   lcmloc::gps_fix_t m{};
   m.utime = f.utime;
   m.seq = seq;
@@ -79,7 +79,7 @@ lcmloc::gps_fix_t toLcm(const models::GpsFixSample& f, const LocalFrame& frame, 
   return m;
 }
 
-lcmloc::landmark_bearings_t toLcm(const models::VisionSample& s, int64_t seq) {
+lcmloc::landmark_bearings_t toLcm(const sim::VisionSample& s, int64_t seq) {
   lcmloc::landmark_bearings_t m;
   m.utime = s.utime;
   m.seq = seq;
@@ -90,4 +90,4 @@ lcmloc::landmark_bearings_t toLcm(const models::VisionSample& s, int64_t seq) {
   return m;
 }
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::drivers

@@ -9,7 +9,10 @@
 
 #include "lcmloc/app/text.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::drivers {
+
+// Built on the application layer (configuration, process helpers).
+using namespace lcmloc::app;
 
 std::string truthProblem(const lcmloc::ground_truth_t& m) {
   if (m.utime < 0 || m.utime >= kTruthUtimeLimit)
@@ -37,7 +40,7 @@ std::string truthProblem(const lcmloc::ground_truth_t& m) {
   return {};
 }
 
-TruthDriver::TruthDriver(Bus& bus, const SystemConfig& cfg, std::string process, OnTruth on_truth,
+TruthDriver::TruthDriver(bus::Bus& bus, const SystemConfig& cfg, std::string process, OnTruth on_truth,
                          std::function<void()> restart, std::function<Heartbeat::Counters()> extra)
     : bus_(bus),
       on_truth_(std::move(on_truth)),
@@ -62,8 +65,8 @@ TruthDriver::TruthDriver(Bus& bus, const SystemConfig& cfg, std::string process,
 void TruthDriver::onMessage(const std::string& ch, const lcmloc::ground_truth_t& m) {
   ++received_;
   const auto gap = gaps_.observe(ch, m.seq);
-  if (gap.ignored && throttle_.allow(ch + ":ignored")) spdlog::warn("{}", common::printable(gap.describeIgnored(ch)));
-  if (gap && throttle_.allow(ch)) spdlog::warn("{}", common::printable(gap.describe(ch)));
+  if (gap.ignored && throttle_.allow(ch + ":ignored")) spdlog::warn("{}", app::printable(gap.describeIgnored(ch)));
+  if (gap && throttle_.allow(ch)) spdlog::warn("{}", app::printable(gap.describe(ch)));
   // One rule for every driver, before the time guard and any sensor model: a NaN or a corrupt
   // utime would otherwise poison a model's state for good (an odometer stuck at NaN) or overflow
   // its time arithmetic.
@@ -113,4 +116,4 @@ int TruthDriver::run(const std::function<std::string()>& out) {
   return kExitOk;
 }
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::drivers

@@ -5,9 +5,12 @@
 #include "lcmloc/app/imu_error_keys.hpp"
 #include "lcmloc/simconfig/sim_config.hpp"
 
-namespace lcmloc::common::ins_config {
+namespace lcmloc::simconfig::ins_config {
 
-void parseInsSim(KeyReader& root, models::InsSimConfig& c) {
+// Built on the application layer (configuration, process helpers).
+using namespace lcmloc::app;
+
+void parseInsSim(KeyReader& root, sim::InsSimConfig& c) {
   KeyReader r(root.child("ins_sim"), root.file(), "ins_sim");
   r.get<uint64_t>("seed", c.seed);
   r.get("rate_hz", c.rate_hz, 1.0, 10000.0);
@@ -17,10 +20,10 @@ void parseInsSim(KeyReader& root, models::InsSimConfig& c) {
   if (c.profile != "paper" && c.profile != "custom")
     throw ConfigError(root.file(), "ins_sim.profile", "unknown profile '" + c.profile + "' (valid: paper, custom)");
   r.get("start", c.start);
-  if (!models::insStartValid(c.start))
+  if (!sim::insStartValid(c.start))
     throw ConfigError(root.file(), "ins_sim.start",
                       "unknown start '" + c.start + "' (valid: hard, gentle, gentle_turn, gentle_stopgo, steady)");
-  r.getList("segments", c.segments, "{duration, accel, yaw_rate}", [](KeyReader& s, models::InsMotionSegment& v) {
+  r.getList("segments", c.segments, "{duration, accel, yaw_rate}", [](KeyReader& s, sim::InsMotionSegment& v) {
     s.get("duration", v.duration, 1e-3, 1e6);
     s.get("accel", v.accel, -20.0, 20.0);
     s.get("yaw_rate", v.yaw_rate, -180.0, 180.0, "deg/s");
@@ -43,4 +46,4 @@ void parseInsSim(KeyReader& root, models::InsSimConfig& c) {
   r.finish();
 }
 
-}  // namespace lcmloc::common::ins_config
+}  // namespace lcmloc::simconfig::ins_config

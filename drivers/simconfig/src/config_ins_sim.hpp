@@ -4,8 +4,8 @@
 #include "lcmloc/app/yaml_reader.hpp"
 #include "lcmloc/sim/ins_sim.hpp"
 
-namespace lcmloc::common::ins_config {
+namespace lcmloc::simconfig::ins_config {
 
-void parseInsSim(KeyReader& root, models::InsSimConfig& c);
+void parseInsSim(app::KeyReader& root, sim::InsSimConfig& c);
 
-}  // namespace lcmloc::common::ins_config
+}  // namespace lcmloc::simconfig::ins_config

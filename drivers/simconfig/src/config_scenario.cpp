@@ -8,11 +8,14 @@
 #include <limits>
 #include <string>
 
-namespace lcmloc::common::scenario_config {
+namespace lcmloc::simconfig::scenario_config {
+
+// Built on the application layer (configuration, process helpers).
+using namespace lcmloc::app;
 
 using yaml_detail::nodeText;
 
-void parseScenarioSection(KeyReader& root, models::ScenarioConfig& s) {
+void parseScenarioSection(KeyReader& root, sim::ScenarioConfig& s) {
   KeyReader r(root.child("scenario"), root.file(), "scenario");
   r.get("name", s.name);
   r.get<uint64_t>("seed", s.seed);
@@ -20,7 +23,7 @@ void parseScenarioSection(KeyReader& root, models::ScenarioConfig& s) {
   r.finish();
 }
 
-void parsePath(KeyReader& root, models::PathConfig& p) {
+void parsePath(KeyReader& root, sim::PathConfig& p) {
   KeyReader r(root.child("path"), root.file(), "path");
   r.get("x0", p.x0);
   r.get("y0", p.y0);
@@ -32,7 +35,7 @@ void parsePath(KeyReader& root, models::PathConfig& p) {
       throw ConfigError(root.file(), kp, "expected a non-empty list of {length, curvature}");
     p.segments.clear();
     for (std::size_t i = 0; i < segs.size(); ++i) {
-      models::PathSegment seg;
+      sim::PathSegment seg;
       KeyReader sr(segs[i], root.file(), kp + "[" + std::to_string(i) + "]");
       sr.get("length", seg.length, 1e-3, 1e6);
       sr.get("curvature", seg.curvature, -10.0, 10.0);
@@ -43,7 +46,7 @@ void parsePath(KeyReader& root, models::PathConfig& p) {
   r.finish();
 }
 
-void parseMarkers(KeyReader& root, models::MarkerLayout& m) {
+void parseMarkers(KeyReader& root, sim::MarkerLayout& m) {
   KeyReader r(root.child("markers"), root.file(), "markers");
   r.get("count", m.count, static_cast<int>(kMarkerCount.lo), static_cast<int>(kMarkerCount.hi));
   r.get("spacing", m.spacing, 1e-3, 1e6);
@@ -51,7 +54,7 @@ void parseMarkers(KeyReader& root, models::MarkerLayout& m) {
   r.finish();
 }
 
-void parseVehicle(KeyReader& root, models::VehicleConfig& v) {
+void parseVehicle(KeyReader& root, sim::VehicleConfig& v) {
   KeyReader r(root.child("vehicle"), root.file(), "vehicle");
   r.get("wheelbase", v.wheelbase, 0.1, 20.0);
   r.get("speed", v.speed, 0.01, 100.0);
@@ -67,7 +70,7 @@ void parseVehicle(KeyReader& root, models::VehicleConfig& v) {
   r.finish();
 }
 
-void parseOdometry(KeyReader& root, models::OdometrySensorConfig& o) {
+void parseOdometry(KeyReader& root, sim::OdometrySensorConfig& o) {
   KeyReader r(root.child("odometry"), root.file(), "odometry");
   r.get("rate_hz", o.rate_hz, 0.1, 10000.0);
   r.get("tick_length", o.tick_length, 1e-6, 1.0);
@@ -79,7 +82,7 @@ void parseOdometry(KeyReader& root, models::OdometrySensorConfig& o) {
   r.finish();
 }
 
-void parseMagRuler(KeyReader& root, models::MagRulerConfig& m) {
+void parseMagRuler(KeyReader& root, sim::MagRulerConfig& m) {
   KeyReader r(root.child("magruler"), root.file(), "magruler");
   r.get("num_sensors", m.num_sensors, 2, 1000);
   r.get("length", m.length, 0.01, 10.0);
@@ -97,7 +100,7 @@ void parseMagRuler(KeyReader& root, models::MagRulerConfig& m) {
   r.finish();
 }
 
-void parseImu(KeyReader& root, models::ImuSensorConfig& m) {
+void parseImu(KeyReader& root, sim::ImuSensorConfig& m) {
   KeyReader r(root.child("imu"), root.file(), "imu");
   r.get("enabled", m.enabled);
   r.get("rate_hz", m.rate_hz, kImuRateHz.lo, kImuRateHz.hi);
@@ -119,7 +122,7 @@ void parseImu(KeyReader& root, models::ImuSensorConfig& m) {
   r.finish();
 }
 
-void parseGps(KeyReader& root, models::GpsSensorConfig& g, GpsDriverConfig& d) {
+void parseGps(KeyReader& root, sim::GpsSensorConfig& g, GpsDriverConfig& d) {
   KeyReader r(root.child("gps"), root.file(), "gps");
   r.get("enabled", g.enabled);
   r.get("source", d.source);
@@ -146,11 +149,11 @@ void parseGps(KeyReader& root, models::GpsSensorConfig& g, GpsDriverConfig& d) {
   r.get("reported_std", g.reported_std, 0.0, 1e4, "0 = the model's own 1 sigma");
   r.get("satellites", g.satellites, 0, 100);
   r.get("hdop", g.hdop, 0.0, 100.0);
-  r.getList("outages", g.outages, "{start, duration}", [](KeyReader& o, models::GpsOutage& v) {
+  r.getList("outages", g.outages, "{start, duration}", [](KeyReader& o, sim::GpsOutage& v) {
     o.get("start", v.start, 0.0, 1e7);
     o.get("duration", v.duration, 0.0, 1e7);
   });
-  r.getList("jumps", g.jumps, "{at, duration, dx, dy}", [](KeyReader& j, models::GpsJump& v) {
+  r.getList("jumps", g.jumps, "{at, duration, dx, dy}", [](KeyReader& j, sim::GpsJump& v) {
     j.get("at", v.at, 0.0, 1e7);
     j.get("duration", v.duration, 0.0, 1e7);
     j.get("dx", v.dx, -1e6, 1e6);
@@ -159,7 +162,7 @@ void parseGps(KeyReader& root, models::GpsSensorConfig& g, GpsDriverConfig& d) {
   r.finish();
 }
 
-void parseFaults(KeyReader& root, std::vector<models::FaultConfig>& faults) {
+void parseFaults(KeyReader& root, std::vector<sim::FaultConfig>& faults) {
   YAML::Node n = root.child("faults");
   if (!n) return;
   if (n.IsNull()) { faults.clear(); return; }
@@ -167,7 +170,7 @@ void parseFaults(KeyReader& root, std::vector<models::FaultConfig>& faults) {
   faults.clear();
   for (std::size_t i = 0; i < n.size(); ++i) {
     const std::string kp = "faults[" + std::to_string(i) + "]";
-    models::FaultConfig f;
+    sim::FaultConfig f;
     KeyReader r(n[i], root.file(), kp);
     r.get("kind", f.kind);
     if (f.kind != "phantom_marker" && f.kind != "wrong_offset")
@@ -181,7 +184,7 @@ void parseFaults(KeyReader& root, std::vector<models::FaultConfig>& faults) {
 }
 
 // `vision` section: the simulated bearing sensor (seeds/004 §III). Angles in radians.
-void parseVision(KeyReader& root, models::VisionSensorConfig& v) {
+void parseVision(KeyReader& root, sim::VisionSensorConfig& v) {
   KeyReader r(root.child("vision"), root.file(), "vision");
   r.get("rate_hz", v.rate_hz, kVisionRateHz.lo, kVisionRateHz.hi);
   r.get("bearing_std", v.bearing_std, 0.0, 1.0, "1 sigma [rad]");
@@ -191,4 +194,4 @@ void parseVision(KeyReader& root, models::VisionSensorConfig& v) {
   r.finish();
 }
 
-}  // namespace lcmloc::common::scenario_config
+}  // namespace lcmloc::simconfig::scenario_config

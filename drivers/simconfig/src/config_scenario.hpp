@@ -8,19 +8,19 @@
 #include "lcmloc/sim/scenario_config.hpp"
 #include "lcmloc/simconfig/sim_config.hpp"
 
-namespace lcmloc::common::scenario_config {
+namespace lcmloc::simconfig::scenario_config {
 
-void parseScenarioSection(KeyReader& root, models::ScenarioConfig& s);
-void parsePath(KeyReader& root, models::PathConfig& p);
-void parseMarkers(KeyReader& root, models::MarkerLayout& m);
-void parseVehicle(KeyReader& root, models::VehicleConfig& v);
-void parseOdometry(KeyReader& root, models::OdometrySensorConfig& o);
-void parseMagRuler(KeyReader& root, models::MagRulerConfig& m);
-void parseImu(KeyReader& root, models::ImuSensorConfig& m);
+void parseScenarioSection(app::KeyReader& root, sim::ScenarioConfig& s);
+void parsePath(app::KeyReader& root, sim::PathConfig& p);
+void parseMarkers(app::KeyReader& root, sim::MarkerLayout& m);
+void parseVehicle(app::KeyReader& root, sim::VehicleConfig& v);
+void parseOdometry(app::KeyReader& root, sim::OdometrySensorConfig& o);
+void parseMagRuler(app::KeyReader& root, sim::MagRulerConfig& m);
+void parseImu(app::KeyReader& root, sim::ImuSensorConfig& m);
 /// `gps`: the simulated receiver's model and the driver's source (sim or gpsd).
-void parseGps(KeyReader& root, models::GpsSensorConfig& g, GpsDriverConfig& d);
-void parseFaults(KeyReader& root, std::vector<models::FaultConfig>& faults);
+void parseGps(app::KeyReader& root, sim::GpsSensorConfig& g, GpsDriverConfig& d);
+void parseFaults(app::KeyReader& root, std::vector<sim::FaultConfig>& faults);
 /// `vision`: the simulated bearing sensor (seeds/004 §III).
-void parseVision(KeyReader& root, models::VisionSensorConfig& v);
+void parseVision(app::KeyReader& root, sim::VisionSensorConfig& v);
 
-}  // namespace lcmloc::common::scenario_config
+}  // namespace lcmloc::simconfig::scenario_config

@@ -8,7 +8,10 @@
 #include "config_scenario.hpp"
 #include "lcmloc/app/yaml_reader.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::simconfig {
+
+// Built on the application layer (configuration, process helpers).
+using namespace lcmloc::app;
 
 SimSystemConfig parseSimSystemConfig(const std::string& yaml_text, const std::string& file) {
   SimSystemConfig cfg;
@@ -36,7 +39,7 @@ SimSystemConfig loadSimSystemConfig(const std::string& path) {
   return parseSimSystemConfig(readConfigFile(path), path);
 }
 
-void checkSampledRate(double rate_hz, const models::ScenarioConfig& sc, const std::string& file,
+void checkSampledRate(double rate_hz, const sim::ScenarioConfig& sc, const std::string& file,
                       const std::string& key) {
   if (rate_hz > sc.vehicle.rate_hz)
     throw ConfigError(file, key,
@@ -45,4 +48,4 @@ void checkSampledRate(double rate_hz, const models::ScenarioConfig& sc, const st
                                   rate_hz, sc.vehicle.rate_hz, sc.vehicle.rate_hz));
 }
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::simconfig

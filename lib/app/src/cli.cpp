@@ -14,7 +14,7 @@
 #include "lcmloc/app/signals.hpp"
 #include "lcmloc/bus/transport.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::app {
 
 namespace {
 void addLogLevelOption(CLI::App& app, std::string& level) {
@@ -55,7 +55,7 @@ void checkNumbers(const CLI::App& app) {
 
 void addCommonOptions(CLI::App& app, CommonOptions& opts) {
   if (opts.config.empty()) opts.config = defaultConfigPath();
-  if (opts.lcm_url.empty()) opts.lcm_url = defaultLcmUrl();
+  if (opts.lcm_url.empty()) opts.lcm_url = bus::defaultLcmUrl();
   app.add_option("--config", opts.config, "scenario YAML file")->capture_default_str();
   app.add_option("--lcm-url", opts.lcm_url, "LCM provider URL (default: $LCM_DEFAULT_URL or udpm)")
       ->capture_default_str();
@@ -156,4 +156,4 @@ int runProcess(CLI::App& app, int argc, char** argv, const CommonOptions& opts,
   }
 }
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::app

@@ -21,7 +21,7 @@
 #include "config_ins.hpp"
 #include "lcmloc/core/filter.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::app {
 
 namespace {
 
@@ -125,7 +125,7 @@ void parseFusion(KeyReader& root, FusionConfig& f) {
   r.finish();
 }
 
-void parseDatum(KeyReader& root, Datum& d) {
+void parseDatum(KeyReader& root, bus::Datum& d) {
   KeyReader r(root.child("datum"), root.file(), "datum");
   r.get("latitude", d.latitude, -90.0, 90.0);
   r.get("longitude", d.longitude, -180.0, 180.0);
@@ -327,4 +327,4 @@ core::EngineConfig engineConfig(const SystemConfig& cfg) {
   return ec;
 }
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::app

@@ -4,7 +4,7 @@
 
 #include "lcmloc/app/imu_error_keys.hpp"
 
-namespace lcmloc::common::ins_config {
+namespace lcmloc::app::ins_config {
 
 void parseInsFilter(KeyReader& filter, core::InsFilterConfig& c) {
   KeyReader r(filter.child("ins"), filter.file(), filter.keyPath("ins"));
@@ -66,4 +66,4 @@ void parseLandmarks(KeyReader& fusion, std::map<int, core::Vec2>& landmarks) {
   for (const auto& l : list) landmarks.emplace(l.id, core::Vec2(l.x, l.y));
 }
 
-}  // namespace lcmloc::common::ins_config
+}  // namespace lcmloc::app::ins_config

@@ -10,7 +10,7 @@
 #include "lcmloc/app/yaml_reader.hpp"
 #include "lcmloc/core/filter.hpp"
 
-namespace lcmloc::common::ins_config {
+namespace lcmloc::app::ins_config {
 
 void parseInsFilter(KeyReader& filter, core::InsFilterConfig& c);
 /// A landmark map under parent.key: a list of {id, x, y} (x east, y north [m]), ids unique
@@ -19,4 +19,4 @@ void parseLandmarkList(KeyReader& parent, const std::string& key, std::vector<Ma
 /// `fusion.landmarks` (the same list) as id -> (x, y).
 void parseLandmarks(KeyReader& fusion, std::map<int, core::Vec2>& landmarks);
 
-}  // namespace lcmloc::common::ins_config
+}  // namespace lcmloc::app::ins_config

@@ -12,7 +12,7 @@
 
 #include "lcmloc/app/files.hpp"
 
-namespace lcmloc::common::csv {
+namespace lcmloc::app::csv {
 
 std::vector<std::string> split(const std::string& line) {
   std::string s = line;
@@ -204,4 +204,4 @@ void writeMap(const std::string& path, const core::MarkerMap& map) {
   if (!out) throw std::runtime_error("cannot write '" + path + "'");
 }
 
-}  // namespace lcmloc::common::csv
+}  // namespace lcmloc::app::csv

@@ -11,7 +11,7 @@
 
 #include "lcmloc/app/exit_codes.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::app {
 
 std::string configDir() {
   if (const char* env = std::getenv("LCMLOC_CONFIG_DIR"); env && *env) return env;
@@ -69,4 +69,4 @@ void prepareOutputDir(const std::string& dir, bool overwrite) {
   fs::remove(probe, ec);
 }
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::app

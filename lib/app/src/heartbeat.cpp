@@ -5,9 +5,9 @@
 #include "lcmloc/app/signals.hpp"
 #include "lcmloc/heartbeat_t.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::app {
 
-Heartbeat::Heartbeat(MessageBus& bus, std::string channel, std::string process,
+Heartbeat::Heartbeat(bus::MessageBus& bus, std::string channel, std::string process,
                      std::function<Counters()> counters)
     : bus_(bus), channel_(std::move(channel)), process_(std::move(process)),
       counters_(std::move(counters)) {}
@@ -20,7 +20,7 @@ void Heartbeat::tick() {
 
 void Heartbeat::publish(const std::string& state) {
   lcmloc::heartbeat_t m;
-  m.utime = wallMicros();
+  m.utime = bus::wallMicros();
   m.seq = seq_++;
   m.process = process_;
   m.pid = static_cast<int32_t>(::getpid());
@@ -37,4 +37,4 @@ void Heartbeat::publish(const std::string& state) {
   sent_ = true;
 }
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::app

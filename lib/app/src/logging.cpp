@@ -3,7 +3,7 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
-namespace lcmloc::common {
+namespace lcmloc::app {
 
 void setupLogging(const std::string& process_name, const std::string& level) {
   spdlog::drop(process_name);  // (set up again: a test that runs several programs' runProcess)
@@ -14,4 +14,4 @@ void setupLogging(const std::string& process_name, const std::string& level) {
   spdlog::flush_on(spdlog::level::info);
 }
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::app

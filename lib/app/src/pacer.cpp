@@ -5,7 +5,7 @@
 
 #include "lcmloc/app/signals.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::app {
 
 Pacer::Pacer(double realtime_factor) : factor_(realtime_factor) {}
 
@@ -32,4 +32,4 @@ bool Pacer::waitUntil(int64_t sim_utime, const std::function<void()>& idle) {
   return false;
 }
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::app

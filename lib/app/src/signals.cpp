@@ -2,7 +2,7 @@
 
 #include <csignal>
 
-namespace lcmloc::common {
+namespace lcmloc::app {
 
 namespace {
 std::atomic<bool> g_stop{false};
@@ -32,4 +32,4 @@ const std::atomic<bool>& stopFlag() { return g_stop; }
 void requestStop() { g_stop.store(true); }
 int stopSignal() { return g_signal.load(); }
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::app

@@ -8,7 +8,7 @@
 
 #include "lcmloc/wire.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::bus {
 
 namespace {
 
@@ -396,4 +396,4 @@ Converted toInput(const lcmloc::landmark_bearings_t& m, const InputContext& ctx,
   return into(toCore(m, ctx.channel, &why), out, why);
 }
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::bus

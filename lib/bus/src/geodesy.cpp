@@ -5,7 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
-namespace lcmloc::common {
+namespace lcmloc::bus {
 
 struct LocalFrame::Impl {
   GeographicLib::LocalCartesian lc;
@@ -29,4 +29,4 @@ void LocalFrame::toGeodetic(double x, double y, double z, double& lat, double& l
   impl_->lc.Reverse(x, y, z, lat, lon, h);
 }
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::bus

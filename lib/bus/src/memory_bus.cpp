@@ -1,6 +1,6 @@
 #include "lcmloc/bus/memory_bus.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::bus {
 
 bool MemoryBus::publishRaw(const std::string& channel, const void* data, std::size_t size) {
   const auto* p = static_cast<const uint8_t*>(data);
@@ -59,4 +59,4 @@ std::vector<MemoryBus::Message> MemoryBus::published(const std::string& channel)
   return out;
 }
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::bus

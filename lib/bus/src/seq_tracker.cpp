@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-namespace lcmloc::common {
+namespace lcmloc::bus {
 
 SeqGap SeqTracker::observe(const std::string& key, int64_t seq) {
   // Most messages come on the channel of the message before: try that entry first.
@@ -124,4 +124,4 @@ int64_t SeqTracker::ignored(const std::string& key) const {
   return it == index_.end() ? 0 : entries_[it->second].second.ignored;
 }
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::bus

@@ -6,7 +6,7 @@
 
 #include <spdlog/spdlog.h>
 
-namespace lcmloc::common {
+namespace lcmloc::bus {
 
 std::string defaultLcmUrl() {
   const char* env = std::getenv("LCM_DEFAULT_URL");
@@ -129,4 +129,4 @@ int64_t MessageBus::decodeErrors(const std::string& channel) const {
   return it == decode_errors_.end() ? 0 : it->second;
 }
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::bus

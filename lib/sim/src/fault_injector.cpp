@@ -5,7 +5,7 @@
 
 #include "lcmloc/sim/world.hpp"
 
-namespace lcmloc::models {
+namespace lcmloc::sim {
 
 FaultInjector::FaultInjector(std::vector<FaultConfig> faults, const MagRulerConfig& ruler,
                              uint64_t seed)
@@ -38,4 +38,4 @@ std::optional<InjectedFault> FaultInjector::sample(const TruthState& truth) {
   return out;
 }
 
-}  // namespace lcmloc::models
+}  // namespace lcmloc::sim

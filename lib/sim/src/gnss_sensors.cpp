@@ -10,7 +10,7 @@
 #include "lcmloc/sim/world.hpp"
 #include "lcmloc/sim/schedule.hpp"
 
-namespace lcmloc::models {
+namespace lcmloc::sim {
 namespace {
 
 core::Vec3 normal3(std::mt19937_64& rng, double sd) {
@@ -132,4 +132,4 @@ std::optional<GpsFixSample> GpsSensor::sample(const TruthState& truth) {
   return f;
 }
 
-}  // namespace lcmloc::models
+}  // namespace lcmloc::sim

@@ -6,7 +6,7 @@
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/sim/scenario_config.hpp"
 
-namespace lcmloc::models {
+namespace lcmloc::sim {
 namespace {
 constexpr double kDeg = M_PI / 180.0;
 constexpr double kG = 9.78;  // as ins::ImuGrade
@@ -202,4 +202,4 @@ InsSimStep InsSim::step() {
   return out;
 }
 
-}  // namespace lcmloc::models
+}  // namespace lcmloc::sim

@@ -9,7 +9,7 @@
 #include "lcmloc/sim/world.hpp"
 #include "lcmloc/sim/schedule.hpp"
 
-namespace lcmloc::models {
+namespace lcmloc::sim {
 namespace {
 
 constexpr double kMu0Over4Pi = 1e-7;   // [T m / A]
@@ -259,4 +259,4 @@ std::optional<RulerReading> MagneticRuler::sample(const TruthState& truth) {
   return out;
 }
 
-}  // namespace lcmloc::models
+}  // namespace lcmloc::sim

@@ -7,7 +7,7 @@
 #include "lcmloc/sim/world.hpp"
 #include "lcmloc/sim/schedule.hpp"
 
-namespace lcmloc::models {
+namespace lcmloc::sim {
 
 OdometrySensor::OdometrySensor(const OdometrySensorConfig& cfg, double wheelbase, uint64_t seed)
     : cfg_(cfg), wheelbase_(wheelbase), rng_(seed) {
@@ -58,4 +58,4 @@ std::optional<OdometrySample> OdometrySensor::sample(const TruthState& truth) {
   return out;
 }
 
-}  // namespace lcmloc::models
+}  // namespace lcmloc::sim

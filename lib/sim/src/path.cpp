@@ -6,7 +6,7 @@
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/sim/world.hpp"
 
-namespace lcmloc::models {
+namespace lcmloc::sim {
 namespace {
 
 /// Pose after travelling ds along an arc of curvature k from `start` (exact; ds may be < 0).
@@ -85,4 +85,4 @@ core::MarkerMap makeMarkerMap(const Path& path, const MarkerLayout& layout) {
   return map;
 }
 
-}  // namespace lcmloc::models
+}  // namespace lcmloc::sim

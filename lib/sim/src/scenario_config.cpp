@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace lcmloc::models {
+namespace lcmloc::sim {
 namespace {
 
 uint64_t fnv1a64(const std::string& s) {
@@ -41,4 +41,4 @@ double stopArcLength(const ScenarioConfig& sc, double path_length) {
   return sc.markers.first_at + (sc.markers.count - 1) * sc.markers.spacing + sc.vehicle.end_margin;
 }
 
-}  // namespace lcmloc::models
+}  // namespace lcmloc::sim

@@ -7,7 +7,7 @@
 #include "lcmloc/core/vehicle_model.hpp"
 #include "lcmloc/sim/world.hpp"
 
-namespace lcmloc::models {
+namespace lcmloc::sim {
 namespace {
 constexpr double kTwoPi = 6.283185307179586;
 constexpr double kCreepSpeed = 0.02;  // [m/s] keeps the final approach finite
@@ -72,4 +72,4 @@ const TruthState& VehicleSim::step() {
   return st_;
 }
 
-}  // namespace lcmloc::models
+}  // namespace lcmloc::sim

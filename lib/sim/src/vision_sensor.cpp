@@ -10,7 +10,7 @@
 #include "lcmloc/sim/world.hpp"
 #include "lcmloc/sim/schedule.hpp"
 
-namespace lcmloc::models {
+namespace lcmloc::sim {
 
 void validateLandmarks(const std::vector<Landmark>& landmarks) {
   std::set<int> seen;
@@ -92,4 +92,4 @@ std::optional<VisionSample> VisionSensor::sample(const TruthState& truth) {
   return observe(truth.x, truth.y, truth.heading, truth.utime);
 }
 
-}  // namespace lcmloc::models
+}  // namespace lcmloc::sim

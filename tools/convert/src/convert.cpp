@@ -55,7 +55,7 @@ double number(const std::string& path, const Line& l, std::size_t i) {
     used = 0;
   }
   if (used != f.size() || !std::isfinite(v))
-    bad(path, l, "column " + std::to_string(i + 1) + ": not a finite number: '" + common::printable(f) + "'");
+    bad(path, l, "column " + std::to_string(i + 1) + ": not a finite number: '" + app::printable(f) + "'");
   return v;
 }
 
@@ -177,7 +177,7 @@ Converted convertUwbLabyrinth(const std::string& dir, const std::string& out_dir
       wheel_distance = b;
       odo.row({text(number(input, l, 1)), text(0.5 * (vr + vl)), text((vr - vl) / b)});
     } else {
-      bad(input, l, "unknown row type '" + common::printable(kind) + "' (range2, odom2diff)");
+      bad(input, l, "unknown row type '" + app::printable(kind) + "' (range2, odom2diff)");
     }
   }
   c.files.push_back(ranges.close());
@@ -190,7 +190,7 @@ Converted convertUwbLabyrinth(const std::string& dir, const std::string& out_dir
   {
     CsvOut truth(out_dir, "truth.csv", "ground truth", "time,truth_x,truth_y");
     for (const auto& l : readTable(gt)) {
-      if (l.fields.front() != "point2") bad(gt, l, "unknown row type '" + common::printable(l.fields.front()) + "' (point2)");
+      if (l.fields.front() != "point2") bad(gt, l, "unknown row type '" + app::printable(l.fields.front()) + "' (point2)");
       truth.row({text(number(gt, l, 1)), text(number(gt, l, 2)), text(number(gt, l, 3))});
     }
     c.files.push_back(truth.close());

@@ -21,8 +21,8 @@
 namespace lcmloc::eval {
 namespace {
 
-constexpr int kExitNothingUsable = common::kExitRuntimeError;
-constexpr int kExitBadConfig = common::kExitConfigError;
+constexpr int kExitNothingUsable = app::kExitRuntimeError;
+constexpr int kExitBadConfig = app::kExitConfigError;
 
 std::string channelList(const std::map<std::string, int64_t>& counts) {
   if (counts.empty()) return "none";
@@ -59,21 +59,21 @@ void addEvaluateOptions(CLI::App& app, EvaluateCommand& c) {
       ->delimiter(',')
       ->expected(1, 3)  // 2 or 3, checked below (a minimum above 1 would print "x 2" in --help)
       ->type_name("LAT,LON[,ALT]");
-  common::addOutputOption(app, c.out_dir, "output directory for report.json and figures")->capture_default_str();
-  common::addOverwriteFlag(app, c.overwrite);
+  app::addOutputOption(app, c.out_dir, "output directory for report.json and figures")->capture_default_str();
+  app::addOverwriteFlag(app, c.overwrite);
   app.add_option("--tum-dir", c.tum_dir, "write estimate.tum (estimate_<CHANNEL>.tum for POSE_*) and truth.tum here");
   app.add_flag("--export-only", c.export_only, "only export TUM files (--tum-dir): no truth needed, no scoring");
   app.add_option("--segment-lengths", c.eo.segment_lengths, "drift segment lengths [m]")
-      ->delimiter(',')->capture_default_str()->check(common::positive());
+      ->delimiter(',')->capture_default_str()->check(app::positive());
   app.add_option("--max-truth-gap", c.eo.max_truth_gap_s,
                  "estimates between truth samples further apart than this are not scored [s] (0 = no limit)")
-      ->capture_default_str()->check(common::nonNegative());
+      ->capture_default_str()->check(app::nonNegative());
   app.add_option("--confidence", c.eo.confidence, "probability of the two-sided chi-square intervals")
       ->capture_default_str()->check(CLI::Range(0.5, 0.9999));
   app.add_option("--ellipse-every", c.po.ellipse_every, "covariance ellipse at every k-th scored estimate (0 = about 40)")
-      ->capture_default_str()->check(common::nonNegative());
+      ->capture_default_str()->check(app::nonNegative());
   app.add_option("--ellipse-sigma", c.po.ellipse_sigma, "ellipse size in standard deviations")
-      ->capture_default_str()->check(common::positive());
+      ->capture_default_str()->check(app::positive());
   app.add_flag("--no-plots", c.no_plots, "do not draw figures");
   app.add_option("--filters", c.filters,
                  "also replay the log's sensor channels through the fusion daemon's code with each of these filters "
@@ -90,9 +90,9 @@ int runEvaluate(EvaluateCommand c) {
   const EvaluateOptions& eo = c.eo;
   const TrajectoryPlotOptions& po = c.po;
   const CLI::Option *o_pose = c.o_pose, *o_truth = c.o_truth, *o_gate = c.o_gate;
-  common::requireInputFile(log_path, "input log");
-  common::refuseExistingOutput(tum_dir, c.overwrite, "--tum-dir");
-  if (!export_only) common::refuseExistingOutput(out_dir, c.overwrite);
+  app::requireInputFile(log_path, "input log");
+  app::refuseExistingOutput(tum_dir, c.overwrite, "--tum-dir");
+  if (!export_only) app::refuseExistingOutput(out_dir, c.overwrite);
   if (export_only && tum_dir.empty()) {
     spdlog::error("--export-only needs --tum-dir DIR");
     return kExitBadConfig;
@@ -101,10 +101,10 @@ int runEvaluate(EvaluateCommand c) {
     spdlog::error("--datum needs LAT,LON or LAT,LON,ALT (got one number)");
     return kExitBadConfig;
   }
-  common::SystemConfig cfg;  // built-in defaults without --config
+  app::SystemConfig cfg;  // built-in defaults without --config
   try {
     if (!config_path.empty()) {
-      cfg = common::loadSystemConfig(config_path);
+      cfg = app::loadSystemConfig(config_path);
       if (!o_pose->count()) lo.pose_channel = cfg.channels.pose;
       if (!o_truth->count()) lo.truth_channel = cfg.channels.ground_truth;
       if (!o_gate->count()) lo.gate_channel = cfg.channels.gate;
@@ -113,11 +113,11 @@ int runEvaluate(EvaluateCommand c) {
       lo.datum = cfg.datum;
     }
     if (!datum.empty()) {
-      common::Datum d;
+      bus::Datum d;
       d.latitude = datum[0];
       d.longitude = datum[1];
       d.altitude = datum.size() > 2 ? datum[2] : 0.0;
-      common::LocalFrame check(d);  // throws std::invalid_argument when out of range
+      bus::LocalFrame check(d);  // throws std::invalid_argument when out of range
       lo.datum = d;
     }
   } catch (const std::exception& e) {
@@ -138,7 +138,7 @@ int runEvaluate(EvaluateCommand c) {
     // A progress line every 2 s of wall time on long logs.
     const auto start = std::chrono::steady_clock::now();
     auto last = start;
-    log = readTrajectoryLog(log_path, lo, &common::stopFlag(), [&](int64_t pos, int64_t size) {
+    log = readTrajectoryLog(log_path, lo, &app::stopFlag(), [&](int64_t pos, int64_t size) {
       const auto now = std::chrono::steady_clock::now();
       if (now - last < std::chrono::seconds(2)) return;
       last = now;
@@ -158,7 +158,7 @@ int runEvaluate(EvaluateCommand c) {
     const auto bad = log.undecodable.find(ch);
     if (n != log.channel_counts.end() && bad != log.undecodable.end() && bad->second == n->second) {
       spdlog::error("{} {}: none of its {} messages is of the type that option reads ({}): is it the right "
-                    "channel?", flag, common::printable(ch), n->second,
+                    "channel?", flag, app::printable(ch), n->second,
                     flag == "--pose-channel" ? "pose_t" : flag == "--truth-channel" ? "ground_truth_t or gps_fix_t"
                                                                                     : "gate_decision_t");
       return kExitBadConfig;
@@ -178,13 +178,13 @@ int runEvaluate(EvaluateCommand c) {
   std::optional<ReplayComparison> live_vs_replay;
   if (!c.filters.empty()) {
     try {
-      addReplayedFilters(log, log_path, cfg, c.filters, out_dir, &common::stopFlag());
+      addReplayedFilters(log, log_path, cfg, c.filters, out_dir, &app::stopFlag());
       // The recorded estimates against the replay of their filter: equal where the run was deterministic.
       const auto& recorded = log.tracks.front();
       for (const auto& t : log.tracks)
         if (!recorded.filters.empty() && t.channel == replayedName(recorded.filters.back()))
           live_vs_replay = compareTracks(recorded, t);
-    } catch (const common::ConfigError& e) {
+    } catch (const app::ConfigError& e) {
       spdlog::error("{}", e.what());
       return kExitBadConfig;
     } catch (const std::invalid_argument& e) {
@@ -295,7 +295,7 @@ int runEvaluate(EvaluateCommand c) {
   }
   if (log.damaged) {
     spdlog::warn("{}: the log is damaged: the report covers its {} intact events only", log_path, log.events_read);
-    return static_cast<int>(common::kExitInputDamaged);
+    return static_cast<int>(app::kExitInputDamaged);
   }
   return 0;
 }

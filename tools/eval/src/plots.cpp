@@ -20,7 +20,7 @@
 
 namespace lcmloc::eval {
 
-std::string withoutControlCharacters(std::string text) { return common::printable(text); }
+std::string withoutControlCharacters(std::string text) { return app::printable(text); }
 
 std::string gnuplotQuote(const std::string& text) {
   std::string out = "'";

@@ -12,16 +12,16 @@ namespace lcmloc::eval {
 
 std::string replayedName(const std::string& type) { return "replay:" + type; }
 
-void addReplayedFilters(TrajectoryLog& log, const std::string& path, const common::SystemConfig& cfg,
+void addReplayedFilters(TrajectoryLog& log, const std::string& path, const app::SystemConfig& cfg,
                         const std::vector<std::string>& types, const std::string& work_dir,
                         const std::atomic<bool>* stop) {
-  common::checkFilterList(types, "--filters", "filters");
-  std::vector<common::SystemConfig> configs;
+  app::checkFilterList(types, "--filters", "filters");
+  std::vector<app::SystemConfig> configs;
   for (const auto& type : types) {  // every filter checked before the first replay
-    common::SystemConfig c = cfg;
+    app::SystemConfig c = cfg;
     YAML::Node n;
     n["type"] = type;
-    c.fusion.filter = common::parseFilterConfig(n, cfg.fusion.filter, "--filters", "fusion.filter");
+    c.fusion.filter = app::parseFilterConfig(n, cfg.fusion.filter, "--filters", "fusion.filter");
     c.fusion.shadow.clear();
     c.fusion.output_every = 1;  // every estimate is scored
     configs.push_back(c);

@@ -144,7 +144,7 @@ class TrajectoryDecoder {
     if (f.fix_type < 2 || !finite(f.latitude) || !finite(f.longitude))
       return issue("truth fix seq " + std::to_string(f.seq) + ": no position fix");
     if (!usable(ev, f.utime)) return;
-    if (!frame_) frame_ = std::make_unique<common::LocalFrame>(*opt_.datum);
+    if (!frame_) frame_ = std::make_unique<bus::LocalFrame>(*opt_.datum);
     double x = 0, y = 0, z = 0;
     frame_->toLocal(f.latitude, f.longitude, finite(f.altitude) ? f.altitude : 0.0, x, y, z);
     noteTruthType("gps_fix_t");
@@ -182,7 +182,7 @@ class TrajectoryDecoder {
 
   const TrajectoryLogOptions& opt_;
   TrajectoryLog& out_;
-  std::unique_ptr<common::LocalFrame> frame_;
+  std::unique_ptr<bus::LocalFrame> frame_;
   int64_t index_ = 0, offset_ = 0;
   bool datum_reported_ = false, mixed_reported_ = false;
 };

@@ -21,13 +21,13 @@ bool keep(std::optional<T>&& v, std::vector<T>& into) {
 }
 }  // namespace
 
-LogRead readRecording(const std::string& log, const common::SystemConfig& cfg) {
+LogRead readRecording(const std::string& log, const app::SystemConfig& cfg) {
   LogRead out;
   Recording& r = out.recording;
   r.wheelbase = cfg.fusion.filter.wheelbase;
   r.pw_distance = cfg.fusion.filter.pw_distance > 0 ? cfg.fusion.filter.pw_distance : 1.0;
-  if (!cfg.fusion.map_file.empty()) r.map = common::csv::loadMap(cfg.fusion.map_file);
-  const common::LocalFrame frame(cfg.datum);
+  if (!cfg.fusion.map_file.empty()) r.map = app::csv::loadMap(cfg.fusion.map_file);
+  const bus::LocalFrame frame(cfg.datum);
   const auto& ch = cfg.channels;
   auto take = [&out](const logio::RawEvent& ev, auto& m, auto&& convert) {
     if (!logio::decodeEvent(ev, m)) {
@@ -48,16 +48,16 @@ LogRead readRecording(const std::string& log, const common::SystemConfig& cfg) {
       });
     } else if (c == ch.odometry) {
       lcmloc::odometry_t m{};
-      take(ev, m, [&](const lcmloc::odometry_t& o) { return keep(common::toCore(o, &why), r.odometry); });
+      take(ev, m, [&](const lcmloc::odometry_t& o) { return keep(bus::toCore(o, &why), r.odometry); });
     } else if (c == ch.landmarks) {
       lcmloc::landmark_obs_t m{};
-      take(ev, m, [&](const lcmloc::landmark_obs_t& o) { return keep(common::toCore(o, c, &why), r.landmarks); });
+      take(ev, m, [&](const lcmloc::landmark_obs_t& o) { return keep(bus::toCore(o, c, &why), r.landmarks); });
     } else if (c == ch.beacons) {
       lcmloc::beacon_range_t m{};
-      take(ev, m, [&](const lcmloc::beacon_range_t& o) { return keep(common::toCore(o, c, &why), r.beacons); });
+      take(ev, m, [&](const lcmloc::beacon_range_t& o) { return keep(bus::toCore(o, c, &why), r.beacons); });
     } else if (c == ch.gps) {
       lcmloc::gps_fix_t m{};
-      take(ev, m, [&](const lcmloc::gps_fix_t& o) { return keep(common::toCore(o, c, frame, &why), r.gps); });
+      take(ev, m, [&](const lcmloc::gps_fix_t& o) { return keep(bus::toCore(o, c, frame, &why), r.gps); });
     }
   });
   out.damaged = scan.damaged;

@@ -82,7 +82,7 @@ std::string timeOrderReason(const std::vector<std::optional<int64_t>>& t, std::s
 
 
 void checkFilterValue(const std::string& flag, const std::string& key, const std::string& value) {
-  common::parseSystemConfig("fusion:\n  filter:\n    " + key + ": " + value + "\n", flag);
+  app::parseSystemConfig("fusion:\n  filter:\n    " + key + ": " + value + "\n", flag);
 }
 
 }  // namespace lcmloc::import

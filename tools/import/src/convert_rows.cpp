@@ -50,7 +50,7 @@ bool parseId(const std::string& s, std::size_t c, bool landmark, int& id, std::s
     return false;
   }
   double v = 0;
-  if (!common::csv::parseNumber(s, c, v, why)) {
+  if (!app::csv::parseNumber(s, c, v, why)) {
     if (landmark) why += " (an integer id >= 0 or \"unknown\")";
     return false;
   }
@@ -87,7 +87,7 @@ Converted convertRows(std::vector<DataFile>& files, const std::vector<const Data
 
   std::map<int, core::Marker> by_id;
   for (const auto& m : map) by_id[m.id] = m;
-  const common::LocalFrame frame(opt.datum);
+  const bus::LocalFrame frame(opt.datum);
   Converted out;
   EventLog& log = out.log;
   bool& have_landmarks = out.have_landmarks;
@@ -130,7 +130,7 @@ Converted convertRows(std::vector<DataFile>& files, const std::vector<const Data
         if (name == "landmark_id" || name == "beacon_id")
           ok = parseId(row.fields[i], i + 1, df.format == Format::Landmarks, id, why);
         else
-          ok = common::csv::parseNumber(row.fields[i], i + 1, v[i], why) &&
+          ok = app::csv::parseNumber(row.fields[i], i + 1, v[i], why) &&
                (name.size() < 4 || name.compare(name.size() - 4, 4, "_std") != 0 || checkStd(name, i + 1, v[i], why));
       }
       if (!row.time_refusal.empty()) { refuse(rep, ln, row.time_refusal); continue; }
@@ -295,7 +295,7 @@ Converted convertRows(std::vector<DataFile>& files, const std::vector<const Data
             m.mag[k] = at(kMag[k]);  // 0 without a magnetometer (config.yaml then turns it off)
           }
           std::string bad;  // what the fusion would refuse (lcmloc/bus/convert.hpp), refused here
-          if (!common::toCore(m, opt.channels.imu, &bad)) { refuse(rep, ln, bad); continue; }
+          if (!bus::toCore(m, opt.channels.imu, &bad)) { refuse(rep, ln, bad); continue; }
           out.imu_without_mag = out.imu_without_mag || !with_mag;
           out.have_imu = true;
           m.seq = seq[opt.channels.imu]++;

@@ -105,8 +105,8 @@ std::string configText(const ImportOptions& opt, const std::string& filter, bool
 /// refuse is an error before anything is written.
 void checkConfigText(const std::string& text, const std::string& path) {
   try {
-    common::parseSystemConfig(text, path);
-  } catch (const common::ConfigError& e) {
+    app::parseSystemConfig(text, path);
+  } catch (const app::ConfigError& e) {
     throw std::runtime_error(std::string("the config.yaml made for this import is one lcmloc-replay would refuse, so "
                                          "nothing is written (give the value with an option): ") + e.what());
   }
@@ -117,12 +117,12 @@ void checkConfigText(const std::string& text, const std::string& path) {
 /// is not used (the defaults stay, and a line says why).
 std::string fittedConfig(const ImportOptions& opt, ImportResult& r, bool with_map, const detail::Converted& conv,
                          const std::string& plain) {
-  const fit::LogRead read = fit::readRecording(r.log_path, common::parseSystemConfig(plain, r.config_path));
+  const fit::LogRead read = fit::readRecording(r.log_path, app::parseSystemConfig(plain, r.config_path));
   const fit::NoiseFit f = fit::fitAgainstTruth(read.recording);
   const std::string text = configText(opt, r.filter, with_map, conv, &f);
   try {
-    common::parseSystemConfig(text, r.config_path);
-  } catch (const common::ConfigError& e) {
+    app::parseSystemConfig(text, r.config_path);
+  } catch (const app::ConfigError& e) {
     r.noise_fit.push_back(std::string("noise fit not used (the filter's defaults kept): ") + e.what());
     return plain;
   }
@@ -188,7 +188,7 @@ ImportResult importDirectory(const ImportOptions& opt) {
   if (!opt.out_dir.empty()) {
     const std::vector<std::string> inputs(paths.begin(), paths.end());
     for (const char* name : {"run.lcmlog", "map.csv", "config.yaml"})
-      common::refuseOutputOverInputs("--output", (fs::path(opt.out_dir) / name).string(), inputs);
+      app::refuseOutputOverInputs("--output", (fs::path(opt.out_dir) / name).string(), inputs);
   }
 
   // Pass 1: recognise the files, read the map, split rows and read the time column.
@@ -222,7 +222,7 @@ ImportResult importDirectory(const ImportOptions& opt) {
     log.write(r.log_path);
     if (!map.empty()) {
       r.map_path = (fs::path(opt.out_dir) / "map.csv").string();
-      common::csv::writeMap(r.map_path, map);
+      app::csv::writeMap(r.map_path, map);
     }
     std::string text = config;
     if (opt.fit_noise && conv.first_truth) text = fittedConfig(opt, r, !map.empty(), conv, config);

@@ -13,8 +13,8 @@ namespace lcmloc::import {
 
 void addImportOptions(CLI::App& app, ImportCommand& c) {
   app.add_option("dir", c.io.dir, "directory holding the *.csv files")->required();
-  common::addOutputOption(app, c.io.out_dir, "output directory (run.lcmlog, map.csv, config.yaml); omit to check only");
-  common::addOverwriteFlag(app, c.overwrite);
+  app::addOutputOption(app, c.io.out_dir, "output directory (run.lcmlog, map.csv, config.yaml); omit to check only");
+  app::addOverwriteFlag(app, c.overwrite);
   app.add_option("--time-unit", c.unit, "time column unit: auto, s, us (a header time_s / time_us fixes it per file)")
       ->capture_default_str()->check(CLI::IsMember({"auto", "s", "us"}));
   app.add_option("--time-base", c.base, "absolute (Unix epoch) or relative times: auto, absolute, relative")
@@ -23,18 +23,18 @@ void addImportOptions(CLI::App& app, ImportCommand& c) {
   app.add_flag("--no-noise-fit{false}", c.io.fit_noise,
                "keep the filter's default noise (default: fitted against the ground truth when there is one)");
   app.add_option("--wheelbase", c.io.wheelbase, "L [m]: needed for speed,steering odometry (eq. 2)")
-      ->check(common::positive());
+      ->check(app::positive());
   app.add_option("--filter", c.io.filter, "filter type written into config.yaml (default: from the data)");
   app.add_option("--initial-pose", c.pose, "x y theta [m m rad] (default: first ground-truth row, else 0 0 0)")
       ->expected(3);
   app.add_option("--show-refused", c.show, "list at most this many refused rows")
       ->capture_default_str()
-      ->check(common::nonNegative());
+      ->check(app::nonNegative());
   app.footer("The datum (lat/lon origin of the local frame, for GPS) and the channel names come from --config.");
 }
 
-int runImport(const common::SystemConfig& cfg, ImportCommand c) {
-  common::refuseExistingOutput(c.io.out_dir, c.overwrite);
+int runImport(const app::SystemConfig& cfg, ImportCommand c) {
+  app::refuseExistingOutput(c.io.out_dir, c.overwrite);
   ImportOptions& io = c.io;
   io.datum = cfg.datum;
   io.channels = cfg.channels;
@@ -45,9 +45,9 @@ int runImport(const common::SystemConfig& cfg, ImportCommand c) {
   std::cout << importSummary(r, c.show);
   if (!r.usable()) {
     spdlog::error("nothing usable in '{}': no valid row in any recognised file", io.dir);
-    return common::kExitRuntimeError;
+    return app::kExitRuntimeError;
   }
-  return common::kExitOk;
+  return app::kExitOk;
 }
 
 }  // namespace lcmloc::import

@@ -50,7 +50,7 @@ inline void refuse(ImportResult& r, FileReport& f, int64_t line, const std::stri
 
 /// Pass 1: recognises the files, reads the map into `map`, splits the rows and reads the time
 /// column (unit, base, time-order rule). A directory named *.csv goes to r.skipped. Throws
-/// common::UsageError naming every *.csv file that is none of the formats (with the formats it
+/// app::UsageError naming every *.csv file that is none of the formats (with the formats it
 /// could have been and the columns it had), std::runtime_error for an unreadable file, two map
 /// files or a bad map.
 std::vector<DataFile> readDataFiles(const std::vector<std::filesystem::path>& paths, const ImportOptions& opt,

@@ -75,10 +75,10 @@ MagnetGridImport importMagnetGrid(const MagnetGridOptions& opt) {
   checkFilterValue("--pw-turn", "pw_turn", fmt::format("{}", opt.pw_turn));
   checkFilterValue("--reach", "reach_forward", fmt::format("{}", opt.reach));
   if (!std::isfinite(opt.grid_angle))
-    throw common::ConfigError("--grid-angle", "", fmt::format("{} is not an angle [rad]", opt.grid_angle));
+    throw app::ConfigError("--grid-angle", "", fmt::format("{} is not an angle [rad]", opt.grid_angle));
   if (!opt.out_dir.empty())
     for (const char* name : {"run.lcmlog", "map.csv", "config.yaml"})
-      common::refuseOutputOverInputs("--output", (fs::path(opt.out_dir) / name).string(), {opt.input});
+      app::refuseOutputOverInputs("--output", (fs::path(opt.out_dir) / name).string(), {opt.input});
   std::ifstream in(opt.input);
   if (!in) throw std::runtime_error("cannot open '" + opt.input + "'");
   MagnetGridImport r;
@@ -124,7 +124,7 @@ MagnetGridImport importMagnetGrid(const MagnetGridOptions& opt) {
     utimes.emplace_back();
     if (f.size() < 4) { sm.why = fmt::format("expected at least 4 columns, got {}", f.size()); continue; }
     bool ok = true;
-    for (int i = 0; i < 4 && ok; ++i) ok = common::csv::parseNumber(f[static_cast<std::size_t>(i)], i + 1, sm.v[i], sm.why);
+    for (int i = 0; i < 4 && ok; ++i) ok = app::csv::parseNumber(f[static_cast<std::size_t>(i)], i + 1, sm.v[i], sm.why);
     if (!ok) continue;
     if (sm.v[2] < 0 || sm.v[2] > 255 || sm.v[2] != std::floor(sm.v[2])) {
       sm.why = fmt::format("reed byte {} not in 0..255", f[2]);
@@ -249,7 +249,7 @@ MagnetGridImport importMagnetGrid(const MagnetGridOptions& opt) {
     r.map_path = (fs::path(opt.out_dir) / "map.csv").string();
     r.config_path = (fs::path(opt.out_dir) / "config.yaml").string();
     log.write(r.log_path);
-    common::csv::writeMap(r.map_path, r.map);
+    app::csv::writeMap(r.map_path, r.map);
     std::ofstream c(r.config_path);
     c << "# Written by lcmloc-magnet-grid --import-only from " << opt.input << " (docs/magnet_grid.md).\n"
       << "# Replay: lcmloc-replay run.lcmlog --config config.yaml -o estimates.lcmlog\n"
@@ -281,7 +281,7 @@ MagnetGridReport runMagnetGrid(const MagnetGridOptions& opt, MagnetGridImport* i
   if (opt.out_dir.empty()) throw std::invalid_argument("runMagnetGrid needs an output directory");
   const auto imp = importMagnetGrid(opt);
   if (imported) *imported = imp;
-  const auto cfg = common::loadSystemConfig(imp.config_path);
+  const auto cfg = app::loadSystemConfig(imp.config_path);
   replay::ReplayOptions ro;
   ro.input = imp.log_path;
   ro.output = (fs::path(opt.out_dir) / "estimates.lcmlog").string();

@@ -15,7 +15,7 @@
 namespace lcmloc::import {
 
 int runMagnetGridCommand(const MagnetGridCommand& c) {
-  common::refuseExistingOutput(c.output, c.overwrite);
+  app::refuseExistingOutput(c.output, c.overwrite);
   MagnetGridOptions mo = c.grid;
   if (c.pv_diag.size() == 2) mo.pv_diag = core::Vec2(c.pv_diag[0], c.pv_diag[1]);
   if (c.pw_diag.size() == 3) mo.pw_diag = core::Vec3(c.pw_diag[0], c.pw_diag[1], c.pw_diag[2]);
@@ -32,11 +32,11 @@ int runMagnetGridCommand(const MagnetGridCommand& c) {
     const std::string name = std::filesystem::path(input).stem().string();
     for (std::size_t k = 0; k < i; ++k)
       if (inputs[k].second == name)
-        throw common::ConfigError("--run", "",
+        throw app::ConfigError("--run", "",
                                   fmt::format("'{}' and '{}' are both run '{}' (output {}/{}): give each run once, "
                                               "or copy one under another name",
                                               runs[k], run, name, c.output, name));
-    common::requireInputFile(input, "run " + run);
+    app::requireInputFile(input, "run " + run);
     inputs.emplace_back(input, name);
   }
   nlohmann::json summary;
@@ -76,7 +76,7 @@ int runMagnetGridCommand(const MagnetGridCommand& c) {
     std::filesystem::create_directories(c.output);
     eval::writeJson(summary, c.output + "/summary.json");
   }
-  return common::kExitOk;
+  return app::kExitOk;
 }
 
 }  // namespace lcmloc::import

@@ -178,8 +178,8 @@ std::vector<DataFile> readDataFiles(const std::vector<fs::path>& paths, const Im
       continue;
     }
     Header hd{p, {}, {}, {}};
-    common::csv::openCsv(p.string(), hd.text);  // throws for a file that cannot be read
-    hd.columns = common::csv::split(hd.text);
+    app::csv::openCsv(p.string(), hd.text);  // throws for a file that cannot be read
+    hd.columns = app::csv::split(hd.text);
     hd.what = classify(hd.columns);
     if (!hd.what.format)
       unknown.push_back(fmt::format("'{}': {}: {}", p.string(),
@@ -198,19 +198,19 @@ std::vector<DataFile> readDataFiles(const std::vector<fs::path>& paths, const Im
             formatList() +
             "Every *.csv file in the directory is read (no other file is): fix the header, or move the file out or "
             "rename it (e.g. to .txt).";
-    throw common::UsageError(what);
+    throw app::UsageError(what);
   }
   for (const auto& hd : headers) {
     const fs::path& p = hd.path;
     const auto& h = hd.columns;
     const std::string& header = hd.text;
     std::string again;
-    std::ifstream in = common::csv::openCsv(p.string(), again);
+    std::ifstream in = app::csv::openCsv(p.string(), again);
     const Format f = *hd.what.format;
     if (f == Format::Map) {
       if (!map_source.empty())
         throw std::runtime_error("two map files: '" + map_source + "' and '" + p.string() + "'");
-      map = common::csv::loadMap(p.string());  // a map is configuration: any bad row is an error
+      map = app::csv::loadMap(p.string());  // a map is configuration: any bad row is an error
       map_source = p.string();
       continue;
     }
@@ -234,12 +234,12 @@ std::vector<DataFile> readDataFiles(const std::vector<fs::path>& paths, const Im
       ++df.report.rows;
       Row row;
       row.line = lineno;
-      row.fields = common::csv::split(line);
+      row.fields = app::csv::split(line);
       if (row.fields.size() != ncol) {
         refuse(df.report, lineno, fmt::format("expected {} columns, got {}", ncol, row.fields.size()));
         continue;
       }
-      if (!common::csv::parseNumber(row.fields[0], 1, row.t_raw, why)) {
+      if (!app::csv::parseNumber(row.fields[0], 1, row.t_raw, why)) {
         refuse(df.report, lineno, why);
         continue;
       }

@@ -41,7 +41,7 @@ logio::ScanSummary scan(const std::string& path, const std::function<void(const 
   auto s = logio::scanLog(path, [&](const logio::RawEvent& ev) {
     fn(ev);
     if ((ev.index & 0xffff) == 0) {
-      if (common::stopRequested()) stop = true;
+      if (app::stopRequested()) stop = true;
       const auto now = std::chrono::steady_clock::now();
       if (now - last > std::chrono::seconds(2)) {
         spdlog::info("{}: {} events read, byte {}", path, ev.index, ev.offset);
@@ -102,7 +102,7 @@ class ChannelFilter {
     try {
       if (!all_) re_ = std::regex(r);
     } catch (const std::regex_error& e) {
-      throw common::ConfigError("--channel", "", "bad channel regex '" + r + "': " + e.what());
+      throw app::ConfigError("--channel", "", "bad channel regex '" + r + "': " + e.what());
     }
   }
   bool operator()(const std::string& channel) const { return all_ || std::regex_match(channel, re_); }
@@ -123,7 +123,7 @@ struct ChannelInfo {
 
 int info(const std::string& path) {
   std::map<std::string, ChannelInfo> channels;
-  common::SeqTracker seqs;
+  bus::SeqTracker seqs;
   int64_t first = 0, last = 0, n = 0, undecodable = 0;
   std::vector<std::string> bad;  // first few undecodable events, with position
   const auto s = scan(path, [&](const logio::RawEvent& ev) {
@@ -138,7 +138,7 @@ int info(const std::string& path) {
     auto undecodableEvent = [&](const std::string& why) {
       ++c.undecodable;
       if (++undecodable <= 10)
-        bad.push_back(fmt::format("undecodable {} event at byte {} (event {}): {} bytes, {}", common::printable(*ev.channel), ev.offset,
+        bad.push_back(fmt::format("undecodable {} event at byte {} (event {}): {} bytes, {}", app::printable(*ev.channel), ev.offset,
                                   ev.index, ev.size, why));
     };
     if (noFingerprint(ev)) return undecodableEvent("shorter than a fingerprint");  // not a type of its own
@@ -172,7 +172,7 @@ int info(const std::string& path) {
     if (c.types.size() > 1) type = "mixed (" + std::to_string(c.types.size()) + " types)";
     const double span = spanSeconds(c.first, c.last);
     const std::string rate = (c.count > 1 && span > 0) ? fmt::format("{:.2f}", (c.count - 1) / span) : "-";
-    std::cout << fmt::format("{:<24} {:<28} {:>9} {:>10} {:>12} {:>9} {:>11}\n", common::printable(name), type, c.count, rate, c.bytes,
+    std::cout << fmt::format("{:<24} {:<28} {:>9} {:>10} {:>12} {:>9} {:>11}\n", app::printable(name), type, c.count, rate, c.bytes,
                              c.gaps, c.undecodable);
   }
   std::cout << fmt::format("total: {} events, {} sequence gaps, {} undecodable\n", s.events_read, seqs.gaps(),
@@ -181,7 +181,7 @@ int info(const std::string& path) {
   if (undecodable > static_cast<int64_t>(bad.size()))
     std::cout << "(" << undecodable - static_cast<int64_t>(bad.size()) << " more undecodable events)\n";
   reportDamage(s, path, &std::cout);
-  return s.damaged ? common::kExitInputDamaged : common::kExitOk;
+  return s.damaged ? app::kExitInputDamaged : app::kExitOk;
 }
 
 namespace {
@@ -237,7 +237,7 @@ struct Columns {
 
 int toCsv(const std::string& path, const std::vector<std::string>& channel_regexes, const std::string& output) {
   const bool to_stdout = output.empty() || output == "-";
-  if (!to_stdout) common::refuseOutputOverInputs("--output", output, {path}, "input log");
+  if (!to_stdout) app::refuseOutputOverInputs("--output", output, {path}, "input log");
   const ChannelFilter selected(channel_regexes);
   std::map<std::string, Columns> columns;
   std::map<std::string, int64_t> undecodable, unknown;
@@ -251,21 +251,21 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
     columns[*ev.channel].merge(fields);
   });
   for (const auto& [ch, n] : unknown)
-    spdlog::warn("{}: {} event(s) of a type this tool does not know, not exported", common::printable(ch), n);
-  for (const auto& [ch, n] : undecodable) spdlog::warn("{}: {} undecodable event(s) skipped", common::printable(ch), n);
+    spdlog::warn("{}: {} event(s) of a type this tool does not know, not exported", app::printable(ch), n);
+  for (const auto& [ch, n] : undecodable) spdlog::warn("{}: {} undecodable event(s) skipped", app::printable(ch), n);
   reportDamage(s, path, nullptr);
   if (columns.empty()) {
     if (channel_regexes.empty())
       spdlog::error("no decodable events of lcmloc's types in {}", path);
     else
       spdlog::error("no decodable events on channels matching '{}' in {}", fmt::join(channel_regexes, "|"), path);
-    return common::kExitRuntimeError;
+    return app::kExitRuntimeError;
   }
   for (auto& [ch, cols] : columns) {
     if (cols.size() > kMaxColumns)
       throw std::runtime_error(fmt::format(
           "{}: more than {} columns (widest message: {} fields): too wide for a CSV, nothing written; select the "
-          "other channels with -c", common::printable(ch), kMaxColumns, cols.widest));
+          "other channels with -c", app::printable(ch), kMaxColumns, cols.widest));
     cols.finish();
   }
   const bool to_dir = columns.size() > 1;
@@ -280,7 +280,7 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
     for (const auto& kv : columns) channels.push_back(kv.first);
     const auto stems = logio::uniqueStems(channels);  // ../x -> ___x, ./ODOMETRY next to ODOMETRY -> __ODOMETRY
     for (std::size_t i = 0; i < channels.size(); ++i) paths[channels[i]] = (fs::path(output) / (stems[i] + ".csv")).string();
-    for (const auto& kv : paths) common::refuseOutputOverInputs("--output", kv.second, {path}, "input log");
+    for (const auto& kv : paths) app::refuseOutputOverInputs("--output", kv.second, {path}, "input log");
     fs::create_directories(output);
   } else if (!to_stdout) {
     auto f = std::make_unique<std::ofstream>(output);
@@ -328,10 +328,10 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
   single->flush();
   if (!*single) throw std::runtime_error(std::string("writing CSV to ") + (to_stdout ? "stdout" : output) + " failed");
   for (const auto& [ch, n] : rows)
-    spdlog::info("{}: {} rows, {} columns{}", common::printable(ch), n, columns[ch].names.size() + 1,
+    spdlog::info("{}: {} rows, {} columns{}", app::printable(ch), n, columns[ch].names.size() + 1,
                  to_dir ? " -> " + paths.at(ch)
                         : (to_stdout ? "" : " -> " + output));
-  return s.damaged ? common::kExitInputDamaged : common::kExitOk;
+  return s.damaged ? app::kExitInputDamaged : app::kExitOk;
 }
 
 namespace {
@@ -342,7 +342,7 @@ namespace {
 /// --from / --to [s] in microseconds, compared in integers (0.2 s is 200000 us exactly). A bound
 /// beyond the int64 range of log times saturates (keeps all or none, as asked); not finite: refused.
 int64_t boundMicros(const char* flag, double seconds) {
-  if (!std::isfinite(seconds)) throw common::ConfigError(flag, "", fmt::format("{} is not a number of seconds", seconds));
+  if (!std::isfinite(seconds)) throw app::ConfigError(flag, "", fmt::format("{} is not a number of seconds", seconds));
   const double us = seconds * 1e6;
   if (us >= 9.2e18) return std::numeric_limits<int64_t>::max();
   if (us <= -9.2e18) return std::numeric_limits<int64_t>::min();
@@ -359,14 +359,14 @@ int64_t saturatingSub(int64_t a, int64_t b) {
 }  // namespace
 
 int cut(const std::string& path, const std::string& output, const CutOptions& o) {
-  common::refuseOutputOverInputs("--output", output, {path}, "input log");
+  app::refuseOutputOverInputs("--output", output, {path}, "input log");
   std::optional<int64_t> from, to;
   if (o.from) from = boundMicros("--from", *o.from);
   if (o.to) to = boundMicros("--to", *o.to);
   if (from && to && *from > *to)
-    throw common::ConfigError("--from", "", fmt::format("{} s is after --to {} s: nothing to keep", *o.from, *o.to));
+    throw app::ConfigError("--from", "", fmt::format("{} s is after --to {} s: nothing to keep", *o.from, *o.to));
   if (o.from_utime && o.to_utime && *o.from_utime > *o.to_utime)
-    throw common::ConfigError("--from-utime", "", fmt::format("{} is after --to-utime {}: nothing to keep",
+    throw app::ConfigError("--from-utime", "", fmt::format("{} is after --to-utime {}: nothing to keep",
                                                               *o.from_utime, *o.to_utime));
   const ChannelFilter selected(o.channels);
   logger::EventFile out(output);
@@ -392,7 +392,7 @@ int cut(const std::string& path, const std::string& output, const CutOptions& o)
   spdlog::info("wrote {} of {} events to {}", kept, s.events_read, output);
   if (kept == 0 && s.events_read > 0)
     spdlog::warn("no event is inside the window and on the selected channels: {} holds no events", output);
-  return s.damaged ? common::kExitInputDamaged : common::kExitOk;
+  return s.damaged ? app::kExitInputDamaged : app::kExitOk;
 }
 
 }  // namespace lcmloc::logtool

@@ -21,7 +21,7 @@
 namespace lcmloc::montecarlo {
 namespace {
 
-using common::ConfigError;
+using app::ConfigError;
 
 struct FilterStats {
   std::vector<double> rmse, max_error, final_error, nees;
@@ -44,7 +44,7 @@ nlohmann::json summary(const std::vector<double>& v) {
   return {{"median", s.median}, {"p95", s.p95}, {"mean", s.mean}, {"max", s.max}};
 }
 
-nlohmann::json report(const Options& o, const models::ScenarioConfig& sc, const Eigen::Vector3d& pw, int runs_done,
+nlohmann::json report(const Options& o, const sim::ScenarioConfig& sc, const Eigen::Vector3d& pw, int runs_done,
                       uint64_t base, const std::vector<std::string>& names,
                       const std::vector<FilterStats>& stats) {
   nlohmann::json j;
@@ -80,35 +80,35 @@ nlohmann::json report(const Options& o, const models::ScenarioConfig& sc, const 
 }  // namespace
 
 void addOptions(CLI::App& app, Options& o) {
-  app.add_option("--runs", o.runs, "number of runs")->capture_default_str()->check(common::positive());
+  app.add_option("--runs", o.runs, "number of runs")->capture_default_str()->check(app::positive());
   app.add_option("--seed-base", o.seed_base, "seed of the first run (default: the config's seed)")
-      ->check(common::seed());
-  app.add_option("--scale-error", o.scale_error, "odometer scale error k [-]")->capture_default_str()->check(CLI::Range(common::kOdometryScaleError.lo, common::kOdometryScaleError.hi));
+      ->check(app::seed());
+  app.add_option("--scale-error", o.scale_error, "odometer scale error k [-]")->capture_default_str()->check(CLI::Range(simconfig::kOdometryScaleError.lo, simconfig::kOdometryScaleError.hi));
   app.add_option("--steering-bias-deg", o.steering_bias_deg, "steering-encoder bias [deg]")
       ->capture_default_str()
-      ->check(CLI::Range(common::kOdometrySteeringBias.lo * 180.0 / M_PI,
-                                common::kOdometrySteeringBias.hi * 180.0 / M_PI));
+      ->check(CLI::Range(simconfig::kOdometrySteeringBias.lo * 180.0 / M_PI,
+                                simconfig::kOdometrySteeringBias.hi * 180.0 / M_PI));
   app.add_flag("--no-faults", o.no_faults, "run without the configured fault markers");
   app.add_option("--marker-spacing", o.marker_spacing,
                  "markers this many metres apart over the stretch the configured markers cover (default: as configured) [m]")
-      ->check(common::positive());
+      ->check(app::positive());
   app.add_option("--pw-diag", o.pw_diag,
                  "process noise Pw of the filters: x [m^2], y [m^2], theta [rad^2] per pw_distance of travel "
                  "(default: the config's fusion.filter.pw_diag)")
       ->expected(3)
       ->delimiter(',')
-      ->check(common::nonNegative());
+      ->check(app::nonNegative());
   app.add_option("--filters", o.filters, "comma-separated filter types")->capture_default_str();
-  common::addOutputOption(app, o.out, "JSON report file")->capture_default_str();
-  common::addOverwriteFlag(app, o.overwrite);
+  app::addOutputOption(app, o.out, "JSON report file")->capture_default_str();
+  app::addOverwriteFlag(app, o.overwrite);
 }
 
 int run(const Options& o) {
-  common::refuseExistingOutput(o.out, o.overwrite);
-  models::ScenarioConfig sc;
+  app::refuseExistingOutput(o.out, o.overwrite);
+  sim::ScenarioConfig sc;
   core::FilterConfig base_filter;
   if (!o.config.empty()) {
-    const auto sys = common::loadSimSystemConfig(o.config);
+    const auto sys = simconfig::loadSimSystemConfig(o.config);
     sc = sys.scenario;
     base_filter = sys.fusion.filter;
   }
@@ -116,17 +116,17 @@ int run(const Options& o) {
   sc.odometry.steering_bias = o.steering_bias_deg * M_PI / 180.0;
   if (o.no_faults) sc.faults.clear();
   if (o.marker_spacing > 0) {
-    sc.markers = models::respaced(sc.markers, o.marker_spacing);
-    if (sc.markers.count > common::kMarkerCount.hi)
+    sc.markers = sim::respaced(sc.markers, o.marker_spacing);
+    if (sc.markers.count > simconfig::kMarkerCount.hi)
       throw ConfigError("--marker-spacing", "marker_spacing",
                         fmt::format("{} markers {} m apart: more than markers.count allows ({})", sc.markers.count,
-                                    o.marker_spacing, common::kMarkerCount.hi));
+                                    o.marker_spacing, simconfig::kMarkerCount.hi));
   }
   if (!o.pw_diag.empty()) base_filter.pw_diag = Eigen::Vector3d(o.pw_diag[0], o.pw_diag[1], o.pw_diag[2]);
 
   const auto names = splitList(o.filters);
   if (names.empty()) throw ConfigError("--filters", "filters", "no filter given");
-  common::checkFilterList(names, "--filters", "filters");  // the report has one entry per type
+  app::checkFilterList(names, "--filters", "filters");  // the report has one entry per type
   std::vector<core::FilterConfig> filters;
   for (const auto& n : names) {
     auto f = base_filter;
@@ -142,7 +142,7 @@ int run(const Options& o) {
 
   std::vector<FilterStats> stats(names.size());
   int done = 0, next_progress = 1;
-  for (int i = 0; i < o.runs && !common::stopRequested(); ++i) {
+  for (int i = 0; i < o.runs && !app::stopRequested(); ++i) {
     sc.seed = base + static_cast<uint64_t>(i);
     const auto res = scenario::runScenario(sc, filters);
     for (std::size_t k = 0; k < names.size(); ++k) {
@@ -183,7 +183,7 @@ int run(const Options& o) {
                  s["valid_rejected"].get<int>());
   }
   spdlog::info("report written to {}", o.out);
-  return done < o.runs ? common::kExitRuntimeError : common::kExitOk;
+  return done < o.runs ? app::kExitRuntimeError : app::kExitOk;
 }
 
 

@@ -47,9 +47,9 @@ double median(std::vector<double> v) {
 volatile double decoded_sum = 0;
 
 /// Reads every event and decodes the sensor messages into their lcmtypes, with the decoder the
-/// daemon uses (common::decodeMessage); returns events read. Every decoded field goes into a sum
+/// daemon uses (bus::decodeMessage); returns events read. Every decoded field goes into a sum
 /// that is kept: the compiler cannot skip the decoding.
-int64_t readAndDecode(const std::string& path, const common::ChannelConfig& ch, int64_t* decoded) {
+int64_t readAndDecode(const std::string& path, const app::ChannelConfig& ch, int64_t* decoded) {
   logio::LogScanner scanner(path, nullptr);
   const std::set<std::string> rulers(ch.magruler.begin(), ch.magruler.end());
   lcmloc::odometry_t odo;
@@ -60,13 +60,13 @@ int64_t readAndDecode(const std::string& path, const common::ChannelConfig& ch, 
     const auto* data = static_cast<const uint8_t*>(ev->data);
     const auto size = static_cast<std::size_t>(ev->datalen);
     if (ev->channel == ch.odometry) {
-      if (common::decodeMessage(odo, data, size) >= 0) {
+      if (bus::decodeMessage(odo, data, size) >= 0) {
         ++n;
         sum += static_cast<double>(odo.utime + odo.seq + odo.ticks) + odo.delta_s + odo.steering + odo.delta_theta +
                (odo.has_steering ? 1.0 : 0.0);
       }
     } else if (rulers.count(ev->channel)) {
-      if (common::decodeMessage(mr, data, size) >= 0) {
+      if (bus::decodeMessage(mr, data, size) >= 0) {
         ++n;
         sum += static_cast<double>(mr.utime + mr.seq) + mr.lateral_offset + mr.quality +
                static_cast<double>(mr.readings.size());
@@ -80,7 +80,7 @@ int64_t readAndDecode(const std::string& path, const common::ChannelConfig& ch, 
 
 /// Why a kept synthetic log does not fit this run ("" when it does): damaged, not the
 /// configured channels, or another length of message time than duration_s.
-std::string keptLogProblem(const std::string& path, const common::SimSystemConfig& cfg, double duration_s) {
+std::string keptLogProblem(const std::string& path, const simconfig::SimSystemConfig& cfg, double duration_s) {
   std::vector<logio::LogIssue> issues;
   logio::LogScanner scanner(path, &issues);
   int64_t first = -1, last = -1, odometry = 0;
@@ -102,18 +102,18 @@ std::string keptLogProblem(const std::string& path, const common::SimSystemConfi
 
 }  // namespace
 
-int runBench(const common::SimSystemConfig& base, const BenchOptions& opts) {
+int runBench(const simconfig::SimSystemConfig& base, const BenchOptions& opts) {
   namespace fs = std::filesystem;
   using Clock = std::chrono::steady_clock;
   fs::create_directories(opts.dir);
   const std::string log = (fs::path(opts.dir) / "synthetic.lcmlog").string();
   const std::string out = (fs::path(opts.dir) / "replay_out.lcmlog").string();
 
-  common::SimSystemConfig cfg = base;
+  simconfig::SimSystemConfig cfg = base;
   cfg.scenario = ovalScenario(base.scenario, OvalTrack{}, opts.duration_s);
   cfg.fusion.shadow.clear();
   cfg.fusion.map_file = (fs::path(opts.dir) / "synthetic_map.csv").string();  // the oval's markers
-  common::writeScenarioMap(cfg, cfg.fusion.map_file);
+  drivers::writeScenarioMap(cfg, cfg.fusion.map_file);
 
   /// One measured configuration: filter, fusion.output_every, output file or not, one thread or two.
   struct Case {
@@ -164,7 +164,7 @@ int runBench(const common::SimSystemConfig& base, const BenchOptions& opts) {
         for (const Case& k : cases) known += (known.empty() ? "" : ", ") + k.key;
         spdlog::error("--bench-case {}: no such case (with --bench-output-every {}: {})", key, opts.output_every,
                       known);
-        return common::kExitConfigError;
+        return app::kExitConfigError;
       }
       if (std::none_of(chosen.begin(), chosen.end(), [&](const Case& k) { return k.key == key; })) chosen.push_back(*it);
     }
@@ -187,13 +187,13 @@ int runBench(const common::SimSystemConfig& base, const BenchOptions& opts) {
         last_line = Clock::now();
         spdlog::info("generating: {:.0f}%", 100.0 * done);
       }
-      return !common::stopRequested();
+      return !app::stopRequested();
     });
     if (st.stopped) {
       std::error_code ec;
       fs::remove(log, ec);
       spdlog::warn("stopped while generating the synthetic log; the partial log is removed");
-      return common::kExitRuntimeError;
+      return app::kExitRuntimeError;
     }
     spdlog::info("generated {} odometry, {} detections over {:.0f} m ({} markers) in {:.1f} s", st.odometry,
                  st.detections, st.distance_m, st.markers,
@@ -210,11 +210,11 @@ int runBench(const common::SimSystemConfig& base, const BenchOptions& opts) {
     cpu_read.push_back(events / (cpuSeconds() - c0));
   };
   int reps_done = 0;
-  for (int rep = 0; rep < opts.repetitions && !common::stopRequested(); ++rep) {
+  for (int rep = 0; rep < opts.repetitions && !app::stopRequested(); ++rep) {
     std::string line = fmt::format("repetition {}:", rep + 1);
     for (Case& k : cases) {
       readOnce();  // the baseline next to each case
-      common::SystemConfig c = cfg;
+      app::SystemConfig c = cfg;
       c.fusion.filter.type = k.filter;
       c.fusion.output_every = k.output_every;
       ReplayOptions ro;
@@ -242,7 +242,7 @@ int runBench(const common::SimSystemConfig& base, const BenchOptions& opts) {
     spdlog::info("{}", line);
     ++reps_done;
   }
-  if (reps_done == 0) return common::kExitRuntimeError;
+  if (reps_done == 0) return app::kExitRuntimeError;
   const double m_read = median(rate_read), c_read = median(cpu_read);
   std::string table = fmt::format("{:<40}{:>14}{:>10}{:>16}{:>10}{:>11}\n", "what", "messages/s", "ratio",
                                   "msgs/CPU-s", "ratio", "written");
@@ -280,7 +280,7 @@ int runBench(const common::SimSystemConfig& base, const BenchOptions& opts) {
   eval::writeJson(j, report);
   std::cout << "report: " << report << "\n";
   fs::remove(out);
-  return common::kExitOk;
+  return app::kExitOk;
 }
 
 }  // namespace lcmloc::replay

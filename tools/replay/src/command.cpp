@@ -21,11 +21,11 @@ std::string bytes(int64_t n) {
 
 }  // namespace
 
-common::SimSystemConfig applyOverrides(common::SimSystemConfig cfg, const CommandOptions& o) {
+simconfig::SimSystemConfig applyOverrides(simconfig::SimSystemConfig cfg, const CommandOptions& o) {
   if (!o.filter.empty()) {
     YAML::Node n;
     n["type"] = o.filter;
-    cfg.fusion.filter = common::parseFilterConfig(n, cfg.fusion.filter, "--filter", "fusion.filter");
+    cfg.fusion.filter = app::parseFilterConfig(n, cfg.fusion.filter, "--filter", "fusion.filter");
   }
   if (o.no_shadow) cfg.fusion.shadow.clear();
   if (!o.shadow.empty()) {
@@ -39,24 +39,24 @@ common::SimSystemConfig applyOverrides(common::SimSystemConfig cfg, const Comman
         item += o.shadow[i];
       }
     }
-    common::checkFilterList(cfg.fusion.shadow, "--shadow", "shadow");
+    app::checkFilterList(cfg.fusion.shadow, "--shadow", "shadow");
   }
   return cfg;
 }
 
-int runCommand(const common::SimSystemConfig& cfg, const CommandOptions& o) {
+int runCommand(const simconfig::SimSystemConfig& cfg, const CommandOptions& o) {
   if (o.bench) return runBench(cfg, o.bench_options);
-  if (o.input.empty() || o.output.empty()) throw common::UsageError("give an input log and --output FILE (or --bench)");
-  common::requireInputFile(o.input, "input log");
-  common::refuseOutputOverInputs("--output", o.output, {o.input}, "input log");  // (the more useful message)
-  common::refuseExistingOutput(o.output, o.overwrite);
+  if (o.input.empty() || o.output.empty()) throw app::UsageError("give an input log and --output FILE (or --bench)");
+  app::requireInputFile(o.input, "input log");
+  app::refuseOutputOverInputs("--output", o.output, {o.input}, "input log");  // (the more useful message)
+  app::refuseExistingOutput(o.output, o.overwrite);
   ReplayOptions ro;
   ro.input = o.input;
   ro.output = o.output;
   ro.with_inputs = o.with_inputs;
   ro.progress_period_s = o.progress_s;
   ro.read_ahead = !o.one_thread;
-  ro.stop = [] { return common::stopRequested(); };
+  ro.stop = [] { return app::stopRequested(); };
   const auto r = replayLog(cfg, ro);
   std::cout << fmt::format("replayed {} ({}) with filter {} (shadow: {}) -> {}\n", o.input, bytes(r.file_size),
                            cfg.fusion.filter.type,
@@ -66,7 +66,7 @@ int runCommand(const common::SimSystemConfig& cfg, const CommandOptions& o) {
     spdlog::error("the output log {} could not be written ({}): the replay stopped after {} of the input's events; "
                   "the output holds the events that could be written (lcmloc-log info {})",
                   o.output, r.write_error, r.events_read, o.output);
-    return common::kExitRuntimeError;
+    return app::kExitRuntimeError;
   }
   std::string per;
   for (const auto& [ch, n] : r.written_per_channel) per += fmt::format("{}{} {}", per.empty() ? "" : ", ", ch, n);
@@ -78,7 +78,7 @@ int runCommand(const common::SimSystemConfig& cfg, const CommandOptions& o) {
   if (r.interrupted) std::cout << "interrupted: the output holds what was replayed so far\n";
   for (const auto& is : r.issues)
     std::cout << fmt::format("damage: before event {} at byte {}: {}\n", is.event_index, is.byte_offset, is.what);
-  return r.damaged ? common::kExitInputDamaged : common::kExitOk;
+  return r.damaged ? app::kExitInputDamaged : app::kExitOk;
 }
 
 }  // namespace lcmloc::replay

@@ -19,7 +19,7 @@
 
 namespace lcmloc::replay {
 
-bool isDaemonOutput(const common::ChannelConfig& ch, const std::string& c) {
+bool isDaemonOutput(const app::ChannelConfig& ch, const std::string& c) {
   if (c == ch.pose || c == ch.gate || c == ch.status) return true;
   // shadow filters: POSE_<TYPE>
   const std::size_t n = ch.pose.size();
@@ -100,7 +100,7 @@ struct alignas(replay::kLinePair) Block {
 /// the bus; the daemon's intake makes items of them, which it diverts into the block being filled.
 class Reader {
  public:
-  Reader(const std::string& path, const common::SystemConfig& cfg, const ReplayOptions& opts)
+  Reader(const std::string& path, const app::SystemConfig& cfg, const ReplayOptions& opts)
       : scanner_(path, &issues_), cfg_(cfg), opts_(opts) {}
   void attach(LogBus& bus, fusion::FusionDaemon& daemon) {
     bus_ = &bus;
@@ -177,7 +177,7 @@ class Reader {
 
   std::vector<logio::LogIssue> issues_;  ///< the scanner's, until taken into a block
   logio::LogScanner scanner_;
-  const common::SystemConfig& cfg_;
+  const app::SystemConfig& cfg_;
   const ReplayOptions& opts_;
   LogBus* bus_ = nullptr;
   Block* block_ = nullptr;  ///< being filled
@@ -382,14 +382,14 @@ void replayInline(Reader& reader, Applier& applier, ReplayResult& r) {
 
 }  // namespace
 
-ReplayResult replayLog(const common::SystemConfig& cfg, const ReplayOptions& opts) {
+ReplayResult replayLog(const app::SystemConfig& cfg, const ReplayOptions& opts) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   // Each on cache lines of its own (replay::kLinePair): the reader is the reading thread's, the
   // result and the applier the applying thread's, and the bus and the daemon keep their two
   // threads' parts apart inside.
   alignas(replay::kLinePair) ReplayResult r;
-  if (!opts.output.empty()) common::refuseOutputOverInputs("--output", opts.output, {opts.input}, "input log");
+  if (!opts.output.empty()) app::refuseOutputOverInputs("--output", opts.output, {opts.input}, "input log");
   alignas(replay::kLinePair) Reader reader(opts.input, cfg, opts);
   r.file_size = reader.fileSize();
   alignas(replay::kLinePair) LogBus bus(opts.output);

@@ -12,8 +12,8 @@
 
 namespace lcmloc::replay {
 
-models::ScenarioConfig ovalScenario(const models::ScenarioConfig& base, const OvalTrack& t, double duration_s) {
-  models::ScenarioConfig sc = base;
+sim::ScenarioConfig ovalScenario(const sim::ScenarioConfig& base, const OvalTrack& t, double duration_s) {
+  sim::ScenarioConfig sc = base;
   const double k = 1.0 / t.radius, half = M_PI * t.radius;
   const double lap = 2.0 * t.straight + 2.0 * half;
   const int laps = static_cast<int>(std::ceil(duration_s * base.vehicle.speed / lap)) + 2;
@@ -32,17 +32,17 @@ models::ScenarioConfig ovalScenario(const models::ScenarioConfig& base, const Ov
   return sc;
 }
 
-SyntheticLogStats writeSyntheticLog(const models::ScenarioConfig& sc, double duration_s, const std::string& path,
-                                    const common::ChannelConfig& channels,
+SyntheticLogStats writeSyntheticLog(const sim::ScenarioConfig& sc, double duration_s, const std::string& path,
+                                    const app::ChannelConfig& channels,
                                     const std::function<bool(double)>& progress) {
   SyntheticLogStats st;
-  const models::Path track(sc.path);
-  const auto map = models::makeMarkerMap(track, sc.markers);
+  const sim::Path track(sc.path);
+  const auto map = sim::makeMarkerMap(track, sc.markers);
   st.markers = static_cast<int64_t>(map.size());
   const int64_t end_utime = sc.vehicle.start_utime + static_cast<int64_t>(std::llround(duration_s * 1e6));
-  models::VehicleSim vehicle(sc.vehicle, track, track.length() - 1.0, models::componentSeed(sc.seed, "vehicle"));
-  models::OdometrySensor odometry(sc.odometry, sc.vehicle.wheelbase, models::componentSeed(sc.seed, "odometry"));
-  models::MagneticRuler ruler(sc.magruler, map, models::componentSeed(sc.seed, "magruler"));
+  sim::VehicleSim vehicle(sc.vehicle, track, track.length() - 1.0, sim::componentSeed(sc.seed, "vehicle"));
+  sim::OdometrySensor odometry(sc.odometry, sc.vehicle.wheelbase, sim::componentSeed(sc.seed, "odometry"));
+  sim::MagneticRuler ruler(sc.magruler, map, sim::componentSeed(sc.seed, "magruler"));
 
   lcm::LogFile log(path, "w");
   if (!log.good()) throw std::runtime_error("cannot create log '" + path + "'");
@@ -60,15 +60,15 @@ SyntheticLogStats writeSyntheticLog(const models::ScenarioConfig& sc, double dur
   };
   const std::string ruler_channel = channels.magruler.empty() ? "MAGRULER" : channels.magruler.front();
   int64_t odo_seq = 0, ruler_seq = 0;
-  auto process = [&](const models::TruthState& t) {
+  auto process = [&](const sim::TruthState& t) {
     if (auto o = odometry.sample(t)) {
-      write(channels.odometry, common::toLcm(*o, odo_seq++));
+      write(channels.odometry, drivers::toLcm(*o, odo_seq++));
       ++st.odometry;
       if (st.first_utime == 0) st.first_utime = o->input.utime;
       st.last_utime = o->input.utime;
     }
     if (auto r = ruler.sample(t)) {
-      write(ruler_channel, common::toLcm(*r, ruler_seq++));
+      write(ruler_channel, drivers::toLcm(*r, ruler_seq++));
       if (r->detected) ++st.detections;
     }
     st.distance_m = t.distance;

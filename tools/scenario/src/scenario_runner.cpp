@@ -13,7 +13,7 @@
 namespace lcmloc::scenario {
 namespace {
 
-using namespace models;
+using namespace sim;
 
 const char* const kOdometryChannel = "ODOMETRY";
 const char* const kRulerChannel = "MAGRULER";

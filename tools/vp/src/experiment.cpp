@@ -41,7 +41,7 @@ bool interpolate(const std::vector<std::array<double, 3>>& tr, double t, double&
 
 namespace {
 /// The import options of the experiment: its log in out_dir, the datum and channels of cfg.
-ImportOptions experimentImport(const common::SystemConfig& cfg, ImportOptions imp, const ExperimentOptions& opt) {
+ImportOptions experimentImport(const app::SystemConfig& cfg, ImportOptions imp, const ExperimentOptions& opt) {
   imp.output = opt.out_dir + "/vp.lcmlog";
   imp.datum = cfg.datum;
   imp.odometry_channel = cfg.channels.odometry;
@@ -50,11 +50,11 @@ ImportOptions experimentImport(const common::SystemConfig& cfg, ImportOptions im
 }
 }  // namespace
 
-void checkExperimentOptions(const common::SystemConfig& cfg, const ImportOptions& imp, const ExperimentOptions& opt) {
-  if (opt.filters.empty()) throw common::ConfigError("--filters", "", "no filter given");
-  common::checkFilterList(opt.filters, "--filters", "filters");
+void checkExperimentOptions(const app::SystemConfig& cfg, const ImportOptions& imp, const ExperimentOptions& opt) {
+  if (opt.filters.empty()) throw app::ConfigError("--filters", "", "no filter given");
+  app::checkFilterList(opt.filters, "--filters", "filters");
   if (imp.holdout_every < 2)
-    throw common::ConfigError(
+    throw app::ConfigError(
         "--holdout-every", "",
         fmt::format("{} is not >= 2: {}", imp.holdout_every,
                     imp.holdout_every == 1 ? "every fix would be held out and the filters would run without GPS"
@@ -62,7 +62,7 @@ void checkExperimentOptions(const common::SystemConfig& cfg, const ImportOptions
   checkImportOptions(experimentImport(cfg, imp, opt));
 }
 
-ExperimentResult runExperiment(const common::SystemConfig& cfg0, ImportOptions imp, const ExperimentOptions& opt) {
+ExperimentResult runExperiment(const app::SystemConfig& cfg0, ImportOptions imp, const ExperimentOptions& opt) {
   namespace fs = std::filesystem;
   const auto t_start = std::chrono::steady_clock::now();
   checkExperimentOptions(cfg0, imp, opt);
@@ -95,10 +95,10 @@ ExperimentResult runExperiment(const common::SystemConfig& cfg0, ImportOptions i
 
   for (const auto& type : opt.filters) {
     if (imp.stop && imp.stop()) break;
-    common::SystemConfig cfg = cfg0;
+    app::SystemConfig cfg = cfg0;
     YAML::Node n;
     n["type"] = type;
-    cfg.fusion.filter = common::parseFilterConfig(n, cfg0.fusion.filter, "--filters", "fusion.filter");
+    cfg.fusion.filter = app::parseFilterConfig(n, cfg0.fusion.filter, "--filters", "fusion.filter");
     cfg.fusion.filter.initial_pose = init;
     cfg.fusion.shadow.clear();
     replay::ReplayOptions ro;

@@ -40,7 +40,7 @@ struct Rows {
 /// finite, wrong column count, negative or out-of-range time, then the time-order rule
 /// (import::checkTimeOrder: strictly increasing, a single time far ahead refused alone).
 Rows readRows(const std::string& path, const std::string& header, int64_t max_rows) {
-  auto in = common::csv::openWithHeader(path, header);
+  auto in = app::csv::openWithHeader(path, header);
   Rows r;
   std::string text, why;
   std::vector<double> v;
@@ -49,7 +49,7 @@ Rows readRows(const std::string& path, const std::string& header, int64_t max_ro
     if (max_rows > 0 && static_cast<int64_t>(r.size()) >= max_rows) break;
     r.line.push_back(lineno);
     r.utime.emplace_back();
-    if (!common::csv::parseRow(text, 3, v, why)) {
+    if (!app::csv::parseRow(text, 3, v, why)) {
       r.v.emplace_back();
       r.why.push_back(why);
       continue;
@@ -70,7 +70,7 @@ Rows readRows(const std::string& path, const std::string& header, int64_t max_ro
 }  // namespace
 
 void checkImportOptions(const ImportOptions& opt) {
-  auto refuse = [](const std::string& flag, const std::string& why) { throw common::ConfigError(flag, "", why); };
+  auto refuse = [](const std::string& flag, const std::string& why) { throw app::ConfigError(flag, "", why); };
   if (!(opt.wheelbase > 0)) refuse("--wheelbase", fmt::format("{} is not > 0", opt.wheelbase));
   const double h = opt.encoder_offset;
   if (!(h >= kEncoderOffset.lo && h <= kEncoderOffset.hi))
@@ -100,10 +100,10 @@ void checkImportOptions(const ImportOptions& opt) {
 
 ImportResult importVictoriaPark(const ImportOptions& opt) {
   checkImportOptions(opt);
-  if (!opt.output.empty()) common::refuseOutputOverInputs("--output", opt.output, {opt.odometry_csv, opt.gps_csv});
+  if (!opt.output.empty()) app::refuseOutputOverInputs("--output", opt.output, {opt.odometry_csv, opt.gps_csv});
   ImportResult r;
   import::EventLog events;
-  const common::LocalFrame frame(opt.datum);
+  const bus::LocalFrame frame(opt.datum);
   auto refuse = [&](const std::string& file, int64_t line, const std::string& why) {
     r.refusals.push_back({file, line, why});
   };
@@ -224,23 +224,23 @@ std::string importSummary(const ImportOptions& opt, const ImportResult& r, int m
   return s;
 }
 
-int importCommand(const common::SystemConfig& cfg, ImportOptions io, const std::string& dir, int max_refusals,
+int importCommand(const app::SystemConfig& cfg, ImportOptions io, const std::string& dir, int max_refusals,
                   bool overwrite) {
   if (io.odometry_csv.empty() && !dir.empty()) io.odometry_csv = dir + "/vp_odometry.csv";
   if (io.gps_csv.empty() && !dir.empty()) io.gps_csv = dir + "/vp_gps.csv";
   if (io.odometry_csv.empty() || io.gps_csv.empty())
-    throw common::UsageError("give --dir DIR or both --odometry FILE and --gps FILE");
-  common::requireInputFile(io.odometry_csv, "--odometry");
-  common::requireInputFile(io.gps_csv, "--gps");
-  common::refuseExistingOutput(io.output, overwrite);
+    throw app::UsageError("give --dir DIR or both --odometry FILE and --gps FILE");
+  app::requireInputFile(io.odometry_csv, "--odometry");
+  app::requireInputFile(io.gps_csv, "--gps");
+  app::refuseExistingOutput(io.output, overwrite);
   io.datum = cfg.datum;
   io.odometry_channel = cfg.channels.odometry;
   io.gps_channel = cfg.channels.gps;
-  io.stop = [] { return common::stopRequested(); };
+  io.stop = [] { return app::stopRequested(); };
   spdlog::info("importing {} and {} -> {}", io.odometry_csv, io.gps_csv, io.output);
   const auto r = importVictoriaPark(io);
   std::cout << importSummary(io, r, max_refusals);
-  return common::kExitOk;
+  return app::kExitOk;
 }
 
 }  // namespace lcmloc::vp

@@ -7,13 +7,13 @@
 #include "lcmloc/core/types.hpp"
 #include "lcmloc/simconfig/sim_config.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::drivers {
 
-/// The markers the simulated world has (models::makeMarkerMap over the scenario's path).
-core::MarkerMap scenarioMap(const SimSystemConfig& cfg);
+/// The markers the simulated world has (sim::makeMarkerMap over the scenario's path).
+core::MarkerMap scenarioMap(const simconfig::SimSystemConfig& cfg);
 /// Writes scenarioMap(cfg) to path (csv::writeMap: every coordinate as the shortest text that
 /// reads back to the same double, so a replay with the file computes what one with the world's
 /// own markers would). Throws std::runtime_error.
-void writeScenarioMap(const SimSystemConfig& cfg, const std::string& path);
+void writeScenarioMap(const simconfig::SimSystemConfig& cfg, const std::string& path);
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::drivers

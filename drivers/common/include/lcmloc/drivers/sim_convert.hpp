@@ -11,16 +11,16 @@
 #include "lcmloc/sim/vision_sensor.hpp"
 #include "lcmloc/sim/world.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::drivers {
 
-models::TruthState toCore(const lcmloc::ground_truth_t& m);
-lcmloc::ground_truth_t toLcm(const models::TruthState& s, int64_t seq);
-lcmloc::odometry_t toLcm(const models::OdometrySample& s, int64_t seq);
-lcmloc::magruler_t toLcm(const models::RulerReading& r, int64_t seq);
-lcmloc::imu_t toLcm(const models::ImuSample& s, int64_t seq);
+sim::TruthState toCore(const lcmloc::ground_truth_t& m);
+lcmloc::ground_truth_t toLcm(const sim::TruthState& s, int64_t seq);
+lcmloc::odometry_t toLcm(const sim::OdometrySample& s, int64_t seq);
+lcmloc::magruler_t toLcm(const sim::RulerReading& r, int64_t seq);
+lcmloc::imu_t toLcm(const sim::ImuSample& s, int64_t seq);
 /// Local fix -> gps_fix_t (lat/lon about the frame's datum, altitude = datum altitude).
-lcmloc::gps_fix_t toLcm(const models::GpsFixSample& f, const LocalFrame& frame, int64_t seq);
+lcmloc::gps_fix_t toLcm(const sim::GpsFixSample& f, const bus::LocalFrame& frame, int64_t seq);
 /// Bearings to landmarks -> landmark_bearings_t (channel VISION).
-lcmloc::landmark_bearings_t toLcm(const models::VisionSample& s, int64_t seq);
+lcmloc::landmark_bearings_t toLcm(const sim::VisionSample& s, int64_t seq);
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::drivers

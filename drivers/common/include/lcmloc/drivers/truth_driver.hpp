@@ -23,7 +23,7 @@
 #include "lcmloc/core/time_guard.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::drivers {
 
 /// Message time [us] a usable ground-truth sample stays below (and >= 0): the offline tools'
 /// limit (logio::kUtimeLimit, about 146,000 years), far from where utime arithmetic overflows.
@@ -47,8 +47,8 @@ class TruthDriver {
   /// truthProblem and that the time guard takes, in order. restart: makes the driver's model anew
   /// (truth time went back: the simulator started over). extra: the driver's own heartbeat
   /// counters (after the common ones).
-  TruthDriver(Bus& bus, const SystemConfig& cfg, std::string process, OnTruth on_truth,
-              std::function<void()> restart, std::function<Heartbeat::Counters()> extra = nullptr);
+  TruthDriver(bus::Bus& bus, const app::SystemConfig& cfg, std::string process, OnTruth on_truth,
+              std::function<void()> restart, std::function<app::Heartbeat::Counters()> extra = nullptr);
   /// The seq of the next message the driver publishes (and one more "published").
   int64_t nextSeq() { return published_++; }
   int64_t received() const { return received_; }
@@ -63,14 +63,14 @@ class TruthDriver {
  private:
   void onMessage(const std::string& channel, const lcmloc::ground_truth_t& m);
 
-  Bus& bus_;
+  bus::Bus& bus_;
   OnTruth on_truth_;
   std::function<void()> restart_;
-  SeqTracker gaps_;
-  LogThrottle throttle_;
+  bus::SeqTracker gaps_;
+  app::LogThrottle throttle_;
   core::TimeBaseGuard<lcmloc::ground_truth_t> guard_;
   int64_t received_ = 0, published_ = 0, dropped_ = 0, bad_truth_ = 0;
-  Heartbeat heartbeat_;
+  app::Heartbeat heartbeat_;
 };
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::drivers

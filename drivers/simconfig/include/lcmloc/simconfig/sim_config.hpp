@@ -12,18 +12,18 @@
 #include "lcmloc/sim/ins_sim.hpp"
 #include "lcmloc/sim/scenario_config.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::simconfig {
 
-inline constexpr Bounds kImuRateHz{0.1, 10000.0};         ///< imu.rate_hz, lcmloc-imu --rate
-inline constexpr Bounds kVisionRateHz{1e-3, 1000.0};      ///< vision.rate_hz, lcmloc-vision --rate
-inline constexpr Bounds kMarkerCount{0, 100000};          ///< markers.count, lcmloc-montecarlo --marker-spacing
-inline constexpr Bounds kRealtimeFactor{0.0, 1e6};        ///< scenario.realtime_factor, --realtime-factor
-inline constexpr Bounds kInsSimDuration{0.01, 1e6};       ///< ins_sim.duration [s], --duration
-inline constexpr Bounds kOdometryScaleError{-0.5, 0.5};   ///< odometry.scale_error, montecarlo --scale-error
-inline constexpr Bounds kOdometrySteeringBias{-0.5, 0.5}; ///< odometry.steering_bias [rad]
+inline constexpr app::Bounds kImuRateHz{0.1, 10000.0};         ///< imu.rate_hz, lcmloc-imu --rate
+inline constexpr app::Bounds kVisionRateHz{1e-3, 1000.0};      ///< vision.rate_hz, lcmloc-vision --rate
+inline constexpr app::Bounds kMarkerCount{0, 100000};          ///< markers.count, lcmloc-montecarlo --marker-spacing
+inline constexpr app::Bounds kRealtimeFactor{0.0, 1e6};        ///< scenario.realtime_factor, --realtime-factor
+inline constexpr app::Bounds kInsSimDuration{0.01, 1e6};       ///< ins_sim.duration [s], --duration
+inline constexpr app::Bounds kOdometryScaleError{-0.5, 0.5};   ///< odometry.scale_error, montecarlo --scale-error
+inline constexpr app::Bounds kOdometrySteeringBias{-0.5, 0.5}; ///< odometry.steering_bias [rad]
 
 /// Where lcmloc-gps takes its fixes from (the `gps` section; the simulated receiver's model is
-/// models::GpsSensorConfig in the same section).
+/// sim::GpsSensorConfig in the same section).
 struct GpsDriverConfig {
   std::string source = "sim";         ///< "sim" (from GROUND_TRUTH) or "gpsd"
   std::string gpsd_host = "localhost";
@@ -32,12 +32,12 @@ struct GpsDriverConfig {
 };
 
 /// The whole system file: what every process reads (SystemConfig) and the simulation's sections.
-struct SimSystemConfig : SystemConfig {
+struct SimSystemConfig : app::SystemConfig {
   /// The simulated world and its sensors; scenario.landmarks is the top-level `landmarks`
   /// (SystemConfig::landmarks, the landmarks lcmloc-vision observes).
-  models::ScenarioConfig scenario;
+  sim::ScenarioConfig scenario;
   GpsDriverConfig gps_driver;
-  models::InsSimConfig ins_sim;       ///< `ins_sim`: lcmloc-ins-sim and lcmloc-ins-experiment
+  sim::InsSimConfig ins_sim;       ///< `ins_sim`: lcmloc-ins-sim and lcmloc-ins-experiment
 };
 
 /// Reads a system config file with its simulation sections. Missing sections take defaults;
@@ -48,7 +48,7 @@ SimSystemConfig parseSimSystemConfig(const std::string& yaml_text, const std::st
 
 /// A simulated sensor samples GROUND_TRUTH: its rate (key) cannot be above vehicle.rate_hz.
 /// Throws ConfigError.
-void checkSampledRate(double rate_hz, const models::ScenarioConfig& sc, const std::string& file,
+void checkSampledRate(double rate_hz, const sim::ScenarioConfig& sc, const std::string& file,
                       const std::string& key);
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::simconfig

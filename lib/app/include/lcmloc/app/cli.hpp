@@ -9,7 +9,7 @@
 
 #include "lcmloc/app/exit_codes.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::app {
 
 /// The project's version (CMake's project(VERSION)), which --version prints after the program's name.
 std::string version();
@@ -49,4 +49,4 @@ CLI::Option* addOverwriteFlag(CLI::App& app, bool& overwrite);
 int runProcess(CLI::App& app, int argc, char** argv, const CommonOptions& opts,
                const std::string& process_name, const std::function<int()>& body);
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::app

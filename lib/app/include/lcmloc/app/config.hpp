@@ -17,7 +17,7 @@
 #include "lcmloc/core/engine.hpp"
 #include "lcmloc/core/filter.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::app {
 
 class ConfigError : public std::runtime_error {
  public:
@@ -109,7 +109,7 @@ struct SystemConfig {
   ChannelConfig channels;
   FusionConfig fusion;
   LoggerConfig logger;
-  Datum datum;                        ///< origin of the local frame for lat/lon conversions
+  bus::Datum datum;                        ///< origin of the local frame for lat/lon conversions
   /// The top-level `landmarks`, in the file's order: the world's landmarks (lcmloc-vision
   /// observes them), and fusion.landmarks when that is not given.
   std::vector<MapLandmark> landmarks;
@@ -147,4 +147,4 @@ core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterC
 /// track per filter). Throws ConfigError naming key[i].
 void checkFilterList(const std::vector<std::string>& types, const std::string& file, const std::string& key);
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::app

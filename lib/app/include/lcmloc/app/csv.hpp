@@ -7,7 +7,7 @@
 
 #include "lcmloc/core/types.hpp"
 
-namespace lcmloc::common::csv {
+namespace lcmloc::app::csv {
 
 /// Fields of one line split at commas; a trailing '\r' is dropped, spaces and tabs around each
 /// field are trimmed. An empty line gives no fields.
@@ -54,4 +54,4 @@ long farMarker(const core::MarkerMap& map, const MapSpread& spread);
 /// same double, so loadMap gives map again exactly). Throws std::runtime_error.
 void writeMap(const std::string& path, const core::MarkerMap& map);
 
-}  // namespace lcmloc::common::csv
+}  // namespace lcmloc::app::csv

@@ -2,7 +2,7 @@
 // The exit codes every lcmloc program shares, and the usage error that exits 2.
 #include <stdexcept>
 
-namespace lcmloc::common {
+namespace lcmloc::app {
 
 /// Exit codes shared by every executable (runProcess states them in every --help):
 ///  0 ok; 1 a runtime error; 2 a usage or configuration error: a bad command line, a bad config
@@ -26,4 +26,4 @@ class UsageError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::app

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <string>
 
-namespace lcmloc::common {
+namespace lcmloc::app {
 
 /// The directory of the shipped configuration files: $LCMLOC_CONFIG_DIR when set, else
 /// <prefix>/share/lcmloc/config, <prefix> being the directory above the running program's
@@ -35,4 +35,4 @@ void refuseExistingOutput(const std::string& path, bool overwrite, const std::st
 /// and is not empty is refused first (refuseExistingOutput).
 void prepareOutputDir(const std::string& dir, bool overwrite);
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::app

@@ -9,7 +9,7 @@
 
 #include "lcmloc/bus/transport.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::app {
 
 /// Publishes heartbeat_t on the heartbeat channel once per wall second (and at the first tick).
 class Heartbeat {
@@ -17,14 +17,14 @@ class Heartbeat {
   using Counters = std::vector<std::pair<std::string, int64_t>>;
   /// [s] between two heartbeats (lcmloc-launcher's heartbeat_timeout is at least twice this).
   static constexpr double kPeriodSeconds = 1.0;
-  Heartbeat(MessageBus& bus, std::string channel, std::string process,
+  Heartbeat(bus::MessageBus& bus, std::string channel, std::string process,
             std::function<Counters()> counters = nullptr);
   /// Publishes if a second of wall time has passed since the last heartbeat (or none was sent).
   void tick();
   /// Publishes now with the given state ("starting", "running", "stopping").
   void publish(const std::string& state);
  private:
-  MessageBus& bus_;
+  bus::MessageBus& bus_;
   std::string channel_, process_;
   std::function<Counters()> counters_;
   int64_t seq_ = 0;
@@ -32,4 +32,4 @@ class Heartbeat {
   bool sent_ = false;
 };
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::app

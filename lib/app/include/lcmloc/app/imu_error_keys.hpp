@@ -4,7 +4,7 @@
 // simulator draws (first-order Markov + white noise per axis).
 #include "lcmloc/app/yaml_reader.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::app {
 
 template <class Config>
 void readImuErrorModel(KeyReader& r, Config& c) {
@@ -16,4 +16,4 @@ void readImuErrorModel(KeyReader& r, Config& c) {
   r.get("accel_white", c.accel_white, 0.0, 1.0, "g");
 }
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::app

@@ -4,7 +4,7 @@
 #include <map>
 #include <string>
 
-namespace lcmloc::common {
+namespace lcmloc::app {
 
 /// Log throttle for problems that can repeat per message (gaps, rejected inputs): allow() is true
 /// for the first 5 occurrences of each key, then for one in a thousand (the counts themselves
@@ -19,4 +19,4 @@ class LogThrottle {
   std::map<std::string, int64_t> counts_;
 };
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::app

@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <functional>
 
-namespace lcmloc::common {
+namespace lcmloc::app {
 
 /// Paces simulated time against wall time: sim time t is due at wall start + (t - t0) / factor.
 /// factor <= 0 means as fast as possible.
@@ -21,4 +21,4 @@ class Pacer {
   std::chrono::steady_clock::time_point wall0_;
 };
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::app

@@ -2,7 +2,7 @@
 // SIGINT/SIGTERM -> a stop flag that the programs' loops poll.
 #include <atomic>
 
-namespace lcmloc::common {
+namespace lcmloc::app {
 
 /// Installs SIGINT/SIGTERM handlers (no SA_RESTART, so a blocking handleTimeout returns early).
 void installSignalHandlers();
@@ -13,4 +13,4 @@ void requestStop();
 /// Signal number that requested the stop (0 if none).
 int stopSignal();
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::app

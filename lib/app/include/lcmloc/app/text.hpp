@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <string>
 
-namespace lcmloc::common {
+namespace lcmloc::app {
 
 /// text as a terminal or a log line may show it: every control character (bytes below 0x20,
 /// 0x7f, and the C1 controls U+0080..U+009F, which some terminals take as escape sequences) and
@@ -46,4 +46,4 @@ inline std::string printable(const std::string& text) {
   return out;
 }
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::app

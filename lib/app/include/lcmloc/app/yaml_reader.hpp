@@ -13,7 +13,7 @@
 
 #include "lcmloc/app/config.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::app {
 
 namespace yaml_detail {
 inline std::string join(const std::vector<std::string>& v, const char* sep = ", ") {
@@ -177,4 +177,4 @@ class KeyReader {
 
 using yaml_detail::KeyReader;
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::app

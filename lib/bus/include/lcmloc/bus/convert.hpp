@@ -19,7 +19,7 @@
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::bus {
 
 /// Returns nullopt and sets why when a field is NaN/Inf or out of range.
 std::optional<core::OdometryInput> toCore(const lcmloc::odometry_t& m, std::string* why = nullptr);
@@ -82,4 +82,4 @@ Converted toInput(const lcmloc::beacon_range_t& m, const InputContext& ctx, core
 Converted toInput(const lcmloc::landmark_bearings_t& m, const InputContext& ctx, core::InputPayload& out,
                   std::string& why);
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::bus

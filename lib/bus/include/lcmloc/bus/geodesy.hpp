@@ -4,7 +4,7 @@
 // -> lat/lon), the fusion daemon (lat/lon -> local GpsInput) and the Victoria Park import.
 #include <memory>
 
-namespace lcmloc::common {
+namespace lcmloc::bus {
 
 struct Datum {
   double latitude = -33.8830;   ///< [deg] (default: Sydney, near Victoria Park)
@@ -30,4 +30,4 @@ class LocalFrame {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::bus

@@ -21,7 +21,7 @@
 
 #include "lcmloc/bus/transport.hpp"
 
-namespace lcmloc::common {
+namespace lcmloc::bus {
 
 class MemoryBus : public MessageBus {
  public:
@@ -98,4 +98,4 @@ class MemoryBus : public MessageBus {
   int64_t recv_utime_ = 0;
 };
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::bus

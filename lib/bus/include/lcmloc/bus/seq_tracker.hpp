@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-namespace lcmloc::common {
+namespace lcmloc::bus {
 
 /// What one message's seq says about its channel: `missing` messages before the one with seq
 /// `before_seq`, a new sequence (`restarted`), and/or a seq that was ignored (`ignored`).
@@ -92,4 +92,4 @@ class SeqTracker {
   int64_t total_ = 0, ignored_ = 0;
 };
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::bus

@@ -15,7 +15,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 
-namespace lcmloc::common {
+namespace lcmloc::bus {
 
 class TransportError : public std::runtime_error {
  public:
@@ -159,4 +159,4 @@ class Bus : public MessageBus {
 /// Wall clock in microseconds since the epoch (heartbeats, log timestamps; never fusion logic).
 int64_t wallMicros();
 
-}  // namespace lcmloc::common
+}  // namespace lcmloc::bus

@@ -11,7 +11,7 @@
 
 #include "lcmloc/core/types.hpp"
 
-namespace lcmloc::models {
+namespace lcmloc::sim {
 
 struct TruthState;
 
@@ -111,4 +111,4 @@ class GpsSensor {
   int64_t t0_ = 0, next_utime_ = 0;
 };
 
-}  // namespace lcmloc::models
+}  // namespace lcmloc::sim

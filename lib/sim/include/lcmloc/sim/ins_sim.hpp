@@ -16,7 +16,7 @@
 #include "lcmloc/sim/gnss_sensors.hpp"
 #include "lcmloc/sim/world.hpp"
 
-namespace lcmloc::models {
+namespace lcmloc::sim {
 
 namespace ins = core::ins;
 
@@ -102,4 +102,4 @@ class InsSim {
   double scale_markov_ = 0.0;
 };
 
-}  // namespace lcmloc::models
+}  // namespace lcmloc::sim

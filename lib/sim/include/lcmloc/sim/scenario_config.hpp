@@ -9,7 +9,7 @@
 #include "lcmloc/sim/gnss_sensors.hpp"
 #include "lcmloc/sim/vision_sensor.hpp"
 
-namespace lcmloc::models {
+namespace lcmloc::sim {
 
 /// Reference path: starts at (x0, y0) heading theta0 and is a sequence of segments, each a
 /// length [m] and a constant curvature [1/m] (0 = straight).
@@ -104,4 +104,4 @@ double stopArcLength(const ScenarioConfig& sc, double path_length);
 /// Derives the seed of a named component from the master seed (deterministic, stable).
 uint64_t componentSeed(uint64_t master, const std::string& component);
 
-}  // namespace lcmloc::models
+}  // namespace lcmloc::sim

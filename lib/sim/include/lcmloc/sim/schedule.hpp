@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <limits>
 
-namespace lcmloc::models {
+namespace lcmloc::sim {
 
 /// a + b, saturated to the int64 range instead of overflowing (undefined behaviour) where a
 /// message time is corrupt.
@@ -43,4 +43,4 @@ inline bool scheduleDue(int64_t& next, int64_t now, int64_t period) {
   return true;
 }
 
-}  // namespace lcmloc::models
+}  // namespace lcmloc::sim

@@ -14,7 +14,7 @@
 
 #include "lcmloc/core/landmark_fix.hpp"
 
-namespace lcmloc::models {
+namespace lcmloc::sim {
 
 struct TruthState;
 
@@ -86,4 +86,4 @@ class VisionSensor {
   int64_t next_utime_ = 0;
 };
 
-}  // namespace lcmloc::models
+}  // namespace lcmloc::sim

@@ -11,7 +11,7 @@
 #include "lcmloc/core/types.hpp"
 #include "lcmloc/sim/scenario_config.hpp"
 
-namespace lcmloc::models {
+namespace lcmloc::sim {
 
 /// Reference path as a function of arc length.
 class Path {
@@ -139,4 +139,4 @@ class FaultInjector {
   std::shared_ptr<const MagneticRuler> mapper_;  // peak mapping of the synthesised readings
 };
 
-}  // namespace lcmloc::models
+}  // namespace lcmloc::sim

@@ -22,7 +22,7 @@
 
 namespace lcmloc::ctl {
 
-/// lcmloc-ctl's own exit codes, after the shared ones (common::ExitCode, 0 to 3).
+/// lcmloc-ctl's own exit codes, after the shared ones (app::ExitCode, 0 to 3).
 inline constexpr int kExitNoAnswer = 4, kExitRefused = 5;
 
 /// One command as given on the command line.
@@ -43,9 +43,9 @@ std::string paramsToYaml(const std::vector<std::string>& items);
 lcmloc::fusion_control_t makeCommand(const Command& c);
 
 /// Sends cmd on the bus at lcm_url at utime (< 0: one reorder window after the daemon's newest
-/// time seen within timeout [s]) and prints the daemon's answer. Returns common::kExitOk
+/// time seen within timeout [s]) and prints the daemon's answer. Returns app::kExitOk
 /// (acknowledged), kExitRuntimeError (no daemon on the bus), kExitRefused or kExitNoAnswer.
-int send(const common::SystemConfig& cfg, const std::string& lcm_url, lcmloc::fusion_control_t cmd, double timeout,
+int send(const app::SystemConfig& cfg, const std::string& lcm_url, lcmloc::fusion_control_t cmd, double timeout,
          int64_t utime);
 
 }  // namespace lcmloc::ctl

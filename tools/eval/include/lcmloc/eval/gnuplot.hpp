@@ -15,7 +15,7 @@ namespace lcmloc::eval {
 /// backslashes literally.
 std::string gnuplotQuote(const std::string& text);
 
-/// common::printable(text): every control character (C0, DEL, C1) and invalid UTF-8 byte as '?'.
+/// app::printable(text): every control character (C0, DEL, C1) and invalid UTF-8 byte as '?'.
 std::string withoutControlCharacters(std::string text);
 
 /// True when an executable named exe is in PATH.

@@ -18,9 +18,9 @@ std::string replayedName(const std::string& type);
 /// Replays the log at `path` with cfg once per type (cfg.fusion.filter with that type, no
 /// shadows, every pose published) and adds to `log` the track replayedName(type) and its gate
 /// decisions (filter replayedName(type)). The replay's output log is written in work_dir and
-/// removed. Throws common::ConfigError / std::invalid_argument on a bad filter list,
+/// removed. Throws app::ConfigError / std::invalid_argument on a bad filter list,
 /// std::runtime_error when a replay fails; stop (optional) ends the replays early.
-void addReplayedFilters(TrajectoryLog& log, const std::string& path, const common::SystemConfig& cfg,
+void addReplayedFilters(TrajectoryLog& log, const std::string& path, const app::SystemConfig& cfg,
                         const std::vector<std::string>& types, const std::string& work_dir,
                         const std::atomic<bool>* stop = nullptr);
 

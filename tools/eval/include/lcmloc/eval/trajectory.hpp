@@ -71,7 +71,7 @@ struct TrajectoryLogOptions {
   /// them with the nearest landmark; in a recording, e.g. other robots seen) ("" = none).
   std::string landmark_channel = "LANDMARKS";
   /// Needed only when the truth channel holds gps_fix_t (lat/lon -> local x east, y north).
-  std::optional<common::Datum> datum;
+  std::optional<bus::Datum> datum;
 };
 
 /// One fault_event_t: the measurement (channel, measurement_seq) is a known fault.

@@ -1,7 +1,7 @@
 #pragma once
 // The fit's input from an LCM log (any of ours: an import, a recording): the truth, odometry,
 // landmark, beacon and GPS channels of a system config, each message checked and converted as
-// the fusion daemon does (common::toCore); the map from the config's fusion.map_file.
+// the fusion daemon does (bus::toCore); the map from the config's fusion.map_file.
 #include <string>
 
 #include "lcmloc/app/config.hpp"
@@ -17,6 +17,6 @@ struct LogRead {
 };
 
 /// Throws std::runtime_error when the log cannot be read.
-LogRead readRecording(const std::string& log, const common::SystemConfig& cfg);
+LogRead readRecording(const std::string& log, const app::SystemConfig& cfg);
 
 }  // namespace lcmloc::fit

@@ -37,7 +37,7 @@ struct Result {
 /// run (-1: none).
 int64_t settledFrom(const std::vector<scenario::TrackPoint>& track, const Options& opt);
 
-Result run(const models::ScenarioConfig& sc, const std::vector<core::FilterConfig>& filters,
+Result run(const sim::ScenarioConfig& sc, const std::vector<core::FilterConfig>& filters,
            const Options& opt);
 
 /// report.json + data files + plot.gp + fig1a_tracks.png, fig1b_error.png (gnuplot) in dir.

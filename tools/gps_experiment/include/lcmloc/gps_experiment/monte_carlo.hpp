@@ -48,10 +48,10 @@ struct McResult {
 };
 
 /// The path's segments repeated until the drive at the vehicle's speed lasts min_drive_s.
-models::PathConfig extendedPath(const models::ScenarioConfig& sc, double min_drive_s);
+sim::PathConfig extendedPath(const sim::ScenarioConfig& sc, double min_drive_s);
 
 /// Runs every seed at every rate with every filter. progress(done, total) after each run.
-McResult monteCarlo(const models::ScenarioConfig& sc, const std::vector<core::FilterConfig>& filters,
+McResult monteCarlo(const sim::ScenarioConfig& sc, const std::vector<core::FilterConfig>& filters,
                     const MonteCarloOptions& opt, const std::function<void(int, int)>& progress = nullptr);
 
 /// montecarlo.json in dir (every run and the distribution per rate and filter).

@@ -41,7 +41,7 @@ std::vector<TimeVerdict> checkTimeOrder(const std::vector<std::optional<int64_t>
 std::string timeOrderReason(const std::vector<std::optional<int64_t>>& utimes, std::size_t i, const TimeVerdict& v,
                             bool strict, const std::function<std::string(std::size_t)>& text);
 
-/// Throws common::ConfigError naming flag when value (YAML, e.g. "[1e-5, 2e-3]") is not what a
+/// Throws app::ConfigError naming flag when value (YAML, e.g. "[1e-5, 2e-3]") is not what a
 /// system config accepts for fusion.filter.<key>: a command-line value bound for a generated
 /// config.yaml is refused with the flag's name, not later by the replay naming the file.
 void checkFilterValue(const std::string& flag, const std::string& key, const std::string& value);

@@ -28,8 +28,8 @@ struct ImportOptions {
   double wheelbase = 0.0;                ///< L [m] for speed,steering odometry (required there)
   std::string filter;                    ///< filter type of config.yaml ("" = chosen from the data)
   std::optional<core::Vec3> initial_pose;  ///< x, y, theta; default: first ground-truth row, else 0
-  common::Datum datum;                   ///< lat/lon <-> local frame (GPS in x,y is converted with it)
-  common::ChannelConfig channels;
+  bus::Datum datum;                   ///< lat/lon <-> local frame (GPS in x,y is converted with it)
+  app::ChannelConfig channels;
 };
 
 struct Refusal {
@@ -72,15 +72,15 @@ TimeUnit detectTimeUnit(const std::vector<double>& times);
 /// Absolute (Unix epoch) when the first time is at least 1e9 s (2001-09-09), else relative.
 TimeBase detectTimeBase(int64_t first_utime);
 
-/// Imports opt.dir (every *.csv file in it). Throws common::UsageError, before anything is
+/// Imports opt.dir (every *.csv file in it). Throws app::UsageError, before anything is
 /// written, naming every *.csv file that is none of the formats (an unknown column, beacons
 /// without an id, no time column, ...) with its columns and the formats it could have been;
 /// std::runtime_error for an unreadable directory or file, a bad map file, two map files, two
 /// odometry, IMU or ground-truth files that overlap in time (files that do not are joined one
 /// after the other; gps, landmarks and beacons may come from several), a missing --wheelbase
 /// for speed,steering odometry, files whose clocks disagree (absolute and relative) or a
-/// config.yaml that the replay's loader (common::parseSystemConfig) would refuse (checked before
-/// anything is written); common::ConfigError (naming the flag) for an option config.yaml would
+/// config.yaml that the replay's loader (app::parseSystemConfig) would refuse (checked before
+/// anything is written); app::ConfigError (naming the flag) for an option config.yaml would
 /// not accept or an output file that is one of the input files. Bad rows (a bad sigma among
 /// them) are refused and listed, never fatal; the time column follows the time-order rule of
 /// checkTimeOrder (import/checks.hpp).

@@ -27,8 +27,8 @@ void addImportOptions(CLI::App& app, ImportCommand& c);
 
 /// Imports c.io.dir with the datum and channel names of cfg and prints the summary on stdout.
 /// Throws UsageError (exit 2) for an existing output without c.overwrite (before anything is
-/// read) and ConfigError for a bad option; returns common::kExitOk, or kExitRuntimeError when
+/// read) and ConfigError for a bad option; returns app::kExitOk, or kExitRuntimeError when
 /// nothing usable was read.
-int runImport(const common::SystemConfig& cfg, ImportCommand c);
+int runImport(const app::SystemConfig& cfg, ImportCommand c);
 
 }  // namespace lcmloc::import

@@ -23,7 +23,7 @@ struct MagnetGridCommand {
 };
 
 /// Throws UsageError (an existing output without overwrite, a missing run file), ConfigError
-/// (a run given twice). Returns common::kExitOk.
+/// (a run given twice). Returns app::kExitOk.
 int runMagnetGridCommand(const MagnetGridCommand& c);
 
 }  // namespace lcmloc::import

@@ -24,7 +24,7 @@ struct CommandOptions {
 
 /// Runs the experiment with cfg's ins_sim, fusion.filter (and vision, landmarks, fusion.fix for
 /// fixes). Throws ConfigError (fixes without a landmark map), UsageError (an existing output
-/// without overwrite). Returns common::kExitOk, or kExitConfigError for an unknown start.
-int runCommand(const common::SimSystemConfig& cfg, const CommandOptions& o);
+/// without overwrite). Returns app::kExitOk, or kExitConfigError for an unknown start.
+int runCommand(const simconfig::SimSystemConfig& cfg, const CommandOptions& o);
 
 }  // namespace lcmloc::ins_experiment

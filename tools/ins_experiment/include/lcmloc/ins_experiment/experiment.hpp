@@ -24,8 +24,8 @@ struct Options {
   /// `landmarks` from the truth and every observation with three bearings goes to the engine as
   /// VISION, re-initializing odo_ins and odo_ins_uncal; the run reports the error before/after.
   bool fixes = false;
-  models::VisionSensorConfig vision;
-  std::vector<models::Landmark> landmarks;
+  sim::VisionSensorConfig vision;
+  std::vector<sim::Landmark> landmarks;
   uint64_t vision_seed = 5;
   core::landmark::FixOptions fix;  ///< the engine's fix options and gate (`fusion.landmark_fix`)
   core::LandmarkFixGate fix_gate;
@@ -71,18 +71,18 @@ struct RunResult {
 };
 
 /// Called with every simulation step (e.g. to write the sensor log).
-using StepSink = std::function<void(const models::InsSimStep&)>;
+using StepSink = std::function<void(const sim::InsSimStep&)>;
 
 /// One run of the scenario (cfg.start decides hard or gentle start). base: fusion.filter (its
 /// type is replaced by odo_ins / odo_ins_uncal; ins.latitude/longitude/height and the initial
 /// heading follow the simulation). Progress: called every 10 % of the run.
-RunResult run(const std::string& name, const models::InsSimConfig& cfg, const core::FilterConfig& base,
+RunResult run(const std::string& name, const sim::InsSimConfig& cfg, const core::FilterConfig& base,
               int64_t start_utime, const Options& opt, const StepSink& sink = {},
               const std::function<void(double)>& progress = {});
 
 /// report.json, data files, plot.gp, fig1_scale.png, fig1b_scale_run.png, fig2_position.png.
 /// Returns false when gnuplot failed (the report is written anyway).
-bool writeReport(const std::vector<RunResult>& runs, const models::InsSimConfig& cfg, const Options& opt,
+bool writeReport(const std::vector<RunResult>& runs, const sim::InsSimConfig& cfg, const Options& opt,
                  const std::string& dir);
 
 }  // namespace lcmloc::ins_experiment

@@ -16,7 +16,7 @@ struct CommandOptions {
   std::string output = "out/landmark_experiment";  ///< output directory
   bool overwrite = false;   ///< replace the files of a directory that is not empty
   uint64_t seed = 0;        ///< 0: vision.seed, else derived from scenario.seed
-  double heading_arcmin = Options().ins_heading_error / models::kArcSec / 60.0;  ///< INS heading error [arcmin]
+  double heading_arcmin = Options().ins_heading_error / sim::kArcSec / 60.0;  ///< INS heading error [arcmin]
   std::vector<double> ins_offset{Options().ins_offset.x(), Options().ins_offset.y()};  ///< east, north [m]
   std::vector<double> off_centre{Options().off_centre.x(), Options().off_centre.y()};  ///< of the circumradius
   std::string log;          ///< a recorded run to solve instead of the Monte Carlo ("" = none)
@@ -27,11 +27,11 @@ struct CommandOptions {
 /// non-finite messages are counted and skipped; a VISION message with no truth at its time too.
 /// A damaged log is read up to and past the damage (eval's reader); each damaged place is logged
 /// and *damaged set. Throws std::runtime_error when no observation has truth.
-std::vector<Observation> readObservations(const std::string& path, const common::ChannelConfig& ch, bool* damaged);
+std::vector<Observation> readObservations(const std::string& path, const app::ChannelConfig& ch, bool* damaged);
 
 /// Runs the experiment with cfg's `vision` (and `landmarks` for a log). Throws ConfigError (an
 /// off-centre position outside 0.9 circumradius, a log without a map), UsageError (an existing
-/// output without overwrite). Returns common::kExitOk, or kExitInputDamaged for a damaged log.
-int runCommand(const common::SimSystemConfig& cfg, CommandOptions o);
+/// output without overwrite). Returns app::kExitOk, or kExitInputDamaged for a damaged log.
+int runCommand(const simconfig::SimSystemConfig& cfg, CommandOptions o);
 
 }  // namespace lcmloc::landmark_experiment

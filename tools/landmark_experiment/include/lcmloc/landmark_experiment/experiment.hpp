@@ -1,6 +1,6 @@
 #pragma once
 // Fig. 5 of seeds/004 §III as a Monte Carlo experiment: three landmarks at the corners of an
-// equilateral triangle, bearings from the vision model (models::VisionSensor, the code of
+// equilateral triangle, bearings from the vision model (sim::VisionSensor, the code of
 // lcmloc-vision), position and heading solved by the error-triangle method and by damped least
 // squares (lcmloc::core::landmark), errors against the Cramér-Rao bound. No LCM, no clock.
 #include <cstdint>
@@ -25,12 +25,12 @@ struct Options {
   Eigen::Vector2d ins_offset{500.0, -500.0};  ///< INS position error (east, north) [m]
   /// INS heading error [rad] in the paper's sense (heading clockwise from north, eq. 9):
   /// -30' puts the INS heading 30' counter-clockwise of the truth.
-  double ins_heading_error = -30.0 * 60.0 * models::kArcSec;
+  double ins_heading_error = -30.0 * 60.0 * sim::kArcSec;
   double true_heading = 0.0;           ///< true heading, clockwise from north [rad] (§III: north)
   /// Off-centre case: vehicle at centre + fraction * circumradius (east, north).
   Eigen::Vector2d off_centre{0.3, -0.2};
   double paper_position = 0.1;         ///< §III: errors per axis "mostly less than 0.1 m" [m]
-  double paper_heading_2sigma = 20.0 * models::kArcSec;  ///< §III: 20" (2 sigma) [rad]
+  double paper_heading_2sigma = 20.0 * sim::kArcSec;  ///< §III: 20" (2 sigma) [rad]
   int histogram_bins = 40;
   /// Called with (done, total) runs over all cases; may be empty.
   std::function<void(int64_t, int64_t)> progress;
@@ -72,7 +72,7 @@ struct CaseResult {
 
 struct Result {
   Options options;
-  models::VisionSensorConfig vision;
+  sim::VisionSensorConfig vision;
   double sigma_effective = 0;          ///< sqrt(std^2 + resolution^2 / 12) [rad]
   std::vector<CaseResult> cases;       ///< from_vehicle/apart x centre/off_centre
   /// Which reading the paper's position figure fits: the centre case whose fraction of runs
@@ -86,16 +86,16 @@ struct Result {
 
 /// Landmarks (ids 1, 2, 3) of a reading: equilateral triangle centred on the origin, first
 /// corner due north; circumradius distance (from vehicle) or distance / sqrt(3) (apart).
-std::vector<models::Landmark> triangleLandmarks(Reading r, double distance);
+std::vector<sim::Landmark> triangleLandmarks(Reading r, double distance);
 
 /// Runs the experiment. Throws std::invalid_argument for bad options or vision config.
-Result run(const models::VisionSensorConfig& vision, const Options& opt);
+Result run(const sim::VisionSensorConfig& vision, const Options& opt);
 
 /// One recorded observation (e.g. VISION of a multi-process run) with the true pose at its time.
 struct Observation {
   int64_t utime = 0;
   double x = 0, y = 0, heading = 0;  ///< true pose, heading CCW from east [rad]
-  models::VisionSample sample;
+  sim::VisionSample sample;
 };
 
 /// The fix on recorded observations: the INS pose of each is the truth plus opt.ins_offset and
@@ -103,7 +103,7 @@ struct Observation {
 /// the observed poses (sigma: the observations' bearing_std). Observations without exactly three
 /// bearings are refused by the fix and counted. Throws std::invalid_argument for a bad map or
 /// an empty list.
-Result runObservations(const std::vector<models::Landmark>& map, const std::vector<Observation>& obs,
+Result runObservations(const std::vector<sim::Landmark>& map, const std::vector<Observation>& obs,
                        const Options& opt);
 
 /// report.json, per-case data files and figures (gnuplot) into dir. Returns false when gnuplot

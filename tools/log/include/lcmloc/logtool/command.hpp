@@ -25,9 +25,9 @@ struct LogCommand {
 /// into c; exactly one subcommand is required, and the one parsed is stored in c.subcommand.
 void addLogOptions(CLI::App& app, LogCommand& c);
 
-/// Runs the subcommand c.subcommand. Throws common::ConfigError for a missing or unreadable log
+/// Runs the subcommand c.subcommand. Throws app::ConfigError for a missing or unreadable log
 /// and UsageError (exit 2) for an output over the log or an existing output without
-/// c.overwrite; returns common::kExitOk or common::kExitInputDamaged (log_tool.hpp).
+/// c.overwrite; returns app::kExitOk or app::kExitInputDamaged (log_tool.hpp).
 int runLogCommand(const LogCommand& c);
 
 }  // namespace lcmloc::logtool

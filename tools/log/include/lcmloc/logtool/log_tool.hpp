@@ -2,8 +2,8 @@
 // lcmloc-log's subcommands, for its command line (tools/log/main.cpp) and the tests. Each reads
 // a truncated or damaged log up to and past the damage, reports every damaged place (a warning
 // with its byte offset and event number) and returns the process's exit code:
-// common::kExitOk, or common::kExitInputDamaged when the log is damaged (the work is done with
-// the intact events). Bad arguments throw common::ConfigError; a failed write,
+// app::kExitOk, or app::kExitInputDamaged when the log is damaged (the work is done with
+// the intact events). Bad arguments throw app::ConfigError; a failed write,
 // std::runtime_error.
 #include <cstdint>
 #include <optional>

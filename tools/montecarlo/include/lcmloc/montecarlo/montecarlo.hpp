@@ -30,7 +30,7 @@ struct Options {
 void addOptions(CLI::App& app, Options& o);
 
 /// Runs the Monte Carlo and writes the report to o.out. Returns the exit code (1 when stopped
-/// before all runs were done); throws common::ConfigError on a bad option or config.
+/// before all runs were done); throws app::ConfigError on a bad option or config.
 int run(const Options& o);
 
 }  // namespace lcmloc::montecarlo

@@ -21,6 +21,6 @@ struct BenchOptions {
 
 /// Generates the synthetic log, measures read+decode, dead_reckoning and ukf_gated replay
 /// (repetitions each, interleaved), prints medians and ratios, writes dir/bench.json.
-int runBench(const common::SimSystemConfig& cfg, const BenchOptions& opts);
+int runBench(const simconfig::SimSystemConfig& cfg, const BenchOptions& opts);
 
 }  // namespace lcmloc::replay

@@ -25,12 +25,12 @@ struct CommandOptions {
 };
 
 /// cfg with --filter, --no-shadow and --shadow applied. Throws ConfigError for an unknown filter.
-common::SimSystemConfig applyOverrides(common::SimSystemConfig cfg, const CommandOptions& o);
+simconfig::SimSystemConfig applyOverrides(simconfig::SimSystemConfig cfg, const CommandOptions& o);
 
 /// Replays o.input into o.output (or runs the benchmark) with cfg and prints the summary.
 /// Throws UsageError (exit 2) without an input or an output, for a missing input, and for an
-/// existing output without o.overwrite. Returns common::kExitOk, kExitRuntimeError (the output
+/// existing output without o.overwrite. Returns app::kExitOk, kExitRuntimeError (the output
 /// could not be written) or kExitInputDamaged.
-int runCommand(const common::SimSystemConfig& cfg, const CommandOptions& o);
+int runCommand(const simconfig::SimSystemConfig& cfg, const CommandOptions& o);
 
 }  // namespace lcmloc::replay

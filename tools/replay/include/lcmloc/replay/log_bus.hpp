@@ -1,5 +1,5 @@
 #pragma once
-// A common::MessageBus over log files: subscriptions are fed from the events of an input log
+// A bus::MessageBus over log files: subscriptions are fed from the events of an input log
 // (dispatch), publications are written to an output log. The offline replay runs the fusion
 // daemon's own code (fusion::FusionDaemon) on it, so the bytes it writes are the bytes the daemon
 // publishes live.
@@ -22,7 +22,7 @@ namespace lcmloc::replay {
 /// The utime of an lcmloc message (big-endian int64 after the fingerprint); fallback if shorter.
 int64_t messageUtime(const void* data, std::size_t size, int64_t fallback);
 
-class LogBus : public common::MessageBus {
+class LogBus : public bus::MessageBus {
  public:
   /// output empty: publications are counted and dropped. Throws std::runtime_error when the
   /// output cannot be created.

@@ -62,11 +62,11 @@ struct ReplayResult {
 
 /// Replays opts.input with cfg (filter, shadows, channels, reorder window). Throws
 /// std::runtime_error when the input cannot be opened or the output cannot be created,
-/// std::invalid_argument / common::ConfigError on a bad filter configuration.
-ReplayResult replayLog(const common::SystemConfig& cfg, const ReplayOptions& opts);
+/// std::invalid_argument / app::ConfigError on a bad filter configuration.
+ReplayResult replayLog(const app::SystemConfig& cfg, const ReplayOptions& opts);
 
 /// Output channels of the daemon under cfg: POSE, POSE_<TYPE> of each shadow, GATE, FUSION_STATUS.
-bool isDaemonOutput(const common::ChannelConfig& ch, const std::string& channel);
+bool isDaemonOutput(const app::ChannelConfig& ch, const std::string& channel);
 
 /// A synthetic log (for the benchmark and tests): the vehicle drives laps of an oval track
 /// (two straights joined by half circles) with markers along the first lap, for duration_s of
@@ -85,11 +85,11 @@ struct OvalTrack {
 };
 /// The scenario of the synthetic log (path, markers) from base: the same oval for the replay's
 /// marker map. laps is chosen so that the track is long enough for duration_s.
-models::ScenarioConfig ovalScenario(const models::ScenarioConfig& base, const OvalTrack& track, double duration_s);
+sim::ScenarioConfig ovalScenario(const sim::ScenarioConfig& base, const OvalTrack& track, double duration_s);
 /// progress (optional) is called every 10 s of message time with the fraction of duration_s
 /// written; it returns false to stop writing there.
-SyntheticLogStats writeSyntheticLog(const models::ScenarioConfig& scenario, double duration_s, const std::string& path,
-                                    const common::ChannelConfig& channels,
+SyntheticLogStats writeSyntheticLog(const sim::ScenarioConfig& scenario, double duration_s, const std::string& path,
+                                    const app::ChannelConfig& channels,
                                     const std::function<bool(double)>& progress = {});
 
 }  // namespace lcmloc::replay

@@ -13,9 +13,9 @@
 
 namespace lcmloc::scenario {
 
-using models::GpsFixSample;
-using models::ScenarioConfig;
-using models::TruthState;
+using sim::GpsFixSample;
+using sim::ScenarioConfig;
+using sim::TruthState;
 
 struct TrackPoint {
   int64_t utime = 0;

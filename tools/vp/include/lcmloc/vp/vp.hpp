@@ -16,7 +16,7 @@ namespace lcmloc::vp {
 /// --encoder-offset H [m]: the encoder wheel is half a vehicle's track from the axle centre, so
 /// |H| is at most 1.5 m (within it the correction 1 / (1 - tan(psi) H / L) stays finite for the
 /// default wheelbase and every accepted steering angle).
-inline constexpr common::Bounds kEncoderOffset{-1.5, 1.5};
+inline constexpr app::Bounds kEncoderOffset{-1.5, 1.5};
 
 struct ImportOptions {
   std::string odometry_csv;           ///< vp_odometry.csv: time_ms, speed_mps, steering_rad
@@ -31,7 +31,7 @@ struct ImportOptions {
   double max_steering = 1.0;          ///< |steering| above this: refused [rad]
   /// A slice: the first N odometry rows and the GPS rows up to the last of them (0 = all).
   int64_t max_rows = 0;
-  common::Datum datum;                ///< local Lo/La metres -> lat/lon about this datum
+  bus::Datum datum;                ///< local Lo/La metres -> lat/lon about this datum
   std::string odometry_channel = "ODOMETRY";
   std::string gps_channel = "GPS";
   std::string heldout_channel = "GPS_HELDOUT";
@@ -62,7 +62,7 @@ struct ImportResult {
   bool interrupted = false;
 };
 
-/// Throws common::ConfigError naming the flag for an option that would make a wrong log:
+/// Throws app::ConfigError naming the flag for an option that would make a wrong log:
 /// --wheelbase not > 0, --encoder-offset outside kEncoderOffset, --holdout-every < 0,
 /// --holdout-phase outside [0, every) (>= 0 when every is 0), and a --heldout-channel that is
 /// empty, holds a blank or is a channel the import writes (odometry or GPS: the held-out fixes
@@ -70,7 +70,7 @@ struct ImportResult {
 void checkImportOptions(const ImportOptions& opt);
 
 /// Reads both files, converts and (when output is set) writes the log in time order. Refused
-/// rows are listed with file, line and reason. Throws common::ConfigError for the options
+/// rows are listed with file, line and reason. Throws app::ConfigError for the options
 /// (checkImportOptions) or an output that is an input file, std::runtime_error when a file is
 /// missing, a directory or cannot be opened, its header is not the expected one (a leading UTF-8
 /// byte-order mark is skipped), or the output cannot be written.
@@ -81,9 +81,9 @@ std::string importSummary(const ImportOptions& opt, const ImportResult& r, int m
 
 /// lcmloc-import-vp's work after its command line: the CSV files from dir unless given, the
 /// datum and channels from cfg, the import and its summary (importSummary) on stdout. Throws
-/// common::UsageError (exit 2) without both inputs, for a missing input and for an existing
-/// output without overwrite. Returns common::kExitOk.
-int importCommand(const common::SystemConfig& cfg, ImportOptions io, const std::string& dir, int max_refusals,
+/// app::UsageError (exit 2) without both inputs, for a missing input and for an existing
+/// output without overwrite. Returns app::kExitOk.
+int importCommand(const app::SystemConfig& cfg, ImportOptions io, const std::string& dir, int max_refusals,
                   bool overwrite);
 
 // ---------------------------------------------------------------------------------------------
@@ -114,18 +114,18 @@ struct ExperimentResult {
   double seconds = 0;
 };
 
-/// Throws common::ConfigError naming the flag for options that make no experiment, before
+/// Throws app::ConfigError naming the flag for options that make no experiment, before
 /// anything is written: an empty --filters, a filter type cfg does not know or one listed
 /// twice, --holdout-every below 2 (0 holds no fix out: nothing to score; 1 holds every fix out:
 /// the filters get no GPS) and the import options (checkImportOptions, with cfg's channels).
-void checkExperimentOptions(const common::SystemConfig& cfg, const ImportOptions& imp, const ExperimentOptions& opt);
+void checkExperimentOptions(const app::SystemConfig& cfg, const ImportOptions& imp, const ExperimentOptions& opt);
 
 /// Checks the options (checkExperimentOptions), imports (into out_dir/vp.lcmlog), replays the log
 /// through the fusion daemon's code once per filter (lcmloc-replay's replayLog: the active filter
 /// subscribes to ODOMETRY and GPS only, never to GPS_HELDOUT) and scores each estimate at the
 /// held-out fixes (linear interpolation of the pose stream at the fix time). Writes report.json, data files, plot.gp, drive.png
 /// and error.png into out_dir.
-ExperimentResult runExperiment(const common::SystemConfig& cfg, ImportOptions imp, const ExperimentOptions& opt);
+ExperimentResult runExperiment(const app::SystemConfig& cfg, ImportOptions imp, const ExperimentOptions& opt);
 
 /// Interpolated position of a time-sorted track (t, x, y) at t; false outside its span.
 bool interpolate(const std::vector<std::array<double, 3>>& track, double t, double& x, double& y);
