@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
 #include <random>
 
+#include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/engine.hpp"
 #include "lcmloc/core/filter.hpp"
 #include "lcmloc/core/ruler_model.hpp"
@@ -204,4 +206,88 @@ TEST(UkfLandmarks, EngineHandsLandmarksAndBeaconsToTheFilterWithTheChannelAsSens
   EXPECT_TRUE(decisions[0].accepted);
   EXPECT_EQ(decisions[1].sensor, "UWB");
   EXPECT_TRUE(decisions[1].accepted);
+}
+
+// Re-localization from evidence: a robot carried off (its pose jumps by metres) is found again
+// from observations of known landmarks that agree with each other, within a bounded number of
+// them, and the filter says so once with its evidence.
+TEST(UkfLandmarksRelocalization, AKidnappedRobotIsFoundAgainFromAgreeingObservations) {
+  const auto map = landmarks();
+  auto f = makeFilter(landmarkConfig(Vec3(2.0, 0.0, M_PI / 2), 0.01), map);
+  int k = 0, relocalized = 0, refused_after_jump = 0;
+  std::optional<Relocalization> event;
+  Pose truth(2.0, 0.0, M_PI / 2);
+  const double ds = 0.05, dth = ds / 2.0;
+  for (int step = 1; step <= 600; ++step) {
+    truth = propagatePose(truth, ds, dth);
+    if (step == 200) truth = Pose(truth.x() - 3.0, truth.y() + 2.0, wrapAngle(truth.z() + 0.6));  // carried off
+    f->predict(odo(step * 50000, ds, dth));
+    if (step % 4) continue;
+    const Marker& m = map[static_cast<std::size_t>(k++ % map.size())];
+    const auto d = f->update(observe(truth, m, m.id, step * 50000));
+    ASSERT_TRUE(d);
+    if (step > 200 && !relocalized && !d->accepted) ++refused_after_jump;
+    if (d->reason == "relocalized") {
+      ++relocalized;
+      event = f->takeRelocalization();
+    }
+  }
+  EXPECT_EQ(relocalized, 1);
+  ASSERT_TRUE(event);
+  EXPECT_TRUE(event->from_landmarks);
+  EXPECT_GE(event->fixes, 3);
+  EXPECT_GE(event->landmarks, 2);
+  EXPECT_GT(event->jump, 3.0);  // the position moved to where the robot is
+  EXPECT_LE(refused_after_jump, 6);  // found within a bounded number of observations
+  const auto s = f->state();
+  EXPECT_NEAR(s.x[0], truth.x(), 0.05);
+  EXPECT_NEAR(s.x[1], truth.y(), 0.05);
+  EXPECT_NEAR(wrapAngle(s.x[2] - truth.z()), 0.0, 0.02);
+  EXPECT_EQ(s.status, FilterStatus::Ok);
+}
+
+// Lone outliers of known landmarks (each far off, each alone) never re-localize the filter and
+// never move it: over 60 s of them it follows its dead reckoning exactly. Observations without
+// identity are never evidence: a minute of them gives no re-localization either.
+TEST(UkfLandmarksRelocalization, LoneOutliersAndDistractorsNeverRelocalize) {
+  const auto map = landmarks();
+  for (const bool distractors : {false, true}) {
+    FilterConfig c = landmarkConfig(Vec3(2.0, 0.0, M_PI / 2), 0.01);
+    c.p0_diag[2] = 1e-4;  // the heading known and the odometry good: every outlier is outside the gate
+    c.pw_diag = Vec3(1e-6, 1e-6, 1e-6);
+    c.pw_turn = 1e-6;
+    auto f = makeFilter(c, map);
+    auto dr = makeFilter(c, map);  // the same without observations
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    Pose truth(2.0, 0.0, M_PI / 2);
+    const double ds = 0.05, dth = ds / 2.0;
+    for (int step = 1; step <= 1200; ++step) {  // 60 s
+      truth = propagatePose(truth, ds, dth);
+      f->predict(odo(step * 50000, ds, dth));
+      dr->predict(odo(step * 50000, ds, dth));
+      if (step % 2) continue;
+      LandmarkObservation o;
+      if (!distractors) {  // a known landmark, 2-3 m too far, its bearing off by up to 0.8 rad
+        const Marker& m = map[static_cast<std::size_t>(step / 2 % map.size())];
+        o = observe(truth, m, m.id, step * 50000, 2.0 + u(rng), 0.8 * u(rng));
+      } else {  // something seen without identity, anywhere
+        o.utime = step * 50000;
+        o.sensor = "LANDMARKS";
+        o.landmark_id = -1;
+        o.range = 3.0 + 2.0 * u(rng);
+        o.bearing = M_PI * u(rng);
+      }
+      const auto d = f->update(o);
+      ASSERT_TRUE(d);
+      EXPECT_NE(d->reason, "relocalized") << step;
+      EXPECT_FALSE(f->takeRelocalization()) << step;
+      if (!distractors) EXPECT_FALSE(d->accepted) << step;
+    }
+    if (distractors) continue;
+    const auto a = f->state(), b = dr->state();
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(a.x[i], b.x[i], 1e-9) << i;
+    EXPECT_EQ(a.status, FilterStatus::Lockout);  // a status only: no covariance inflated
+    EXPECT_NEAR(a.P(0, 0), b.P(0, 0), 1e-12);
+  }
 }

@@ -132,6 +132,15 @@ std::string text(const events::GapBridged& e) {
 std::string text(const events::Relocalized& e) {
   const Relocalization& r = e.evidence;
   char t[400];
+  if (r.from_landmarks) {
+    std::snprintf(t, sizeof t,
+                  "%s re-localized: %d observations of %d landmarks agree within %.2f m (placed by the dead-reckoned "
+                  "motion; the first at utime %lld) and disagree with the estimate: position moved %.2f m, heading "
+                  "changed by %.4f rad (1 sigma %.4f rad)",
+                  e.filter.c_str(), r.fixes, r.landmarks, r.spread, static_cast<long long>(r.first_utime), r.jump,
+                  r.heading_change, r.heading_std);
+    return at(e.input) + ": " + t;
+  }
   std::snprintf(t, sizeof t,
                 "%s re-localized: %d GPS fixes agree within %.2f m (carried forward by the dead-reckoned motion; "
                 "the first at utime %lld) and disagree with the estimate: position moved %.2f m to the newest fix, ",

@@ -92,6 +92,9 @@ struct GateBook {
   std::vector<InflateCap> caps;  ///< lockoutCaps of the filter's states
   FilterStatus status = FilterStatus::Ok;
   int consecutive_rejections = 0;
+  /// A lock-out inflates the covariance (the magnetic-ruler filters); false: the lock-out is a
+  /// status only, the filter re-localizes from evidence ("ukf_landmarks").
+  bool inflate = true;
   void reset() {
     status = FilterStatus::Ok;
     consecutive_rejections = 0;
@@ -134,6 +137,7 @@ struct GateBook {
     ++consecutive_rejections;
     if (cfg.lockout_rejections > 0 && consecutive_rejections % cfg.lockout_rejections == 0) {
       status = FilterStatus::Lockout;
+      if (!inflate) return;
       auto P = ukf.P();
       inflateCapped(P, caps, cfg.lockout_inflation);
       ukf.reset(ukf.x(), P);

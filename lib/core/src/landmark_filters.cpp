@@ -6,9 +6,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "filter_internal.hpp"
+#include "landmark_evidence.hpp"
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/ruler_model.hpp"
 #include "lcmloc/core/vehicle_model.hpp"
@@ -30,6 +32,7 @@ class LandmarkUkf final : public Filter {
       : cfg_(c), map_(std::move(map)), gated_(c.gate.enabled), gate2_(gated_ ? c.gate.threshold(2) : kInf),
         gate1_(gated_ ? c.gate.threshold(1) : kInf), ukf_(c.sigma, kThetaMask) {
     book_.caps = detail::lockoutCaps(cfg_, names_);
+    book_.inflate = false;  // a lock-out is a status; the way back is evidence_ (re-localization)
     reset();
   }
 
@@ -67,7 +70,10 @@ class LandmarkUkf final : public Filter {
     U::Matrix Q = U::Matrix::Zero();
     Q.diagonal() = detail::poseProcessNoise(cfg_, ds, dth);
     if (ukf_.predict(f, Q)) utime_ = odo.utime;
+    evidence_.move(ds, dth);
   }
+
+  std::optional<Relocalization> takeRelocalization() override { return std::exchange(relocalized_, std::nullopt); }
 
   /// The ruler is not this filter's sensor (uses() says so; the engine never calls this).
 
@@ -97,6 +103,10 @@ class LandmarkUkf final : public Filter {
       }
       const Marker& m = *known;
       if (ukf_.innovate<2>(X, h_of(m), R, z, kBearingMask, best)) best_id = m.id;
+      finish(d, best_id, best, gate2_);
+      if (d.accepted) evidence_.clear();
+      else if (d.reason == "gate") relocalize(d, obs, m, rs, bs);
+      return d;
     } else {
       // Nearest neighbour: only landmarks whose distance from the predicted position can match
       // the measured range within 4 sigma (position and range) are tried: the index hands those
@@ -165,6 +175,30 @@ class LandmarkUkf final : public Filter {
  private:
   void reset() {
     ukf_.reset(cfg_.initial_pose, Mat3(cfg_.p0_diag.asDiagonal()));
+    evidence_.clear();
+  }
+  /// A refused observation of a known landmark is evidence: when enough of them agree on a pose
+  /// (LandmarkEvidence), the filter starts again from it, and d says so.
+  void relocalize(GateDecision& d, const LandmarkObservation& obs, const Marker& m, double rs, double bs) {
+    const auto f = evidence_.add(obs.utime, m.id, m.x, m.y, obs.range, wrapAngle(obs.bearing), rs, bs,
+                                 std::isfinite(gate2_) ? gate2_ : 9.21);
+    if (!f) return;
+    const Vec3 before = ukf_.x();
+    ukf_.reset(f->pose, f->P);
+    book_.reset();
+    Relocalization r;
+    r.utime = obs.utime;
+    r.fixes = f->observations;
+    r.first_utime = f->first_utime;
+    r.spread = f->spread;
+    r.jump = std::hypot(f->pose.x() - before.x(), f->pose.y() - before.y());
+    r.heading_change = wrapAngle(f->pose.z() - before.z());
+    r.heading_std = std::sqrt(f->P(2, 2));
+    r.from_landmarks = true;
+    r.landmarks = f->landmarks;
+    relocalized_ = r;
+    d.accepted = true;
+    d.reason = "relocalized";
   }
   template <int M>
   GateDecision finish(GateDecision& d, int id, Innovation<3, M>& in, double gate) {
@@ -181,6 +215,8 @@ class LandmarkUkf final : public Filter {
   std::vector<std::string> names_{"x", "y", "theta"};
   int64_t utime_ = 0;
   detail::GateBook book_;  ///< gate decisions and lock-out
+  detail::LandmarkEvidence evidence_;  ///< refused observations of known landmarks, for re-localization
+  std::optional<Relocalization> relocalized_;
 };
 
 }  // namespace

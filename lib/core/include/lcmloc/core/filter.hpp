@@ -158,6 +158,11 @@ struct Relocalization {
   bool heading_from_chord = false;  ///< heading from the chord of the fixes; else kept, its sigma opened
   double heading_change = 0;        ///< [rad] (0 when kept)
   double heading_std = 0;           ///< 1 sigma of the heading after it [rad]
+  /// The evidence were observations of landmarks ("ukf_landmarks"; fixes counts them, landmarks
+  /// the distinct landmarks among them, spread is the largest distance of one from its
+  /// landmark, pose and heading from all of them); else GPS fixes.
+  bool from_landmarks = false;
+  int landmarks = 0;
 };
 
 /// Measurement kinds a filter may use (Filter::uses).
