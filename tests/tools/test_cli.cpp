@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "run_command.hpp"
+#include "temp_files.hpp"
 
 namespace fs = std::filesystem;
 
@@ -41,12 +42,7 @@ std::string readFile(const fs::path& p) {
   return ss.str();
 }
 
-fs::path tempDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("lcmloc_cli_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+fs::path tempDir(const std::string& name) { return freshTempDir("lcmloc_cli_", name); }
 
 constexpr const char* kFooter = "Exit status: 0 ok, 1 runtime error, 2 usage or configuration error";
 

@@ -29,20 +29,16 @@
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
 #include "run_command.hpp"
+#include "temp_files.hpp"
 
 using namespace lcmloc;
 namespace fs = std::filesystem;
 
 namespace {
 
-fs::path tempDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("lcmloc_test_import_formats_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+fs::path tempDir(const std::string& name) { return freshTempDir("lcmloc_test_import_formats_", name); }
 
-void write(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
+void write(const fs::path& p, const std::string& text) { writeText(p, text); }
 
 /// Every message of type T on channel ch, in log order.
 template <typename T>

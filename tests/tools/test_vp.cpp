@@ -14,20 +14,16 @@
 #include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/vp/vp.hpp"
 #include "run_command.hpp"
+#include "temp_files.hpp"
 
 using namespace lcmloc;
 namespace fs = std::filesystem;
 
 namespace {
 
-fs::path tempDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("lcmloc_test_vp_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+fs::path tempDir(const std::string& name) { return freshTempDir("lcmloc_test_vp_", name); }
 
-void write(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
+void write(const fs::path& p, const std::string& text) { writeText(p, text); }
 
 /// Import options reading d/odo.csv and d/gps.csv (the files the tests write).
 vp::ImportOptions csvsIn(const fs::path& d) {
