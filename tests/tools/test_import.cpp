@@ -815,13 +815,15 @@ TEST(Import, TheConfigGetsTheNoiseFittedAgainstTheTruth) {
   const auto d = tempDir("noisefit");
   std::mt19937_64 rng(3);
   std::normal_distribution<double> n(0.0, 1.0);
-  std::string odo = "time,speed,yaw_rate\n", truth = "time,x,y,heading\n", obs = "time,landmark_id,range,bearing\n";
+  std::string odo = "time,speed,yaw_rate\n", truth = "time,x,y,heading\n", obs = "time,landmark_id,range,bearing\n",
+              gps = "time,x,y\n";
   const double lx[2] = {6.0, -6.0}, ly[2] = {0.0, 0.0};
   for (int k = 0; k <= 3000; ++k) {  // 300 s at 10 Hz, radius 3 m at 0.3 m/s
     const double t = 100.0 + 0.1 * k, th = 0.1 * 0.1 * k;
     const double x = 3.0 * std::sin(th), y = 3.0 - 3.0 * std::cos(th);
     odo += fmt::format("{:.1f},0.3,0.1\n", t);
     truth += fmt::format("{:.1f},{},{},{}\n", t, x, y, core::wrapAngle(th));
+    if (k % 10 == 0) gps += fmt::format("{:.1f},{},{}\n", t, x + 1.5 * n(rng), y + 1.5 * n(rng));  // 1 Hz, 1.5 m
     if (k % 2) continue;
     for (int i = 0; i < 2; ++i)
       obs += fmt::format("{:.1f},{},{},{}\n", t, i + 1, std::hypot(lx[i] - x, ly[i] - y) + 0.3 * n(rng),
@@ -830,6 +832,7 @@ TEST(Import, TheConfigGetsTheNoiseFittedAgainstTheTruth) {
   write(d / "odometry.csv", odo);
   write(d / "truth.csv", truth);
   write(d / "landmarks.csv", obs);
+  write(d / "gps.csv", gps);
   write(d / "map.csv", "id,x,y\n1,6,0\n2,-6,0\n");
   import::ImportOptions o;
   o.dir = d.string();
@@ -840,6 +843,7 @@ TEST(Import, TheConfigGetsTheNoiseFittedAgainstTheTruth) {
   const auto cfg = app::loadSystemConfig(r.config_path);
   EXPECT_NEAR(cfg.fusion.filter.landmarks.range_std, 0.3, 0.03);
   EXPECT_NEAR(cfg.fusion.filter.landmarks.bearing_std, 0.05, 0.005);
+  EXPECT_NEAR(cfg.fusion.filter.gnss.gps_std, 1.5, 0.15);
   EXPECT_NE(import::importSummary(r, 0).find("noise fit: landmark bearing"), std::string::npos);
 
   o.out_dir = (d / "plain").string();
@@ -849,4 +853,5 @@ TEST(Import, TheConfigGetsTheNoiseFittedAgainstTheTruth) {
   const auto defaults = app::loadSystemConfig(plain.config_path);
   EXPECT_EQ(defaults.fusion.filter.landmarks.range_std, core::FilterConfig{}.landmarks.range_std);
   EXPECT_EQ(defaults.fusion.filter.pw_diag, core::FilterConfig{}.pw_diag);
+  EXPECT_EQ(defaults.fusion.filter.gnss.gps_std, core::FilterConfig{}.gnss.gps_std);
 }

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "import_files.hpp"
 #include "lcmloc/app/csv.hpp"
@@ -54,6 +55,7 @@ std::string applyFit(const fit::NoiseFit* f, core::FilterConfig& d) {
   if (f->landmark_range) take("range_std", f->landmark_range->sigma, d.landmarks.range_std);
   if (f->landmark_bearing) take("bearing_std", f->landmark_bearing->sigma, d.landmarks.bearing_std);
   if (f->beacon_range) take("beacon_std", f->beacon_range->sigma, d.landmarks.beacon_std);
+  if (f->gps) take("gps_std", f->gps->sigma, d.gnss.gps_std);
   return said + "\n";
 }
 
@@ -96,7 +98,10 @@ std::string configText(const ImportOptions& opt, const std::string& filter, bool
     << fmt::format("    pw_turn: {}                   # heading variance per radian turned [rad^2/rad]\n", num(d.pw_turn))
     << fmt::format("    landmarks: {{range_std: {}, bearing_std: {}, beacon_std: {}}}  # [m], [rad], [m]\n",
                    num(d.landmarks.range_std), num(d.landmarks.bearing_std), num(d.landmarks.beacon_std));
-  if (conv.imu_without_mag) c << "    gnss: {use_magnetometer: false}   # the IMU rows have no magnetometer\n";
+  std::vector<std::string> gnss;
+  if (fitted && fitted->gps && fitted->gps->sigma > 0) gnss.push_back("gps_std: " + num(d.gnss.gps_std));
+  if (conv.imu_without_mag) gnss.push_back("use_magnetometer: false");  // the IMU rows have no magnetometer
+  if (!gnss.empty()) c << "    gnss: {" << fmt::format("{}", fmt::join(gnss, ", ")) << "}\n";
   c << "    gate: {enabled: true, probability: 0.99}\n";
   return c.str();
 }
@@ -132,6 +137,7 @@ std::string fittedConfig(const ImportOptions& opt, ImportResult& r, bool with_ma
   line("landmark range [m]", f.landmark_range);
   line("landmark bearing [rad]", f.landmark_bearing);
   line("beacon range [m]", f.beacon_range);
+  line("gps per axis [m]", f.gps);
   if (f.pw_diag)
     r.noise_fit.push_back(fmt::format("noise fit: odometry pw_diag [{:.4g}, {:.4g}, {:.4g}] per {} m, pw_turn {:.4g} ({} windows)",
                                       (*f.pw_diag)[0], (*f.pw_diag)[1], (*f.pw_diag)[2], read.recording.pw_distance,
