@@ -95,3 +95,27 @@ TEST(Scoring, GateStatisticsGroupByFilterAndSensor) {
   EXPECT_EQ(st.by_sensor[0].decisions, 2);  // A: ukf and dr
   EXPECT_EQ(st.by_filter_sensor.size(), 3u);
 }
+
+// The longest run of rejections of one filter and sensor: in decisions, and in seconds from its
+// first rejection to the acceptance that ended it; a run the log ends in is measured to its last
+// rejection; ignored decisions neither break nor count; another filter's decisions are apart.
+TEST(Scoring, LongestRejectionRunPerFilter) {
+  auto rec = [](int64_t t_s, const char* filter, const char* reason, bool accepted) {
+    return core::GateRecord{t_s * 1000000, filter, "GPS", reason, 2, accepted ? 1.0 : 30.0, accepted};
+  };
+  const std::vector<core::GateRecord> g{
+      rec(0, "ukf", "accepted", true),  rec(1, "ukf", "gate", false),    rec(2, "ukf", "gate", false),
+      rec(3, "ekf", "gate", false),     rec(4, "ukf", "accepted", true), rec(5, "ukf", "gate", false),
+      rec(6, "ukf", "gate", false),     rec(7, "ukf", "dead_reckoning", false), rec(9, "ukf", "gate", false),
+      rec(12, "ukf", "relocalized", true), rec(13, "ekf", "gate", false)};
+  const auto st = core::gateStatistics(g, 0.95);
+  ASSERT_EQ(st.by_filter_sensor.size(), 2u);
+  const auto& ekf = st.by_filter_sensor[0];
+  const auto& ukf = st.by_filter_sensor[1];
+  EXPECT_EQ(ukf.filter, "ukf");
+  EXPECT_EQ(ukf.longest_rejection_run, 3);  // 5, 6, 9 (7 ignored), ended by the re-localization at 12
+  EXPECT_DOUBLE_EQ(ukf.longest_rejection_s, 7.0);
+  EXPECT_EQ(ekf.longest_rejection_run, 2);  // 3 and 13: never ended, measured to the last
+  EXPECT_DOUBLE_EQ(ekf.longest_rejection_s, 10.0);
+  EXPECT_EQ(st.by_sensor.at(0).longest_rejection_run, 0);  // several filters together: no run
+}

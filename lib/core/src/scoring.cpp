@@ -143,6 +143,23 @@ GateStats gateStatistics(const std::vector<GateRecord>& gates, double confidence
     std::vector<int> dofs;
     double nis_all = 0;
     int64_t n_all = 0;
+    int64_t run = 0, run_start = 0, run_last = 0;  ///< the current run of rejections
+  };
+  // A run of rejections ends at an acceptance (its length measured to it) or at the end.
+  auto endRun = [](Acc& a, int64_t until) {
+    if (a.run == 0) return;
+    const double s = static_cast<double>(until - a.run_start) * 1e-6;
+    if (a.run > a.g.longest_rejection_run || (a.run == a.g.longest_rejection_run && s > a.g.longest_rejection_s)) {
+      a.g.longest_rejection_run = a.run;
+      a.g.longest_rejection_s = s;
+    }
+    a.run = 0;
+  };
+  auto track = [&endRun](Acc& a, const GateRecord& r) {
+    if (isIgnoredDecision(r.reason)) return;
+    if (r.accepted) return endRun(a, r.utime);
+    if (a.run++ == 0) a.run_start = r.utime;
+    a.run_last = r.utime;
   };
   std::map<std::pair<std::string, std::string>, Acc> fs, f, s;
   auto add = [](Acc& a, const GateRecord& r) {
@@ -162,7 +179,11 @@ GateStats gateStatistics(const std::vector<GateRecord>& gates, double confidence
     add(fs[{r.filter, r.sensor}], r);
     add(f[{r.filter, "*"}], r);
     add(s[{"*", r.sensor}], r);
+    track(fs[{r.filter, r.sensor}], r);
+    track(f[{r.filter, "*"}], r);
   }
+  for (auto* m : {&fs, &f})
+    for (auto& [key, a] : *m) endRun(a, a.run_last);
   auto collect = [&](std::map<std::pair<std::string, std::string>, Acc>& m) {
     std::vector<GateGroup> out;
     for (auto& [key, a] : m) {

@@ -90,7 +90,9 @@ json gateGroupJson(const GateGroup& g) {
           {"reasons", g.reasons},
           {"nis_accepted", consistencyJson(g.nis)},
           {"nis_mean_dof", g.mean_dof},
-          {"nis_mean_all", g.nis_mean_all}};
+          {"nis_mean_all", g.nis_mean_all},
+          {"longest_rejection_run", g.longest_rejection_run},
+          {"longest_rejection_s", g.longest_rejection_s}};
 }
 
 json gateListJson(const std::vector<GateGroup>& v) {
@@ -224,12 +226,13 @@ void printTrajectorySummary(std::ostream& os, const TrajectoryLog& log, const st
       fw = std::max(fw, static_cast<int>(withoutControlCharacters(g.filter).size()) + 1);
     os << std::left << std::setw(fw) << "gate filter" << std::setw(18) << "sensor" << std::right << std::setw(9)
        << "accepted" << std::setw(9) << "rejected" << std::setw(10) << "NIS mean" << std::setw(6) << "dof"
-       << "  reasons\n";
+       << std::setw(14) << "rej. run[s]" << "  reasons\n";
     for (const auto& g : gates.by_filter_sensor) {
       os << std::left << std::setw(fw) << withoutControlCharacters(g.filter) << std::setw(18) << withoutControlCharacters(g.sensor) << std::right << std::setw(9)
          << g.accepted << std::setw(9) << g.rejected << std::setprecision(2);
       if (g.nis.samples) os << std::setw(10) << g.nis.mean << std::setw(6) << g.mean_dof << "  ";
       else os << std::setw(10) << "-" << std::setw(6) << "-" << "  ";
+      os << std::setw(12) << std::fixed << std::setprecision(1) << g.longest_rejection_s << std::defaultfloat << "  ";
       bool first = true;
       for (const auto& [r, n] : g.reasons) {
         os << (first ? "" : ", ") << withoutControlCharacters(r) << " " << n;

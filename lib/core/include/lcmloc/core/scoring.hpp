@@ -107,6 +107,12 @@ struct GateGroup {
   double mean_dof = 0;                   ///< mean innovation dimension of the accepted ones
   ConsistencyStats nis;                  ///< NIS of the accepted measurements
   double nis_mean_all = 0;               ///< mean NIS over every decision with a finite NIS
+  /// The longest run of rejections in a row (ignored decisions neither break nor count) of a
+  /// group of one filter (filter "*": 0): its decisions, and how long the filter went without
+  /// an accepted one: from the first rejection to the acceptance that ended the run (to the last
+  /// rejection when none did) [s].
+  int64_t longest_rejection_run = 0;
+  double longest_rejection_s = 0;
 };
 
 struct GateStats {
