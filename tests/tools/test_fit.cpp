@@ -24,7 +24,7 @@ fit::Recording circle(double range_std, double bearing_std, double range_bias, u
   const double v = 0.3, w = v / 3.0;
   for (int64_t k = 0; k <= 60000; ++k) {
     const double t = k * 0.01, th = w * t;
-    r.truth.push_back({1000000 + k * 10000, 3.0 * std::sin(th), 3.0 - 3.0 * std::cos(th), core::wrapAngle(th)});
+    r.truth.push_back({1000000 + k * 10000, 3.0 * std::sin(th), 3.0 - 3.0 * std::cos(th), core::wrapAngle(th), true});
     if (k % 2 == 0 && k > 0) {
       core::OdometryInput o;
       o.utime = 1000000 + k * 10000;
@@ -103,7 +103,7 @@ TEST(FitNoise, WithoutTruthOrHeadingItSaysWhatItCouldNotFit) {
   EXPECT_NE(f.notes[0].find("no ground truth"), std::string::npos);
 
   auto r = circle(0.05, 0.02, 0.0, 10);
-  for (auto& t : r.truth) t.heading = std::nan("");  // position only
+  for (auto& t : r.truth) t.has_heading = false;  // position only
   const auto g = fit::fitAgainstTruth(r);
   EXPECT_TRUE(g.landmark_range);
   EXPECT_FALSE(g.landmark_bearing);

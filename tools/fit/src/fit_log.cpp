@@ -43,7 +43,7 @@ LogRead readRecording(const std::string& log, const app::SystemConfig& cfg) {
       lcmloc::ground_truth_t m{};
       take(ev, m, [&](const lcmloc::ground_truth_t& t) {
         if (!std::isfinite(t.x) || !std::isfinite(t.y)) return false;
-        r.truth.push_back({t.utime, t.x, t.y, t.heading});
+        r.truth.push_back({t.utime, t.x, t.y, std::isfinite(t.heading) ? t.heading : 0.0, std::isfinite(t.heading)});
         return true;
       });
     } else if (c == ch.odometry) {

@@ -15,22 +15,9 @@
 namespace lcmloc::fit {
 namespace {
 
-/// The truth at utime (linear; heading along the shortest angle, NaN when either has none), or
-/// nullopt outside the truth or between samples more than max_gap_us apart.
+/// The truth at utime (eval::interpolateTruth), or nullopt outside it or in a gap.
 std::optional<TruthSample> truthAt(const std::vector<TruthSample>& t, int64_t utime, int64_t max_gap_us) {
-  auto hi = std::lower_bound(t.begin(), t.end(), utime, [](const TruthSample& s, int64_t u) { return s.utime < u; });
-  if (hi == t.end()) return std::nullopt;
-  if (hi->utime == utime) return *hi;
-  if (hi == t.begin()) return std::nullopt;
-  const auto lo = hi - 1;
-  if (hi->utime - lo->utime > max_gap_us) return std::nullopt;
-  const double a = static_cast<double>(utime - lo->utime) / static_cast<double>(hi->utime - lo->utime);
-  TruthSample s;
-  s.utime = utime;
-  s.x = lo->x + a * (hi->x - lo->x);
-  s.y = lo->y + a * (hi->y - lo->y);
-  s.heading = lo->heading + a * core::wrapAngle(hi->heading - lo->heading);  // NaN stays NaN
-  return s;
+  return eval::interpolateTruth(t, utime, max_gap_us);
 }
 
 /// The map by id (a map of a city has millions of entries: no search per observation).
@@ -82,7 +69,7 @@ void fitOdometry(const Recording& r, const FitOptions& opt, NoiseFit& f) {
   std::size_t i = 0;
   while (i + 1 < r.odometry.size()) {
     const auto start = truthAt(r.truth, r.odometry[i].utime, max_gap);
-    if (!start || !std::isfinite(start->heading)) {
+    if (!start || !start->has_heading) {
       ++i;
       continue;
     }
@@ -107,7 +94,7 @@ void fitOdometry(const Recording& r, const FitOptions& opt, NoiseFit& f) {
       continue;
     }
     const auto end = truthAt(r.truth, r.odometry[j].utime, max_gap);
-    if (end && std::isfinite(end->heading) && (s > 0 || turned > 0)) {
+    if (end && end->has_heading && (s > 0 || turned > 0)) {
       pos2.push_back(0.5 * (std::pow(end->x - p.x(), 2) + std::pow(end->y - p.y(), 2)));
       heading2.push_back(std::pow(core::wrapAngle(end->heading - p.z()), 2));
       dist.push_back(s / r.pw_distance);
@@ -176,7 +163,7 @@ NoiseFit fitAgainstTruth(const Recording& r, const FitOptions& opt) {
     double rg, br;
     rangeBearing(*p, m->x, m->y, rg, br);
     range.push_back(o.range - rg);
-    if (std::isfinite(p->heading)) bearing.push_back(core::wrapAngle(o.bearing - br));
+    if (p->has_heading) bearing.push_back(core::wrapAngle(o.bearing - br));
   }
   if (!range.empty()) f.landmark_range = residualStats(range);
   if (!bearing.empty()) f.landmark_bearing = residualStats(bearing);

@@ -10,14 +10,12 @@
 #include <vector>
 
 #include "lcmloc/core/types.hpp"
+#include "lcmloc/eval/trajectory.hpp"
 
 namespace lcmloc::fit {
 
-/// One truth sample (heading NaN: position only).
-struct TruthSample {
-  int64_t utime = 0;
-  double x = 0, y = 0, heading = 0;
-};
+/// One truth sample: the evaluation's (has_heading false: position only).
+using TruthSample = eval::TruthPose;
 
 /// What the fit reads: the truth, the odometry and the measurements, in time order.
 struct Recording {
