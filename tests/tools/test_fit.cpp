@@ -6,6 +6,7 @@
 
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/vehicle_model.hpp"
+#include "lcmloc/fit/innovation_fit.hpp"
 #include "lcmloc/fit/noise_fit.hpp"
 
 using namespace lcmloc;
@@ -119,4 +120,76 @@ TEST(FitNoise, TheFragmentNamesTheFittedKeysOnly) {
   for (const char* k : {"pw_diag:", "pw_turn:", "range_std:", "bearing_std:", "beacon_std:"})
     EXPECT_NE(y.find(k), std::string::npos) << k << "\n" << y;
   EXPECT_EQ(y.find("gps_std"), std::string::npos) << y;
+}
+
+namespace {
+
+/// ukf_landmarks started at the circle's first truth pose, with the process noise fitted
+/// against the truth and the landmark and beacon sigmas given.
+core::EngineConfig landmarkEngine(const fit::Recording& r, double range_std, double bearing_std, double beacon_std) {
+  const auto truth_fit = fit::fitAgainstTruth(r);
+  core::EngineConfig e;
+  e.filter.type = "ukf_landmarks";
+  e.filter.initial_pose = core::Vec3(r.truth.front().x, r.truth.front().y, r.truth.front().heading);
+  e.filter.p0_diag = core::Vec3(1e-4, 1e-4, 1e-4);
+  e.filter = fit::withFit(e.filter, truth_fit, r.pw_distance);
+  e.filter.landmarks.range_std = range_std;
+  e.filter.landmarks.bearing_std = bearing_std;
+  e.filter.landmarks.beacon_std = beacon_std;
+  return e;
+}
+
+}  // namespace
+
+TEST(FitInnovations, SigmasFourTimesTooLargeOrTooSmallAreScaledToTheNoiseTheRecordingHas) {
+  auto r = circle(0.05, 0.02, 0.0, 12);
+  r.beacons.clear();  // (their per-beacon biases would add to the spread)
+  for (const double wrong : {4.0, 0.25}) {
+    const auto f = fit::fitByInnovations(r, landmarkEngine(r, 0.05 * wrong, 0.02 * wrong, 0.1));
+    ASSERT_EQ(f.before.size(), 1u);
+    EXPECT_EQ(f.before[0].sensor, "LANDMARKS");
+    EXPECT_EQ(f.before[0].dof, 2);
+    // Before: the median NIS off by about wrong^-2; after: near the chi-square median.
+    if (wrong > 1) EXPECT_LT(f.before[0].median, 0.3 * f.before[0].expected_median) << wrong;
+    else EXPECT_GT(f.before[0].median, 3.0 * f.before[0].expected_median) << wrong;
+    ASSERT_EQ(f.after.size(), 1u);
+    EXPECT_NEAR(f.after[0].median / f.after[0].expected_median, 1.0, 0.1) << wrong;
+    EXPECT_NEAR(f.filter.landmarks.range_std, 0.05, 0.0125) << wrong;
+    EXPECT_NEAR(f.filter.landmarks.bearing_std, 0.02, 0.005) << wrong;
+    EXPECT_DOUBLE_EQ(f.filter.landmarks.beacon_std, 0.1);  // no beacon in the recording: kept
+    ASSERT_EQ(f.fitted.size(), 1u);
+    EXPECT_EQ(f.fitted[0], "landmarks.range_std, landmarks.bearing_std");
+    const std::string y = fit::configFragment(f);
+    EXPECT_NE(y.find("range_std:"), std::string::npos) << y;
+    EXPECT_EQ(y.find("beacon_std"), std::string::npos) << y;
+  }
+}
+
+TEST(FitInnovations, RightSigmasAreKeptAndTheTableSaysConsistent) {
+  auto r = circle(0.05, 0.02, 0.0, 13);
+  r.beacons.clear();
+  const auto f = fit::fitByInnovations(r, landmarkEngine(r, 0.05, 0.02, 0.1));
+  EXPECT_NEAR(f.filter.landmarks.range_std, 0.05, 0.005);
+  ASSERT_EQ(f.after.size(), 1u);
+  // The mean NIS of a right filter is within its band for thousands of decisions only
+  // approximately (the UKF's S is approximate): within 15 % of the dof.
+  EXPECT_NEAR(f.after[0].mean, 2.0, 0.3);
+  EXPECT_LT(f.after[0].band_lo, 2.0);
+  EXPECT_GT(f.after[0].band_hi, 2.0);
+  const std::string t = fit::nisTable(f.after);
+  EXPECT_NE(t.find("LANDMARKS"), std::string::npos) << t;
+}
+
+TEST(FitInnovations, RowsWithTheirOwnSigmaAndTooFewDecisionsAreNotFittedAndSaid) {
+  auto r = circle(0.05, 0.02, 0.0, 14);
+  for (auto& o : r.landmarks) o.range_std = 0.05;
+  r.beacons.resize(8);  // two observations of each beacon: too few
+  const auto f = fit::fitByInnovations(r, landmarkEngine(r, 0.2, 0.08, 0.1));
+  EXPECT_TRUE(f.fitted.empty());
+  EXPECT_DOUBLE_EQ(f.filter.landmarks.range_std, 0.2);
+  EXPECT_DOUBLE_EQ(f.filter.landmarks.beacon_std, 0.1);
+  std::string notes;
+  for (const auto& n : f.notes) notes += n + "\n";
+  EXPECT_NE(notes.find("carry their own sigma"), std::string::npos) << notes;
+  EXPECT_NE(notes.find("fewer than 20"), std::string::npos) << notes;
 }

@@ -2,6 +2,8 @@
 
 #include <cstdio>
 
+#include "lcmloc/fit/innovation_fit.hpp"
+
 namespace lcmloc::fit {
 
 void printFit(const NoiseFit& f, const LogRead& read) {
@@ -28,6 +30,46 @@ void printFit(const NoiseFit& f, const LogRead& read) {
                 static_cast<long long>(f.odometry_windows), (*f.pw_diag)[0], (*f.pw_diag)[1], (*f.pw_diag)[2],
                 r.pw_distance, *f.pw_turn);
   for (const auto& n : f.notes) std::printf("note: %s\n", n.c_str());
+}
+
+namespace {
+RecordingChannels channelsOf(const app::SystemConfig& cfg) {
+  return {cfg.channels.odometry, cfg.channels.landmarks, cfg.channels.beacons, cfg.channels.gps};
+}
+void printNis(const char* title, const std::vector<SensorNis>& nis) {
+  if (nis.empty()) {
+    std::printf("%s: no sensor decision with a candidate\n", title);
+    return;
+  }
+  std::printf("%s:\n%s", title, nisTable(nis).c_str());
+}
+}  // namespace
+
+std::string truthFitReport(const LogRead& read, const app::SystemConfig& cfg) {
+  const auto f = fitAgainstTruth(read.recording);
+  printFit(f, read);
+  core::EngineConfig e = app::engineConfig(cfg);
+  printNis("NIS with the config as given", nisPerSensor(read.recording, e, channelsOf(cfg)));
+  e.filter = withFit(e.filter, f, read.recording.pw_distance);
+  printNis("NIS with the fit", nisPerSensor(read.recording, e, channelsOf(cfg)));
+  return configFragment(f, read.recording.pw_distance);
+}
+
+std::string innovationFitReport(const LogRead& read, const app::SystemConfig& cfg) {
+  const Recording& r = read.recording;
+  std::printf("read: %zu odometry, %zu landmark, %zu beacon, %zu gps messages (%lld refused)%s; fitted to the "
+              "innovations of filter %s\n",
+              r.odometry.size(), r.landmarks.size(), r.beacons.size(), r.gps.size(),
+              static_cast<long long>(read.refused), read.damaged ? "; the log is damaged" : "",
+              cfg.fusion.filter.type.c_str());
+  InnovationFitOptions opt;
+  opt.channels = channelsOf(cfg);
+  const auto f = fitByInnovations(r, app::engineConfig(cfg), opt);
+  printNis("NIS with the config as given", f.before);
+  std::printf("%d run(s) of the filter\n", f.iterations + 1);
+  printNis("NIS with the fit", f.after);
+  for (const auto& n : f.notes) std::printf("note: %s\n", n.c_str());
+  return configFragment(f);
 }
 
 }  // namespace lcmloc::fit
