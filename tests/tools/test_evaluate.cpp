@@ -788,3 +788,69 @@ TEST_F(EvaluateTest, ChannelNamesRunNoCommandInGnuplot) {
 }
 
 }  // namespace
+
+TEST_F(EvaluateTest, TheLockOutTimelineGivesEachSpanAndTheReLocalizationsOfTheTracksFilters) {
+  {
+    LogWriter w(file("run.lcmlog"));
+    // 10 s at 10 Hz: ok until 2 s, lock-out 2..5 s, ok, dead reckoning 6..7 s, lock-out 8..8.5 s, ok.
+    auto statusAt = [](int i) -> int32_t {
+      if (i >= 20 && i < 50) return pose_t::STATUS_LOCKOUT;
+      if (i >= 60 && i < 70) return pose_t::STATUS_DEAD_RECKONING;
+      if (i >= 80 && i < 85) return pose_t::STATUS_LOCKOUT;
+      return pose_t::STATUS_OK;
+    };
+    for (int i = 0; i <= 100; ++i) {
+      const int64_t t = kT0 + i * 100000;
+      w.add("GROUND_TRUTH", truthMsg(t, 0.1 * i, 0.0, 0.0), t);
+      pose_t p = poseMsg(t, 0.1 * i, 0.0, 0.0, Eigen::Matrix3d::Identity() * 0.01, "ukf_landmarks");
+      p.status = statusAt(i);
+      w.add("POSE", p, t);
+    }
+    // Re-localized at 5 s and 8.5 s; another filter's re-localization is not this track's.
+    auto relocalized = [&](const char* filter, const char* sensor, int64_t at) {
+      gate_decision_t d = gateMsg(filter, sensor, 2, 1.0, true, "relocalized");
+      d.utime = at;
+      w.add("GATE", d, at);
+    };
+    relocalized("ukf_landmarks", "LANDMARKS", kT0 + 5000000);
+    relocalized("ukf_landmarks", "LANDMARKS", kT0 + 8500000);
+    relocalized("tvekf", "GPS", kT0 + 3000000);
+  }
+  ASSERT_EQ(evaluate(file("run.lcmlog") + " -o " + file("out")), 0) << output_;
+  const auto st = report(file("out")).at("tracks").at(0).at("status_timeline");
+  EXPECT_EQ(st.at("lockouts"), 2);
+  EXPECT_NEAR(st.at("lockout_s").get<double>(), 3.5, 1e-9);
+  EXPECT_NEAR(st.at("longest_lockout_s").get<double>(), 3.0, 1e-9);
+  EXPECT_NEAR(st.at("dead_reckoning_s").get<double>(), 1.0, 1e-9);
+  ASSERT_EQ(st.at("spans").size(), 7u);
+  EXPECT_EQ(st["spans"][1]["status"], "lockout");
+  EXPECT_NEAR(st["spans"][1]["from_s"].get<double>(), 2.0, 1e-9);
+  EXPECT_NEAR(st["spans"][1]["to_s"].get<double>(), 5.0, 1e-9);
+  EXPECT_EQ(st["spans"][1]["estimates"], 30);
+  EXPECT_EQ(st["spans"][3]["status"], "dead_reckoning");
+  ASSERT_EQ(st.at("relocalizations").size(), 2u);
+  EXPECT_NEAR(st["relocalizations"][0]["t_s"].get<double>(), 5.0, 1e-9);
+  EXPECT_EQ(st["relocalizations"][1]["filter"], "ukf_landmarks");
+  EXPECT_NE(output_.find("POSE status: 2 lock-out(s), 3.5 s in lock-out (longest 3.0 s), 1.0 s dead reckoning, 2 "
+                         "re-localization(s) at 5.0 s, 8.5 s"),
+            std::string::npos)
+      << output_;
+  if (std::system("command -v gnuplot > /dev/null") == 0) EXPECT_GT(fs::file_size(file("out/status_POSE.png")), 1000u);
+}
+
+TEST_F(EvaluateTest, ATrackThatNeverLeftTrackingHasNoStatusLineNorFigure) {
+  {
+    LogWriter w(file("run.lcmlog"));
+    for (int i = 0; i <= 20; ++i) {
+      const int64_t t = kT0 + i * 100000;
+      w.add("GROUND_TRUTH", truthMsg(t, 0.1 * i, 0.0, 0.0), t);
+      w.add("POSE", poseMsg(t, 0.1 * i, 0.0, 0.0, Eigen::Matrix3d::Identity() * 0.01), t);
+    }
+  }
+  ASSERT_EQ(evaluate(file("run.lcmlog") + " -o " + file("out")), 0) << output_;
+  const auto st = report(file("out"))["tracks"][0]["status_timeline"];
+  EXPECT_EQ(st.at("lockouts"), 0);
+  EXPECT_EQ(st.at("spans").size(), 1u);
+  EXPECT_EQ(output_.find("POSE status:"), std::string::npos) << output_;
+  EXPECT_FALSE(fs::exists(file("out/status_POSE.png")));
+}

@@ -11,6 +11,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "lcmloc/eval/gnuplot.hpp"
+#include "lcmloc/eval/status_timeline.hpp"
 #include "lcmloc/eval/trajectory_report.hpp"
 
 namespace lcmloc::eval {
@@ -115,6 +116,16 @@ void ellipse(std::ostream& f, double x, double y, const Eigen::Matrix2d& cov, do
   f << '\n';
 }
 
+/// The log's track of a channel (every score has one).
+const EstimateTrack* trackOf(const TrajectoryLog& log, const std::string& channel) {
+  for (const auto& t : log.tracks)
+    if (t.channel == channel) return &t;
+  return nullptr;
+}
+
+/// Times of the report and the figures: seconds since the truth's first sample (0 without one).
+int64_t timeOrigin(const TrajectoryLog& log) { return log.truth.empty() ? 0 : log.truth.front().utime; }
+
 }  // namespace
 
 json makeTrajectoryReport(const TrajectoryLog& log, const std::vector<TrackScore>& scores, const GateStats& gates,
@@ -148,7 +159,11 @@ json makeTrajectoryReport(const TrajectoryLog& log, const std::vector<TrackScore
   }
   j["truth"] = truth;
   j["tracks"] = json::array();
-  for (const auto& s : scores) j["tracks"].push_back(trackJson(s));
+  for (const auto& s : scores) {
+    j["tracks"].push_back(trackJson(s));
+    if (const EstimateTrack* t = trackOf(log, s.channel))
+      j["tracks"].back()["status_timeline"] = statusTimelineJson(statusTimeline(*t, log.gates), timeOrigin(log));
+  }
   j["gate"] = {{"decisions", log.gates.size()},
                {"by_filter_sensor", gateListJson(gates.by_filter_sensor)},
                {"by_filter", gateListJson(gates.by_filter)},
@@ -260,6 +275,11 @@ void printTrajectorySummary(std::ostream& os, const TrajectoryLog& log, const st
          << (std::to_string(g.known_accepted) + " of " + std::to_string(g.known_decided)) << std::setw(22)
          << (std::to_string(g.unknown_accepted) + " of " + std::to_string(g.unknown_decided)) << "\n";
   }
+  for (const auto& s : scores)
+    if (const EstimateTrack* t = trackOf(log, s.channel)) {
+      const StatusTimeline st = statusTimeline(*t, log.gates);
+      if (st.eventful()) os << statusSummary(st, timeOrigin(log)) << "\n";
+    }
   if (live_vs_replay) {
     os << "recorded " << withoutControlCharacters(live_vs_replay->filter) << " against its replay: ";
     if (live_vs_replay->matched)
@@ -278,7 +298,7 @@ void printTrajectorySummary(std::ostream& os, const TrajectoryLog& log, const st
 PlotResult writeTrajectoryPlots(const TrajectoryLog& log, const std::vector<TrackScore>& scores,
                                 const TrajectoryPlotOptions& opt, const std::string& dir) {
   PlotResult res;
-  const int64_t t0 = log.truth.empty() ? 0 : log.truth.front().utime;
+  const int64_t t0 = timeOrigin(log);
   {
     std::ofstream f(dir + "/truth.dat");
     f << "# t[s] x[m] y[m] heading[rad]\n" << std::setprecision(10);
@@ -374,6 +394,8 @@ PlotResult writeTrajectoryPlots(const TrajectoryLog& log, const std::vector<Trac
     }
     res.figures.insert(res.figures.end() - (s.nees2.samples ? 1 : 0),
                        {"trajectory_" + st + ".png", "errors_" + st + ".png"});
+    if (const EstimateTrack* t = trackOf(log, s.channel))
+      writeStatusPlot(gp, statusTimeline(*t, log.gates), t0, dir, st, res.figures);
   }
   writeGatePlots(gp, log, t0, dir, res.figures);
   gp << "set output\n";
