@@ -423,3 +423,62 @@ TEST(ImportFormats, TheWrittenConfigIsReadBackByTheReplaysLoaderAndReplays) {
   EXPECT_NO_THROW(app::loadSystemConfig(r.config_path));
   fs::remove_all(d);
 }
+
+// A recording whose every landmark observation is a distractor (no identity, nothing in the map
+// where it was seen): the import warns that the run can only be dead reckoning, writes every
+// observation (nothing lost), and the replay keeps the estimate on the odometry: no distractor is
+// taken for a landmark.
+TEST(ImportFormats, ARecordingOfNothingButDistractorsIsImportedWholeWarnedAboutAndNeverMovesTheEstimate) {
+  const auto d = tempDir("distractors");
+  write(d / "map.csv", "id,x,y\n1,10,10\n2,-10,10\n3,10,-10\n4,-10,-10\n");
+  std::string odo = "time,delta_s,delta_theta\n", truth = "time,x,y,heading\n",
+              lm = "time,landmark_id,range,bearing\n";
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int k = 0; k <= 600; ++k) {  // 60 s along +x at 0.5 m/s
+    const double t = 1.0 + 0.1 * k, x = 0.05 * k;
+    if (k > 0) odo += fmt::format("{:.1f},0.05,0\n", t);
+    truth += fmt::format("{:.1f},{:.12f},0,0\n", t, x);
+    // Something seen 1-3 m away, in front: never near a map landmark (all 10 m off the path).
+    if (k % 2 == 0) lm += fmt::format("{:.1f},unknown,{:.6f},{:.6f}\n", t, 2.0 + u(rng), 0.7 * u(rng));
+  }
+  write(d / "odometry.csv", odo);
+  write(d / "truth.csv", truth);
+  write(d / "landmarks.csv", lm);
+  const fs::path out = d / "out";
+  auto [code, text] = runCommand(LCMLOC_IMPORT_BIN, d.string() + " -o " + out.string(), d);
+  ASSERT_EQ(code, 0) << text;
+  EXPECT_HAS(text, "warning: every one of the 301 landmark observations is without identity");
+  EXPECT_HAS(text, "301 rows read, 0 refused, 301 messages");
+  const std::string run = (out / "run.lcmlog").string(), config = (out / "config.yaml").string();
+  EXPECT_EQ(messages<lcmloc::landmark_obs_t>(run, "LANDMARKS").size(), 301u);
+  const fs::path est = d / "est.lcmlog";
+  std::tie(code, text) = runCommand(LCMLOC_REPLAY_BIN, run + " --config " + config + " --with-inputs -o " + est.string(), d);
+  ASSERT_EQ(code, 0) << text;
+  const auto log = eval::readTrajectoryLog(est.string(), eval::TrajectoryLogOptions{});
+  int64_t accepted = 0;
+  for (const auto& g : log.gates) accepted += g.accepted;
+  EXPECT_EQ(log.gates.size(), 301u);
+  EXPECT_EQ(accepted, 0);
+  // The same log without its observations gives the same estimates: the distractors changed nothing.
+  const fs::path odo_only = d / "odometry_only.lcmlog", est2 = d / "est2.lcmlog";
+  std::tie(code, text) = runCommand(LCMLOC_LOG_BIN, "cut " + run + " -c 'ODOMETRY|GROUND_TRUTH' -o " + odo_only.string(), d);
+  ASSERT_EQ(code, 0) << text;
+  std::tie(code, text) =
+      runCommand(LCMLOC_REPLAY_BIN, odo_only.string() + " --config " + config + " --with-inputs -o " + est2.string(), d);
+  ASSERT_EQ(code, 0) << text;
+  const auto dr = eval::readTrajectoryLog(est2.string(), eval::TrajectoryLogOptions{});
+  // (a state after every odometry message and after every decision: the last one at each time)
+  std::map<int64_t, eval::Estimate> with, without;
+  for (const auto& p : log.tracks.at(0).poses) with[p.utime] = p;
+  for (const auto& p : dr.tracks.at(0).poses) without[p.utime] = p;
+  ASSERT_EQ(with.size(), 601u);
+  ASSERT_EQ(without.size(), 600u);  // (no decision at the first time, before the first odometry)
+  for (const auto& [t, b] : without) {
+    const auto& a = with.at(t);
+    ASSERT_EQ(a.x, b.x) << t;
+    ASSERT_EQ(a.y, b.y) << t;
+    ASSERT_EQ(a.theta, b.theta) << t;
+  }
+  fs::remove_all(d);
+}

@@ -316,6 +316,8 @@ Converted convertRows(std::vector<DataFile>& files, const std::vector<const Data
       addMsg(log, *rep, order, channel, m);
     }
   };
+  out.landmarks_written = static_cast<int64_t>(landmark_msgs.size());
+  for (const auto& lm : landmark_msgs) out.landmarks_without_identity += lm.first.landmark_id < 0;
   addInTimeOrder(landmark_msgs, 2, opt.channels.landmarks);
   addInTimeOrder(beacon_msgs, 3, opt.channels.beacons);
   addInTimeOrder(gps_msgs, 4, opt.channels.gps);

@@ -213,6 +213,14 @@ ImportResult importDirectory(const ImportOptions& opt) {
   r.last_utime = log.lastUtime();
   r.files.clear();
   for (const auto& f : files) r.files.push_back(f.report);
+  if (conv.landmarks_written > 0 && conv.landmarks_without_identity == conv.landmarks_written && !conv.have_beacons &&
+      !conv.have_gps)
+    r.warnings.push_back(fmt::format(
+        "warning: every one of the {} landmark observations is without identity (landmark_id -1) and nothing else "
+        "measures the position: the filter can only associate them with the map from its predicted pose, never "
+        "confirm that pose, and observations of things not in the map (other robots) are taken for landmarks when "
+        "one is near; the run is dead reckoning at best",
+        conv.landmarks_written));
   if (!opt.filter.empty()) r.filter = opt.filter;
   else if (conv.have_landmarks || conv.have_beacons) r.filter = "ukf_landmarks";
   else if (conv.have_gps) r.filter = "ukf_gps";
@@ -255,6 +263,7 @@ std::string importSummary(const ImportResult& r, int max_refusals) {
     s += fmt::format("refused {}:{}: {}\n", r.refusals[i].file, r.refusals[i].line, r.refusals[i].reason);
   if (shown < r.refusals.size()) s += fmt::format("... and {} more refused rows\n", r.refusals.size() - shown);
   for (const auto& n : r.noise_fit) s += n + "\n";
+  for (const auto& w : r.warnings) s += w + "\n";
   if (!r.log_path.empty())
     s += fmt::format("wrote {}{}, {} (filter {})\n", r.log_path, r.map_path.empty() ? "" : ", " + r.map_path,
                      r.config_path, r.filter);

@@ -66,6 +66,7 @@ struct Converted {
   EventLog log;
   bool have_landmarks = false, have_beacons = false, have_gps = false, have_imu = false;
   bool imu_without_mag = false;           ///< an IMU file without magnetometer columns (mag written as 0)
+  int64_t landmarks_written = 0, landmarks_without_identity = 0;  ///< landmark messages, and those with id -1
   std::optional<core::Vec3> first_truth;  ///< the earliest ground-truth pose (heading: see truth_heading)
   /// How first_truth's heading was found: "row" (the truth has a heading), "travel" (position-only
   /// truth: the direction of travel), "none" (position-only truth that never moves: 0).

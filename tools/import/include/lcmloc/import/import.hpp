@@ -61,6 +61,9 @@ struct ImportResult {
   /// With a ground truth: the noise fitted against it (lcmloc-fit-noise) that config.yaml got,
   /// one line per value, and what could not be fitted (ImportOptions::fit_noise).
   std::vector<std::string> noise_fit;
+  /// What the recording cannot give the filter, said before it is replayed (e.g. no landmark
+  /// observation of known identity).
+  std::vector<std::string> warnings;
   bool usable() const { return messages > 0; }
 };
 
