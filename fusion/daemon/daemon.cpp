@@ -204,6 +204,11 @@ void FusionDaemon::decodeError(const std::string& ch, const std::string& why) {
 void FusionDaemon::apply(IntakeItem& item) {
   ++messages_in_;
   if (item.seq_event) reportSeq(item);
+  if (item.stream.kind == bus::StreamVerdict::Kind::Replaced) {
+    const std::string what = item.stream.describe(item.input.channel);
+    spdlog::warn("{}", app::printable(what));
+    publishStatus("source_replaced", what, last_utime_);
+  }
   core::EngineInput& in = item.input;
   switch (item.kind) {
     case IntakeItem::Kind::Input:
@@ -217,7 +222,17 @@ void FusionDaemon::apply(IntakeItem& item) {
       return decodeError(in.channel, item.why);
     case IntakeItem::Kind::Nothing:
       return;
+    case IntakeItem::Kind::Held:
+      return held(item);
   }
+}
+
+void FusionDaemon::held(const IntakeItem& item) {
+  ++rejected_;
+  if (!item.stream.detected) return;
+  const std::string what = item.stream.describe(item.input.channel);
+  spdlog::warn("{}", app::printable(what));
+  publishStatus("second_publisher", what, last_utime_);
 }
 
 void FusionDaemon::checkResumeGap(const core::EngineInput& in) {
@@ -255,11 +270,12 @@ void FusionDaemon::push(core::EngineInput&& in) {
     reject(in.channel, in.seq, in.utime, "older than the reorder window");  // normally reported by the engine
 }
 
-DaemonIntake::DaemonIntake(const app::SystemConfig& cfg) : cfg_(cfg), frame_(cfg.datum) {}
+DaemonIntake::DaemonIntake(const app::SystemConfig& cfg) : cfg_(cfg), limits_(cfg.fusion.limits), frame_(cfg.datum) {}
 
 void DaemonIntake::start(IntakeItem& out, IntakeItem::Kind kind, const std::string& ch, int64_t seq, int64_t utime) {
   out.kind = kind;
   out.seq_event = false;
+  out.stream = bus::StreamVerdict{};
   out.input.channel = ch;
   out.input.seq = seq;
   out.input.utime = utime;
@@ -267,6 +283,11 @@ void DaemonIntake::start(IntakeItem& out, IntakeItem::Kind kind, const std::stri
 
 void DaemonIntake::tracked(IntakeItem& out, const std::string& ch, int64_t seq, int64_t utime) {
   start(out, IntakeItem::Kind::Nothing, ch, seq, utime);
+  out.stream = streams_.observe(ch, seq, utime);
+  if (out.stream.held()) {  // another publisher's: neither for the fusion nor for the gap count
+    out.kind = IntakeItem::Kind::Held;
+    return;
+  }
   if (gaps_.follows(ch, seq)) return;
   const bus::SeqGap gap = gaps_.observe(ch, seq);
   if (gap.missing > 0 || gap.uncounted > 0 || gap.ignored || gap.restarted) {

@@ -19,6 +19,8 @@
 #include "lcmloc/bus/convert.hpp"
 #include "lcmloc/bus/geodesy.hpp"
 #include "lcmloc/bus/seq_tracker.hpp"
+#include "lcmloc/bus/input_limits.hpp"
+#include "lcmloc/bus/stream_guard.hpp"
 #include "lcmloc/bus/transport.hpp"
 #include "lcmloc/core/engine.hpp"
 #include "lcmloc/fusion_control_t.hpp"
@@ -37,11 +39,13 @@ struct IntakeItem {
     Refused,      ///< a command refused: status refused (why: its detail; note: the log line)
     DecodeError,  ///< undecodable (input.channel, why): status rejected_input
     Nothing,      ///< counted, nothing else (a ruler reading without a detection)
+    Held,         ///< another publisher's on the channel (stream): counted, status on detection
   };
   Kind kind = Kind::Nothing;
   bool seq_event = false;   ///< the sequence tracker found a gap, a restart or an ignored seq (gap)
   core::EngineInput input;  ///< channel, seq and utime always; the payload with Kind::Input
   bus::SeqGap gap;       ///< with seq_event: what the sequence tracker found
+  bus::StreamVerdict stream;  ///< the channel's publisher (bus::StreamGuard)
   std::string why;          ///< Rejected, Refused, DecodeError: the reason
   std::string note;         ///< Refused: the log line
 };
@@ -59,9 +63,11 @@ class DaemonIntake {
   void take(const std::string& ch, const Lcm& m, IntakeItem& out) {
     tracked(out, ch, m.seq, m.utime);
     out.why.clear();
+    if (out.kind == IntakeItem::Kind::Held) return;
     switch (bus::toInput(m, bus::InputContext{ch, frame_}, out.input.payload, out.why)) {
       case bus::Converted::Input:
-        out.kind = IntakeItem::Kind::Input;
+        out.why = limits_.check(out.input);
+        out.kind = out.why.empty() ? IntakeItem::Kind::Input : IntakeItem::Kind::Rejected;
         return;
       case bus::Converted::Refused:
         out.kind = IntakeItem::Kind::Rejected;
@@ -80,6 +86,8 @@ class DaemonIntake {
   void tracked(IntakeItem& out, const std::string& ch, int64_t seq, int64_t utime);
   const app::SystemConfig& cfg_;
   bus::SeqTracker gaps_;
+  bus::StreamGuard streams_;
+  bus::LimitCheck limits_;
   bus::LocalFrame frame_;  ///< lat/lon of GPS fixes -> local metric frame (cfg.datum)
 };
 
@@ -163,6 +171,10 @@ class FusionDaemon {
   /// What the sequence tracker found about a message (a gap, a restart, an ignored seq):
   /// counted, a warning and a status event.
   void reportSeq(const IntakeItem& item);
+  /// A message of another publisher on its channel (IntakeItem::Kind::Held): counted as
+  /// rejected; status "second_publisher" when it is the first held of that publisher, and
+  /// "source_replaced" when a silent stream is replaced.
+  void held(const IntakeItem& item);
   void decodeError(const std::string& ch, const std::string& why);
   void push(core::EngineInput&& in);
   /// First input after an init state (hand-over, checkpoint): more than kResumeGapUs after it

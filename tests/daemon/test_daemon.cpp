@@ -252,6 +252,81 @@ TEST_F(DaemonTest, SequenceGapsAreCountedPerChannelAndReported) {
   EXPECT_EQ(daemon.processed(), 10 + 7 + 6);
 }
 
+// A second publisher on ODOMETRY (a driver started twice, lcm-logplayer on the live network):
+// its stream (seq from 0, -1 m every 10 ms, time near the live one) is held apart or refused by
+// the physical limits, and reported once on the status: the pose is the one without it.
+TEST_F(DaemonTest, ASecondPublisherIsHeldApartReportedAndChangesNoPose) {
+  std::vector<lcmloc::pose_t> clean;
+  for (const bool hostile : {false, true}) {
+    bus::MemoryBus bus;
+    fusion::FusionDaemon daemon(cfg_, bus);
+    for (int64_t k = 0; k < 300; ++k) {
+      bus.inject(cfg_.channels.odometry, odometry(5000 + k, kT0 + k * kStep));
+      bus.deliverAll();
+      if (!hostile || k < 100) continue;
+      auto m = odometry(k - 100, kT0 + k * kStep + 3000);
+      m.delta_s = -1.0;
+      m.steering = -1.0;
+      m.has_steering = false;  // (a yaw-rate source: -1 m and 0 rad, within the yaw-rate bound)
+      m.delta_theta = 0.0;
+      bus.inject(cfg_.channels.odometry, m);
+      bus.deliverAll();
+    }
+    daemon.shutdown();
+    auto p = bus.decoded<lcmloc::pose_t>(cfg_.channels.pose);
+    for (auto& x : p) x.seq = 0;
+    if (!hostile) {
+      clean = p;
+      EXPECT_EQ(daemon.rejected(), 0);
+      continue;
+    }
+    ASSERT_EQ(p.size(), clean.size());
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      ASSERT_EQ(p[i].utime, clean[i].utime) << i;
+      ASSERT_EQ(p[i].state, clean[i].state) << i;
+    }
+    const auto st = bus.decoded<lcmloc::fusion_status_t>(cfg_.channels.status);
+    int second = 0, limit = 0;
+    for (const auto& s : st) {
+      if (s.event == "second_publisher") {
+        ++second;
+        EXPECT_NE(s.detail.find("ODOMETRY: a second publisher (first seq 0 at utime 2003000)"), std::string::npos)
+            << s.detail;
+      }
+      if (s.event == "rejected_input" && s.detail.find("max_speed") != std::string::npos) ++limit;
+    }
+    EXPECT_EQ(second, 1);
+    EXPECT_EQ(limit, 1);  // its first message, a lone seq so far, refused by the speed bound
+    EXPECT_EQ(daemon.rejected(), 200);
+    EXPECT_EQ(daemon.gaps(), 0);
+  }
+}
+
+// Odometry that decodes but describes no vehicle's motion is refused with the bound it broke
+// (fusion.limits), and the pose goes on from the rest.
+TEST_F(DaemonTest, OdometryBeyondThePhysicalLimitsIsRefusedNamingTheLimit) {
+  fusion::FusionDaemon daemon(cfg_, bus_);
+  odo(0, 9);
+  auto fast = odometry(10, kT0 + 10 * kStep);
+  fast.delta_s = 2.0;  // 200 m/s
+  send(cfg_.channels.odometry, fast);
+  auto steer = odometry(11, kT0 + 11 * kStep);
+  steer.steering = -1.0;
+  send(cfg_.channels.odometry, steer);
+  odo(12, 29);
+  daemon.shutdown();
+  EXPECT_EQ(daemon.rejected(), 2);
+  const auto rejected = events("rejected_input");
+  ASSERT_EQ(rejected.size(), 2u);
+  EXPECT_NE(rejected[0].detail.find("ODOMETRY seq 10: increment 2 m over 0.01 s is 200 m/s, beyond fusion.limits.max_speed 70"),
+            std::string::npos)
+      << rejected[0].detail;
+  EXPECT_NE(rejected[1].detail.find("max_steering"), std::string::npos) << rejected[1].detail;
+  const auto p = poses(cfg_.channels.pose);
+  ASSERT_FALSE(p.empty());
+  EXPECT_NEAR(p.back().state[1], 2.8, 0.05) << "the refused increments are not integrated";
+}
+
 // ---------------------------------------------------------------------------------------------
 // The process around the daemon (lcmloc-fusion's main), over the MemoryBus
 

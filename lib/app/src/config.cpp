@@ -116,6 +116,13 @@ void parseFusion(KeyReader& root, FusionConfig& f) {
   r.get("odometry_period", f.odometry_period, 0.0, 10.0, "0 = not known");
   ins_config::parseLandmarks(r, f.landmarks);
   {
+    KeyReader x(r.child("limits"), root.file(), "fusion.limits");
+    x.get("max_speed", f.limits.max_speed, 0.0, 1e4, "0 = off");
+    x.get("max_yaw_rate", f.limits.max_yaw_rate, 0.0, 1e4, "0 = off");
+    x.get("max_steering", f.limits.max_steering, 0.0, 1.6, "0 = off");
+    x.finish();
+  }
+  {
     KeyReader x(r.child("landmark_fix"), root.file(), "fusion.landmark_fix");
     x.get("gate_probability", f.fix_gate.probability, 0.0, 1.0 - 1e-12, "0 = no gate");
     x.get("lockout_rejections", f.fix_gate.lockout_rejections, 0, 1000000);

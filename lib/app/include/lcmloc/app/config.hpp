@@ -14,6 +14,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "lcmloc/bus/geodesy.hpp"
+#include "lcmloc/bus/input_limits.hpp"
 #include "lcmloc/core/engine.hpp"
 #include "lcmloc/core/filter.hpp"
 
@@ -82,6 +83,9 @@ struct FusionConfig {
   /// started again from its checkpoint bridges the motion it did not see at the speed of its
   /// first increment over this period; 0 = not known (bridged at speed 0, covariance grown).
   double odometry_period = 0.01;
+  /// Physical limits on the inputs (`fusion.limits`: max_speed, max_yaw_rate, max_steering;
+  /// bus::LimitCheck): an input beyond them is refused by the daemon's intake.
+  bus::InputLimits limits;
 };
 
 struct LoggerConfig {

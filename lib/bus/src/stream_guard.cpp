@@ -1,0 +1,78 @@
+#include "lcmloc/bus/stream_guard.hpp"
+
+#include <algorithm>
+
+#include <fmt/format.h>
+
+namespace lcmloc::bus {
+namespace {
+
+bool goesOn(int64_t last, int64_t seq) { return seq == last || (seq > last && seq - last <= StreamGuard::kMaxAhead); }
+
+void add(int64_t seq, int64_t utime, int64_t& last_seq, int64_t& last_utime) {
+  last_seq = std::max(last_seq, seq);
+  last_utime = std::max(last_utime, utime);
+}
+
+}  // namespace
+
+std::string StreamVerdict::describe(const std::string& channel) const {
+  if (kind == Kind::Replaced)
+    return fmt::format("{}: a new stream (first seq {} at utime {}) replaces the one silent since seq {} at utime {}",
+                       channel, first_seq, first_utime, established_seq, established_utime);
+  return fmt::format("{}: a second publisher (first seq {} at utime {}) while the established one goes on (seq {} at "
+                     "utime {}): its messages are held apart",
+                     channel, first_seq, first_utime, established_seq, established_utime);
+}
+
+StreamVerdict StreamGuard::observe(const std::string& channel, int64_t seq, int64_t utime) {
+  StreamVerdict v;
+  auto [it, added] = channels_.try_emplace(channel);
+  Channel& c = it->second;
+  if (added) {
+    c.est = Stream{seq, utime, seq, utime, 1};
+    return v;
+  }
+  v.established_seq = c.est.last_seq;
+  v.established_utime = c.est.last_utime;
+  if (goesOn(c.est.last_seq, seq)) {
+    add(seq, utime, c.est.last_seq, c.est.last_utime);
+    ++c.est.count;
+    if (c.has_other) {
+      ++c.est_since_other;
+      c.other_mark = c.other.last_utime;
+    }
+    return v;
+  }
+  if (c.has_other && goesOn(c.other.last_seq, seq)) {
+    add(seq, utime, c.other.last_seq, c.other.last_utime);
+    ++c.other.count;
+    v.first_seq = c.other.first_seq;
+    v.first_utime = c.other.first_utime;
+    if (c.other.last_utime - c.other_mark >= kSilenceUs) {  // the established stream is gone
+      c.est = c.other;
+      c.has_other = false;
+      c.reported = false;
+      v.kind = StreamVerdict::Kind::Replaced;
+      return v;
+    }
+    if (c.est_since_other == 0) return v;  // silent since the other began: a restart, so far
+    v.kind = StreamVerdict::Kind::Held;
+    ++held_;
+    if (!c.reported) {
+      c.reported = true;
+      v.detected = true;
+      ++detections_;
+    }
+    return v;
+  }
+  // Neither: another stream begins (or a lone corrupt seq, which looks the same until the next).
+  if (!c.has_other || c.other.count > 1) c.reported = false;
+  c.other = Stream{seq, utime, seq, utime, 1};
+  c.has_other = true;
+  c.est_since_other = 0;
+  c.other_mark = utime;
+  return v;
+}
+
+}  // namespace lcmloc::bus

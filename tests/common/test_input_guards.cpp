@@ -1,0 +1,124 @@
+// The daemon intake's guards against wrong but decodable input: a second publisher on a channel
+// (bus::StreamGuard) and physical limits (bus::LimitCheck).
+#include <gtest/gtest.h>
+
+#include "lcmloc/bus/input_limits.hpp"
+#include "lcmloc/bus/stream_guard.hpp"
+
+using namespace lcmloc;
+using Kind = bus::StreamVerdict::Kind;
+
+namespace {
+constexpr int64_t kT0 = 1'000'000'000;
+constexpr int64_t kPeriod = 10'000;  // 100 Hz
+}  // namespace
+
+TEST(StreamGuard, ASecondPublisherIsHeldApartFromItsSecondMessageAndReportedOnce) {
+  bus::StreamGuard g;
+  int64_t held = 0, detected = 0, taken_second = 0;
+  for (int i = 0; i < 300; ++i) {
+    const int64_t t = kT0 + i * kPeriod;
+    EXPECT_EQ(g.observe("ODOMETRY", 5000 + i, t).kind, Kind::Taken) << i;
+    if (i < 100) continue;
+    const auto v = g.observe("ODOMETRY", i - 100, t + 3000);  // another stream from seq 0, times near ours
+    held += v.held();
+    detected += v.detected;
+    taken_second += v.kind == Kind::Taken;
+    if (v.detected) {
+      EXPECT_EQ(v.first_seq, 0);
+      EXPECT_EQ(v.first_utime, kT0 + 100 * kPeriod + 3000);
+      EXPECT_NE(v.describe("ODOMETRY").find("a second publisher (first seq 0"), std::string::npos) << v.describe("ODOMETRY");
+    }
+  }
+  EXPECT_EQ(taken_second, 1);  // its first message: a lone corrupt seq looks the same
+  EXPECT_EQ(held, 199);
+  EXPECT_EQ(detected, 1);
+  EXPECT_EQ(g.detections(), 1);
+  // Another channel is another matter.
+  EXPECT_EQ(g.observe("GPS", 0, kT0).kind, Kind::Taken);
+}
+
+TEST(StreamGuard, ALoneCorruptSeqCostsNothing) {
+  bus::StreamGuard g;
+  for (int i = 0; i < 100; ++i) {
+    const int64_t seq = i == 50 ? (int64_t{1} << 40) : i;  // one flipped bit
+    EXPECT_EQ(g.observe("IMU", seq, kT0 + i * kPeriod).kind, Kind::Taken) << i;
+  }
+  EXPECT_EQ(g.held(), 0);
+}
+
+TEST(StreamGuard, APublisherThatRestartsIsTakenAndReplacesItsSilentStream) {
+  bus::StreamGuard g;
+  for (int i = 0; i < 5000; ++i) g.observe("ODOMETRY", i, kT0 + i * kPeriod);
+  // Started over: seq from 0, time from the start again (a log played again); the old stream is silent.
+  int replaced = 0;
+  for (int i = 0; i < 400; ++i) {
+    const auto v = g.observe("ODOMETRY", i, kT0 + i * kPeriod);
+    EXPECT_FALSE(v.held()) << i;
+    if (v.kind == Kind::Replaced) {
+      ++replaced;
+      EXPECT_EQ(i, 200);  // after 2 s of its message time without the old stream
+      EXPECT_NE(v.describe("ODOMETRY").find("replaces the one silent since seq 4999"), std::string::npos);
+    }
+  }
+  EXPECT_EQ(replaced, 1);
+  // The old stream back now is the other one, and held once the new one has gone on.
+  g.observe("ODOMETRY", 5000, kT0 + 5000 * kPeriod);  // (its first message: taken)
+  g.observe("ODOMETRY", 400, kT0 + 400 * kPeriod);
+  EXPECT_TRUE(g.observe("ODOMETRY", 5001, kT0 + 5001 * kPeriod).held());
+}
+
+TEST(StreamGuard, AStreamThatStartsOverWithinItsOwnSeqsIsOneStream) {
+  bus::StreamGuard g;
+  for (int i = 0; i < 100; ++i) g.observe("ODOMETRY", i, kT0 + i * kPeriod);
+  for (int i = 0; i < 300; ++i) EXPECT_FALSE(g.observe("ODOMETRY", i, kT0 + i * kPeriod).held()) << i;
+  EXPECT_EQ(g.held(), 0);
+}
+
+TEST(StreamGuard, ASlowEstablishedStreamIsNotReplacedByAFastIntruderWhichIsHeldAfterOnePeriod) {
+  bus::StreamGuard g;
+  for (int i = 0; i < 10; ++i) g.observe("GPS", i, kT0 + i * 1'000'000);  // 1 Hz
+  int64_t held = 0;
+  for (int k = 0; k < 100; ++k) {  // an intruder at 10 Hz for 10 s
+    const int64_t t = kT0 + 10'000'000 + k * 100'000;
+    if (k % 10 == 0) EXPECT_EQ(g.observe("GPS", 10 + k / 10, t).kind, Kind::Taken) << k;
+    const auto v = g.observe("GPS", 7000 + k, t + 1);
+    EXPECT_NE(v.kind, Kind::Replaced) << k;
+    held += v.held();
+  }
+  // Taken until the established stream's next message (one of its periods), held from then on.
+  EXPECT_EQ(held, 90);
+}
+
+namespace {
+core::EngineInput odo(const std::string& ch, int64_t utime, double ds, double dth, double steering = 0, bool car = false) {
+  core::OdometryInput o;
+  o.utime = utime;
+  o.delta_s = ds;
+  o.delta_theta = dth;
+  o.steering = steering;
+  o.has_steering = car;
+  return core::EngineInput{ch, 0, utime, o};
+}
+}  // namespace
+
+TEST(LimitCheck, OdometryBeyondSpeedYawRateOrSteeringIsRefusedSayingWhich) {
+  bus::LimitCheck c;  // 70 m/s, 5 rad/s, 0.8 rad
+  EXPECT_EQ(c.check(odo("ODOMETRY", kT0, 0.1, 0.0)), "");  // the first: no interval yet
+  EXPECT_EQ(c.check(odo("ODOMETRY", kT0 + kPeriod, 0.3, 0.01)), "");  // 30 m/s, 1 rad/s
+  const std::string fast = c.check(odo("ODOMETRY", kT0 + 2 * kPeriod, -1.0, 0.0));  // -1 m in 10 ms
+  EXPECT_NE(fast.find("100 m/s, beyond fusion.limits.max_speed 70"), std::string::npos) << fast;
+  // The refused one did not move the channel's time: the next is over 20 ms.
+  EXPECT_EQ(c.check(odo("ODOMETRY", kT0 + 3 * kPeriod, 1.2, 0.0)), "");  // 60 m/s over 20 ms
+  const std::string spin = c.check(odo("ODOMETRY", kT0 + 4 * kPeriod, 0.1, 0.1));  // 10 rad/s
+  EXPECT_NE(spin.find("max_yaw_rate"), std::string::npos) << spin;
+  const std::string steer = c.check(odo("ODOMETRY", kT0 + 4 * kPeriod, 0.1, 0.0, -1.0, true));
+  EXPECT_NE(steer.find("steering angle -1 rad beyond fusion.limits.max_steering 0.8"), std::string::npos) << steer;
+  // Each channel has its own interval; other inputs are not odometry's business.
+  EXPECT_EQ(c.check(odo("ODOMETRY_2", kT0 + 4 * kPeriod, 5.0, 0.0)), "");
+  EXPECT_EQ(c.check(core::EngineInput{"GPS", 0, kT0, core::GpsInput{}}), "");
+  // 0 = off.
+  bus::LimitCheck off(bus::InputLimits{0, 0, 0, 0.005});
+  off.check(odo("ODOMETRY", kT0, 0.1, 0.0));
+  EXPECT_EQ(off.check(odo("ODOMETRY", kT0 + kPeriod, -1.0, 1.0, -1.0, true)), "");
+}
