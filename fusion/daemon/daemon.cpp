@@ -16,6 +16,14 @@ namespace lcmloc::fusion {
 
 namespace {
 
+/// The input an engine event refusing one is about ("" for others).
+std::string channelOf(const core::EngineEvent& e) {
+  if (const auto* l = std::get_if<core::events::Late>(&e.fields)) return l->input.channel;
+  if (const auto* o = std::get_if<core::events::Outlier>(&e.fields)) return o->input.channel;
+  if (const auto* c = std::get_if<core::events::CommandAhead>(&e.fields)) return c->input.channel;
+  return "";
+}
+
 /// FNV-1a over a POSE's utime, filter and state: what tells this daemon's POSE from another's.
 uint64_t fingerprint(int64_t utime, const std::string& filter, const double* state, std::size_t n) {
   uint64_t h = 14695981039346656037ull;
@@ -65,12 +73,12 @@ FusionDaemon::FusionDaemon(const app::SystemConfig& cfg, bus::MessageBus& bus, O
         if (log_throttle_.allow("too_old"))
           spdlog::warn("rejected input: {} (older than the {:.3f} s reorder window)", app::printable(detail),
                        cfg_.fusion.reorder_window);
-        publishStatus("rejected_input", "too old: " + detail, e.utime);
+        if (rejects_.note(channelOf(e), "too_old")) publishStatus("rejected_input", "too old: " + detail, e.utime);
         return;
       case core::EventKind::TooNew:  // the time-jump guard dropped it (fusion.max_time_jump)
         ++rejected_;
         if (log_throttle_.allow("too_new")) spdlog::warn("rejected input: {}", app::printable(detail));
-        publishStatus("rejected_input", "too new: " + detail, last_utime_);
+        if (rejects_.note(channelOf(e), "too_new")) publishStatus("rejected_input", "too new: " + detail, last_utime_);
         return;
       case core::EventKind::OdometryGap:
       case core::EventKind::Ambiguous:  // the estimate may be off: a warning
@@ -188,17 +196,19 @@ void FusionDaemon::reportSeq(const IntakeItem& item) {
   }
 }
 
-void FusionDaemon::reject(const std::string& ch, int64_t seq, int64_t utime, const std::string& why) {
+void FusionDaemon::reject(const std::string& ch, int64_t seq, int64_t utime, const std::string& why,
+                          const std::string& reason) {
   ++rejected_;
   const std::string detail = ch + " seq " + std::to_string(seq) + ": " + why;
   if (log_throttle_.allow("reject:" + ch)) spdlog::warn("rejected input: {}", app::printable(detail));
-  publishStatus("rejected_input", detail, utime > 0 ? utime : last_utime_);
+  if (rejects_.note(ch, reason.empty() ? RejectBook::reasonOf(why) : reason))
+    publishStatus("rejected_input", detail, utime > 0 ? utime : last_utime_);
 }
 
 void FusionDaemon::decodeError(const std::string& ch, const std::string& why) {
   ++rejected_;
   if (log_throttle_.allow("decode:" + ch)) spdlog::warn("rejected input: {}: {}", app::printable(ch), why);
-  publishStatus("rejected_input", ch + ": " + why, last_utime_);
+  if (rejects_.note(ch, "undecodable")) publishStatus("rejected_input", ch + ": " + why, last_utime_);
 }
 
 void FusionDaemon::apply(IntakeItem& item) {
@@ -229,6 +239,7 @@ void FusionDaemon::apply(IntakeItem& item) {
 
 void FusionDaemon::held(const IntakeItem& item) {
   ++rejected_;
+  rejects_.note(item.input.channel, "second_publisher");  // (its status event: the detection)
   if (!item.stream.detected) return;
   const std::string what = item.stream.describe(item.input.channel);
   spdlog::warn("{}", app::printable(what));
@@ -267,7 +278,7 @@ void FusionDaemon::push(core::EngineInput&& in) {
   }
   event_seen_ = false;
   if (!engine_->push(std::move(in)) && !event_seen_)  // refused inputs are left as they were;
-    reject(in.channel, in.seq, in.utime, "older than the reorder window");  // normally reported by the engine
+    reject(in.channel, in.seq, in.utime, "older than the reorder window", "too_old");  // normally reported by the engine
 }
 
 DaemonIntake::DaemonIntake(const app::SystemConfig& cfg) : cfg_(cfg), limits_(cfg.fusion.limits), frame_(cfg.datum) {}
@@ -375,7 +386,7 @@ void FusionDaemon::publishState(const std::string& filter, bool active, const co
   if (next_status_utime_ != INT64_MIN && core::apartBy(next_status_utime_, s.utime, 2 * period))
     next_status_utime_ = INT64_MIN;
   if (s.utime >= next_status_utime_) {
-    if (next_status_utime_ != INT64_MIN) publishStatus("periodic", "", s.utime);
+    if (next_status_utime_ != INT64_MIN) publishStatus("periodic", rejects_.period(), s.utime);
     if (__builtin_add_overflow(s.utime, period, &next_status_utime_)) next_status_utime_ = INT64_MAX;
   }
 }
@@ -403,6 +414,7 @@ void FusionDaemon::shutdown() {
       c.processed, rejected_, c.too_old, c.too_new ? fmt::format(", too new {}", c.too_new) : "", gaps_,
       c.accepted, c.rejected);
   if (covered_ > 0) detail += fmt::format(", covered by the initial state {}", covered_);
+  if (const std::string by = rejects_.totals(); !by.empty()) detail += "; rejected by channel and reason: " + by;
   publishStatus("stopped", detail, last_utime_);
   spdlog::info("stopping: {}", detail);
 }

@@ -21,6 +21,7 @@
 #include "lcmloc/bus/seq_tracker.hpp"
 #include "lcmloc/bus/input_limits.hpp"
 #include "lcmloc/bus/stream_guard.hpp"
+#include "daemon/reject_book.hpp"
 #include "lcmloc/bus/transport.hpp"
 #include "lcmloc/core/engine.hpp"
 #include "lcmloc/fusion_control_t.hpp"
@@ -181,7 +182,9 @@ class FusionDaemon {
   /// is reported (status event resume_gap): the motion in between is lost.
   void checkResumeGap(const core::EngineInput& in);
   static constexpr int64_t kResumeGapUs = 100000;
-  void reject(const std::string& ch, int64_t seq, int64_t utime, const std::string& why);
+  /// An input refused: counted under its channel and reason (RejectBook; "" = from why), a
+  /// status event while its reason has had fewer than RejectBook::kEventsPerPeriod this period.
+  void reject(const std::string& ch, int64_t seq, int64_t utime, const std::string& why, const std::string& reason = "");
   void publishState(const std::string& filter, bool active, const core::FilterState& s);
   void publishStatus(const std::string& event, const std::string& detail, int64_t utime);
   std::string poseChannel(const std::string& filter, bool active) const;
@@ -216,6 +219,7 @@ class FusionDaemon {
   std::vector<Echo> echoes_;
   int64_t pose_seqs_ = 0;  ///< seqs published on the active POSE channel (the next one's seq)
   int64_t foreign_outputs_ = 0;
+  RejectBook rejects_;              ///< refused inputs per channel and reason
   app::LogThrottle log_throttle_;  ///< per kind of problem: first 5, then 1 in 1000
   int64_t messages_in_ = 0, rejected_ = 0, last_utime_ = 0, next_status_utime_ = INT64_MIN;
   int64_t status_period_us_ = 0;  ///< fusion.status_period [us]

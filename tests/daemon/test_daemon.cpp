@@ -302,6 +302,36 @@ TEST_F(DaemonTest, ASecondPublisherIsHeldApartReportedAndChangesNoPose) {
   }
 }
 
+// A flood of bad messages (100 undecodable and 100 NaN odometry messages within one status
+// period) costs a few status events per channel and reason, then one summary in the periodic
+// status: counts per channel and reason; every one is counted as rejected.
+TEST_F(DaemonTest, AFloodOfBadMessagesIsCountedPerChannelAndReasonNotReportedOneByOne) {
+  fusion::FusionDaemon daemon(cfg_, bus_);
+  odo(0, 9);
+  for (int k = 0; k < 100; ++k) {
+    bus_.inject(cfg_.channels.odometry, std::vector<uint8_t>{1, 2, 3});
+    auto bad = odometry(10, kT0 + 10 * kStep);
+    bad.delta_s = std::nan("");
+    bus_.inject(cfg_.channels.odometry, bad);
+  }
+  bus_.deliverAll();
+  odo(10, 250);  // 2.4 s more: periodic status reports
+  daemon.shutdown();
+  EXPECT_EQ(daemon.rejected(), 200);
+  EXPECT_EQ(events("rejected_input").size(), 2 * fusion::RejectBook::kEventsPerPeriod);
+  bool summary = false;
+  for (const auto& s : events("periodic"))
+    summary |= s.detail.find("rejected since the last periodic status: ODOMETRY invalid 100 (95 not reported each), "
+                             "ODOMETRY undecodable 100 (95 not reported each)") != std::string::npos;
+  EXPECT_TRUE(summary);
+  const auto stopped = events("stopped");
+  ASSERT_EQ(stopped.size(), 1u);
+  EXPECT_NE(stopped[0].detail.find("rejected by channel and reason: ODOMETRY invalid 100, ODOMETRY undecodable 100"),
+            std::string::npos)
+      << stopped[0].detail;
+  for (const auto& pose : poses(cfg_.channels.pose)) EXPECT_TRUE(finite(pose));
+}
+
 // Odometry that decodes but describes no vehicle's motion is refused with the bound it broke
 // (fusion.limits), and the pose goes on from the rest.
 TEST_F(DaemonTest, OdometryBeyondThePhysicalLimitsIsRefusedNamingTheLimit) {
