@@ -62,6 +62,20 @@ class MultiHostTest : public ProcessFixture {
     Child launcher(ipProgram(),
                    hosts[0]->exec(LCMLOC_LAUNCHER, {"--system", drivers, "--config", scenario, "--lcm-url", url_}, host(0)),
                    path(tag + "_launcher.out"));
+    if (!one) {
+      // lcmloc-preflight on the third host while the system runs: every channel has a publisher,
+      // and the other hosts' clocks (one kernel's here) are within 10 ms of its own.
+      Child pre(ipProgram(),
+                hosts[2]->exec(LCMLOC_PREFLIGHT, {"--lcm-url", url_, "--multi-host", "--expect",
+                                                  "GROUND_TRUTH,ODOMETRY,POSE,HEARTBEAT", "--listen", "3"},
+                               host(2)),
+                path(tag + "_preflight.out"));
+      EXPECT_EQ(pre.wait(30s), std::optional<int>(0)) << pre.output();
+      for (const char* ok : {"ok    route: 239.255.76.67 goes out via v3", "ok    ttl: ttl=1", "ok    channel POSE",
+                             "ok    clock host1", "ok    clock host2", "ok    clock host3"})
+        EXPECT_NE(pre.output().find(ok), std::string::npos) << ok << "\n" << pre.output();
+      std::printf("preflight on host3 during the run:\n%s", pre.output().c_str());
+    }
     const auto rc = launcher.wait(90s);
     ASSERT_TRUE(rc.has_value()) << launcher.output();
     ASSERT_EQ(*rc, 0) << launcher.output();
