@@ -177,8 +177,8 @@ Finding selfTest(const std::string& url) {
   while (!echo.heard && Clock::now() < deadline) lcm->handleTimeout(50);
   if (!echo.heard)
     return {Finding::Fail, "self-test", "a message published on " + channel + " did not come back within 1 s",
-            "a firewall (nftables/iptables) dropping UDP to " + std::string("the group's port") +
-                ", or IP_MULTICAST_LOOP off: see docs/network.md"};
+            "look for a firewall (nftables, iptables) dropping UDP to the URL's port, and for multicast "
+            "loopback turned off: see docs/network.md"};
   return {Finding::Ok, "self-test", "LCM started and heard its own message", ""};
 }
 
