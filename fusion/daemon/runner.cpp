@@ -88,7 +88,11 @@ std::optional<core::FilterState> DaemonRunner::lastPoseOnBus(std::string* filter
 
 void DaemonRunner::start(bus::MessageBus& bus) {
   bus_ = &bus;
-  const bool hold = opts_.init_from_bus > 0 || !opts_.checkpoint.empty();
+  // A checkpoint that does not exist yet (the first start) changes nothing: the daemon starts
+  // exactly as without --checkpoint, so its outputs equal those of a replay.
+  const bool hold = opts_.init_from_bus > 0 || saved_.has_value();
+  if (!opts_.checkpoint.empty() && !saved_)
+    spdlog::info("no checkpoint {} yet: starting from the configured initial state", opts_.checkpoint);
   daemon_ = std::make_unique<FusionDaemon>(cfg_, bus, FusionDaemon::Options{hold, true});
   hb_ = std::make_unique<app::Heartbeat>(bus, cfg_.channels.heartbeat, "lcmloc-fusion",
                                             [this] { return daemon_->counters(); });
@@ -105,7 +109,7 @@ void DaemonRunner::start(bus::MessageBus& bus) {
       init = saved_->state;
       source = "checkpoint " + opts_.checkpoint + " (filter " + saved_->filter + ")";
     }
-    if (!init) source = opts_.init_from_bus > 0 ? "no POSE on the bus and no checkpoint" : "no checkpoint yet";
+    if (!init) source = "no POSE on the bus and no checkpoint";
     daemon_->release(init, source, from_bus);  // the daemon handed over from saw what was queued
     if (!init && opts_.init_from_bus > 0)
       daemon_->warn("no_handover",

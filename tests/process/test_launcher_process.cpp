@@ -261,3 +261,27 @@ TEST_F(LauncherTest, BadWatchSettingsAreConfigurationErrors) {
     EXPECT_NE(launcher.output().find(sys + ": " + c.expected), std::string::npos) << launcher.output();
   }
 }
+
+// A child that crashes again and again soon after its start is started again after a delay that
+// doubles each time, up to restart_delay_max, until its restarts are used up; then (not critical)
+// the others run on without it.
+TEST_F(LauncherTest, RestartsBackOffUpToTheLimit) {
+  const std::string flaky = writeFile("flaky.sh", "#!/bin/sh\nsleep 0.3\nexit 3\n");
+  const std::string world = writeFile("world.sh", "#!/bin/sh\nsleep 4\n");
+  fs::permissions(flaky, fs::perms::owner_all);
+  fs::permissions(world, fs::perms::owner_all);
+  const std::string sys = system("ready_timeout: 0.1\nrestart_delay: 0.2\nrestart_delay_max: 0.5\n",
+                                 "  - {name: flaky, executable: " + flaky + ", restart: 3, critical: false}\n"
+                                 "  - {name: world, executable: " + world + ", until_exit: true}\n");
+  Child launcher(LCMLOC_LAUNCHER, {"--system", sys, "--lcm-url", url_}, path("launcher.out"));
+  const auto rc = waitExit(launcher, 30s);
+  ASSERT_TRUE(rc.has_value()) << launcher.output();
+  EXPECT_EQ(*rc, 1) << launcher.output();  // flaky failed for good
+  const std::string out = launcher.output();
+  for (const char* said : {"flaky ended unexpectedly (exit 3); starting it again in 0.2 s (1 of 3)",
+                           "flaky ended unexpectedly (exit 3); starting it again in 0.4 s (2 of 3)",
+                           "flaky ended unexpectedly (exit 3); starting it again in 0.5 s (3 of 3)",
+                           "flaky ended unexpectedly (exit 3), restarted 3 time(s) already; it is not critical",
+                           "world finished"})
+    EXPECT_NE(out.find(said), std::string::npos) << said << "\n" << out;
+}

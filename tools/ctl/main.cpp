@@ -1,16 +1,19 @@
 // lcmloc-ctl: sends one FUSION_CONTROL command to the fusion daemon and prints its answer
-// (lcmloc/ctl/control.hpp).
+// (lcmloc/ctl/control.hpp); prints the processes on the bus and stops, starts or restarts one
+// under a launcher (lcmloc/ctl/processes.hpp).
 #include "lcmloc/app/cli.hpp"
 #include "lcmloc/core/filter.hpp"
 #include "lcmloc/ctl/control.hpp"
+#include "lcmloc/ctl/processes.hpp"
 
 using namespace lcmloc;
 
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-ctl: send a command to the fusion daemon (FUSION_CONTROL) and print its answer from "
-               "FUSION_STATUS."};
+               "FUSION_STATUS; print the processes on the bus (status); stop, start or restart a process under a "
+               "launcher (proc)."};
   app.footer("lcmloc-ctl's own exit codes: 4 no answer within --timeout, 5 the daemon refused the command "
-             "(1: no daemon on the bus).");
+             "(1: no daemon on the bus; status: no heartbeat on the bus).");
   app::CommonOptions opts;
   app::addCommonOptions(app, opts);
   double timeout = 5.0;
@@ -35,8 +38,13 @@ int main(int argc, char** argv) {
   sp->add_option("pose", c.pose, "X Y THETA")->expected(3)->required();
   sp->add_option("--std", c.stddev, "1-sigma of x [m], y [m], theta [rad]")->expected(3);
 
+  ctl::ProcessCommands pcs;
+  ctl::addProcessCommands(app, pcs);
+
   return app::runProcess(app, argc, argv, opts, "lcmloc-ctl", [&]() -> int {
     const auto cfg = app::loadSystemConfig(opts.config);
+    if (app.got_subcommand(pcs.status)) return ctl::status(cfg, opts.lcm_url, pcs.listen);
+    if (app.got_subcommand(pcs.proc)) return ctl::proc(cfg, opts.lcm_url, pcs.command, timeout);
     c.kind = app.got_subcommand(sw) ? ctl::Command::Switch
              : app.got_subcommand(sp) ? ctl::Command::SetPose : ctl::Command::Reset;
     return ctl::send(cfg, opts.lcm_url, ctl::makeCommand(c), timeout, utime);

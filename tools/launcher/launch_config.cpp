@@ -27,6 +27,10 @@ LaunchConfig loadLaunchConfig(const std::string& path) {
   r.get("stop_timeout", cfg.stop_timeout, 0.1, 3600.0);
   r.get("ready_timeout", cfg.ready_timeout, 0.0, 3600.0);
   r.get("restart_delay", cfg.restart_delay, 0.0, 3600.0);
+  r.get("restart_delay_max", cfg.restart_delay_max, 0.0, 3600.0);
+  r.get("status_period", cfg.status_period, 0.0, 3600.0);
+  r.get("control_channel", cfg.control_channel);
+  r.get("run_dir", cfg.run_dir);
   r.get("heartbeat_timeout", cfg.heartbeat_timeout, 0.0, 3600.0);
   if (cfg.heartbeat_timeout > 0.0 && cfg.heartbeat_timeout < kMinHeartbeatTimeout)
     throw ConfigError(path, "heartbeat_timeout",
@@ -64,6 +68,9 @@ LaunchConfig loadLaunchConfig(const std::string& path) {
     cfg.processes.push_back(p);
   }
   r.finish();
+  if (cfg.control_channel.empty()) throw ConfigError(path, "control_channel", "empty: give a channel name");
+  if (!cfg.run_dir.empty() && fs::path(cfg.run_dir).is_relative())
+    cfg.run_dir = (fs::path(path).parent_path() / cfg.run_dir).lexically_normal().string();
   if (!cfg.scenario.empty() && fs::path(cfg.scenario).is_relative())
     cfg.scenario = (fs::path(path).parent_path() / cfg.scenario).lexically_normal().string();
   return cfg;

@@ -29,6 +29,17 @@ struct LaunchConfig {
   double stop_timeout = 5.0;       ///< [s] per process after SIGTERM, then SIGKILL
   double ready_timeout = 5.0;      ///< [s] to wait for a child's first heartbeat
   double restart_delay = 1.0;      ///< [s] from an unexpected end to the restart (ProcessSpec::restart)
+  /// [s] the backoff's cap: each restart after a run shorter than this waits twice as long as the
+  /// one before (restart_delay, 2x, 4x ... up to this); a run at least this long starts it over.
+  double restart_delay_max = 8.0;
+  /// [s] between two status tables on the launcher's output (process, host, pid, state, restarts,
+  /// CPU, memory, message rates, heartbeat age); 0 = none.
+  double status_period = 10.0;
+  /// process_command_t (stop, start, restart a process by name: lcmloc-ctl proc) is heard here.
+  std::string control_channel = "LAUNCHER_CONTROL";
+  /// Directory for the children's run-time files ("{run_dir}" in their args: the daemon's
+  /// checkpoint): "" = a new one under the temporary directory for each run, removed at its end.
+  std::string run_dir;
   /// [s] a child whose HEARTBEAT (one per second) has been missing this long is hung: stopped
   /// (SIGTERM + SIGCONT, SIGKILL after stop_timeout) and treated as crashed. 0 = off; else at
   /// least kMinHeartbeatTimeout. Watched from the child's first heartbeat on.

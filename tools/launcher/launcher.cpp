@@ -1,15 +1,13 @@
 // lcmloc-launcher's work (see launcher.hpp).
 #include "launcher.hpp"
 
-#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <filesystem>
-#include <cstring>
-#include <map>
 #include <optional>
 #include <thread>
 
@@ -19,119 +17,18 @@
 #include "lcmloc/app/exit_codes.hpp"
 #include "lcmloc/app/files.hpp"
 #include "lcmloc/app/heartbeat.hpp"
+#include "lcmloc/app/process_table.hpp"
 #include "lcmloc/app/signals.hpp"
+#include "lcmloc/app/text.hpp"
 #include "lcmloc/bus/transport.hpp"
+#include "child.hpp"
 #include "lcmloc/heartbeat_t.hpp"
+#include "lcmloc/process_command_t.hpp"
 #include "lcmloc/simconfig/sim_config.hpp"
 
 namespace lcmloc::launcher {
 
-using Clock = std::chrono::steady_clock;
-
 namespace {
-
-struct Child {
-  ProcessSpec spec;
-  pid_t pid = -1;
-  bool running = false;
-  bool ready = false;        ///< a `running` heartbeat with its pid came since it was started
-  int status = 0;            ///< waitpid status once exited
-  bool killed = false;       ///< needed SIGKILL
-  bool terminated = false;   ///< sent SIGTERM by the launcher (a stop)
-  Clock::time_point started;
-  double runtime = 0.0;
-  int restarts = 0;                         ///< times started again (ProcessSpec::restart)
-  std::optional<Clock::time_point> restart_at;  ///< ended unexpectedly: to be started again then
-  std::optional<Clock::time_point> last_heartbeat;  ///< of this run (any state, its pid)
-  bool hung = false;         ///< stopped by the launcher: no heartbeat for heartbeat_timeout
-  double silent_for = 0.0;   ///< [s] without a heartbeat when found hung
-  std::optional<Clock::time_point> kill_at;  ///< hung and sent SIGTERM: SIGKILL then
-  bool given_up = false;     ///< non-critical, failed for good: the others run without it
-  bool warned_silent = false;  ///< (started again) no first heartbeat within ready_timeout, said
-};
-
-std::string resolveExecutable(const std::string& exe) {
-  namespace fs = std::filesystem;
-  if (exe.find('/') != std::string::npos) return exe;
-  std::error_code ec;
-  const auto self = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    const auto sibling = self.parent_path() / exe;
-    if (fs::exists(sibling)) return sibling.string();
-  }
-  return exe;  // execvp searches PATH
-}
-
-/// Starts the child in a process group of its own. Between fork and exec the child must not run
-/// the launcher's signal handler (a SIGTERM would only set a flag in a copy about to be
-/// replaced, and be lost): SIGINT/SIGTERM are blocked across fork and set back to their default
-/// action in the child before they are unblocked, so such a signal ends the child (a stop).
-/// The child gets none of the launcher's file descriptors (LCM sockets and pipes) and the
-/// default action for the signals the launcher ignores.
-pid_t spawn(const Child& c, const std::string& scenario, const std::string& url) {
-  std::vector<std::string> args{resolveExecutable(c.spec.executable), "--config", scenario, "--lcm-url", url};
-  args.insert(args.end(), c.spec.args.begin(), c.spec.args.end());
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  sigset_t stop_signals, before;
-  sigemptyset(&stop_signals);
-  sigaddset(&stop_signals, SIGINT);
-  sigaddset(&stop_signals, SIGTERM);
-  ::sigprocmask(SIG_BLOCK, &stop_signals, &before);
-  const pid_t parent = ::getpid();
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    ::setpgid(0, 0);                      // Ctrl-C reaches the launcher only: it stops us in order
-    for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGPIPE, SIGXFSZ}) ::signal(sig, SIG_DFL);
-    ::sigprocmask(SIG_SETMASK, &before, nullptr);
-    ::prctl(PR_SET_PDEATHSIG, SIGTERM);   // and we stop if the launcher dies
-    if (::getppid() != parent) ::_exit(127);
-    ::close_range(3, ~0U, 0);
-    ::execvp(argv[0], argv.data());
-    std::fprintf(stderr, "lcmloc-launcher: cannot execute %s: %s\n", argv[0], std::strerror(errno));
-    ::_exit(127);
-  }
-  const int fork_errno = errno;
-  if (pid > 0) ::setpgid(pid, pid);  // (also here: the group exists before we signal it)
-  ::sigprocmask(SIG_SETMASK, &before, nullptr);
-  if (pid < 0) throw std::runtime_error("fork failed for " + c.spec.name + ": " + std::strerror(fork_errno));
-  return pid;
-}
-
-/// Sends sig to the child's process group (the child and what it started), or to the child
-/// alone while it has no group yet.
-void signalChild(const Child& c, int sig) {
-  if (::kill(-c.pid, sig) != 0) ::kill(c.pid, sig);
-}
-
-/// SIGTERM, then SIGCONT: a child stopped by SIGSTOP (or a debugger) handles the SIGTERM and
-/// ends in order (the logger closes its file) instead of waiting for the SIGKILL.
-void terminateChild(const Child& c) {
-  signalChild(c, SIGTERM);
-  signalChild(c, SIGCONT);
-}
-
-/// Ended by the SIGTERM of a stop (before it had set up its own handling of it): stopped.
-bool stoppedBySigterm(const Child& c) {
-  return c.terminated && !c.killed && WIFSIGNALED(c.status) && WTERMSIG(c.status) == SIGTERM;
-}
-
-std::string describeStatus(const Child& c) {
-  if (c.running) return "still running";
-  const std::string hung = c.hung ? fmt::format("hung, no heartbeat for {:.1f} s; ", c.silent_for) : "";
-  if (WIFEXITED(c.status)) return hung + "exit " + std::to_string(WEXITSTATUS(c.status));
-  if (stoppedBySigterm(c)) return hung + "stopped by SIGTERM";
-  if (WIFSIGNALED(c.status))
-    return hung + std::string("killed by ") + strsignal(WTERMSIG(c.status)) + (c.killed ? " (stop timeout)" : "");
-  return hung + "unknown";
-}
-
-bool failed(const Child& c) {
-  if (c.hung) return true;
-  if (stoppedBySigterm(c)) return false;
-  return c.killed || !WIFEXITED(c.status) || WEXITSTATUS(c.status) != 0;
-}
 
 /// While a non-critical child is down for good, the launcher says so again this often.
 constexpr double kNonCriticalReminder = 60.0;  // [s]
@@ -140,6 +37,10 @@ class Launcher {
  public:
   Launcher(LaunchConfig cfg, std::string scenario, std::string url)
       : cfg_(std::move(cfg)), scenario_(std::move(scenario)), url_(std::move(url)) {}
+  ~Launcher() {
+    std::error_code ec;
+    if (own_run_dir_) std::filesystem::remove_all(run_dir_, ec);
+  }
 
   int run() {
     const auto sys = simconfig::loadSimSystemConfig(scenario_);  // validate every section before starting anything
@@ -147,6 +48,7 @@ class Launcher {
       children_.emplace_back();
       children_.back().spec = spec;
     }
+    makeRunDir();
     std::optional<bus::Bus> bus;
     try {
       bus.emplace(url_);
@@ -159,7 +61,9 @@ class Launcher {
     // is, and nothing is kept per pid seen.
     if (bus)
       bus->subscribe<lcmloc::heartbeat_t>(sys.channels.heartbeat,
-                                          [this](const std::string&, const lcmloc::heartbeat_t& m, int64_t) {
+                                          [this](const std::string&, const lcmloc::heartbeat_t& m, int64_t recv) {
+                                            table_.observe(m, recv);
+                                            if (m.host != host_) return;
                                             for (auto& c : children_) {
                                               if (!c.running || c.pid != m.pid) continue;
                                               c.last_heartbeat = Clock::now();
@@ -169,16 +73,29 @@ class Launcher {
 
     // Its own HEARTBEAT: a monitor (lcm-spy) sees the system's state, e.g. a non-critical child
     // given up, on the bus and not only in the launcher's log.
-    if (bus)
+    if (bus) {
       hb_.emplace(*bus, sys.channels.heartbeat, "lcmloc-launcher", [this] { return counters(); });
+      bus->subscribe<lcmloc::process_command_t>(
+          cfg_.control_channel,
+          [this](const std::string&, const lcmloc::process_command_t& m, int64_t) { command(m); });
+    }
     bool ok = bus && startAll(*bus);
     std::optional<Clock::time_point> drain_until;
     auto last_pass = Clock::now();
     auto next_reminder = Clock::now() + secs(kNonCriticalReminder);
+    auto next_table = Clock::now() + secs(cfg_.status_period);
     while (ok && !app::stopRequested()) {
       hb_->tick();
       bus->handle(100);
+      if (answer_) {  // a command was applied: its heartbeat shows the new state at once
+        hb_->publish("running");
+        answer_ = false;
+      }
       const auto now = Clock::now();
+      if (cfg_.status_period > 0 && now >= next_table) {
+        spdlog::info("status:\n{}", app::formatProcessTable(table_.rows()));
+        next_table = now + secs(cfg_.status_period);
+      }
       // The launcher itself did not run (suspended, stopped, starved): its children's silence
       // meanwhile says nothing about them.
       if (cfg_.heartbeat_timeout > 0 && now - last_pass > secs(cfg_.heartbeat_timeout / 2)) {
@@ -194,13 +111,20 @@ class Launcher {
           watch(c);
           continue;
         }
-        if (c.spec.until_exit && !failed(c)) {
+        if (c.held) {
+          spdlog::info("{} stopped on request ({})", c.spec.name, describeStatus(c));
+        } else if (c.restart_requested && !drain_until) {
+          c.restart_requested = false;
+          spdlog::info("{} stopped on request ({}); starting it again", c.spec.name, describeStatus(c));
+          start(c, "again on request");
+        } else if (c.spec.until_exit && !failed(c)) {
           spdlog::info("{} finished; stopping the others in {:.1f} s", c.spec.name, cfg_.drain_time);
           drain_until = Clock::now() + secs(cfg_.drain_time);
         } else if (c.restarts < c.spec.restart && !drain_until) {
+          const double delay = backoff(c);
           spdlog::warn("{} ended unexpectedly ({}); starting it again in {:.1f} s ({} of {})", c.spec.name,
-                       describeStatus(c), cfg_.restart_delay, c.restarts + 1, c.spec.restart);
-          c.restart_at = Clock::now() + secs(cfg_.restart_delay);
+                       describeStatus(c), delay, c.restarts + 1, c.spec.restart);
+          c.restart_at = Clock::now() + secs(delay);
         } else if (!c.spec.critical) {
           giveUp(c, "ended unexpectedly (" + describeStatus(c) + ")" +
                         (c.spec.restart ? fmt::format(", restarted {} time(s) already", c.restarts) : ""));
@@ -227,10 +151,72 @@ class Launcher {
     return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
   }
 
+  void makeRunDir() {
+    namespace fs = std::filesystem;
+    run_dir_ = cfg_.run_dir;
+    if (run_dir_.empty()) {
+      run_dir_ = (fs::temp_directory_path() / ("lcmloc-launcher-" + std::to_string(::getpid()))).string();
+      std::error_code ec;
+      fs::remove_all(run_dir_, ec);  // (a launcher of the same pid before a reboot)
+      own_run_dir_ = true;
+    }
+    std::error_code ec;
+    fs::create_directories(run_dir_, ec);
+    if (ec) throw app::ConfigError(cfg_.file, "run_dir", "cannot create " + run_dir_ + ": " + ec.message());
+  }
+
+  /// [s] before the next restart of c: restart_delay, doubled for each restart in a row after a
+  /// run shorter than restart_delay_max, at most restart_delay_max.
+  double backoff(Child& c) const {
+    if (c.runtime >= cfg_.restart_delay_max) c.backoff = 0;
+    const double delay = std::min(cfg_.restart_delay * std::pow(2.0, c.backoff), std::max(cfg_.restart_delay_max, cfg_.restart_delay));
+    ++c.backoff;
+    return delay;
+  }
+
+  /// A process_command_t: stop, start or restart one child by name.
+  void command(const lcmloc::process_command_t& m) {
+    if (!m.host.empty() && m.host != host_) return;
+    auto it = std::find_if(children_.begin(), children_.end(), [&](const Child& c) { return c.spec.name == m.process; });
+    if (it == children_.end()) {
+      spdlog::warn("{}: no process named '{}' here ({} '{}' ignored)", cfg_.control_channel, app::printable(m.process),
+                   app::printable(m.command), app::printable(m.process));
+      return;
+    }
+    Child& c = *it;
+    answer_ = true;
+    if (m.command == "stop" || m.command == "restart") {
+      c.restart_at.reset();
+      if (!c.running) {
+        if (m.command == "restart") {
+          c.held = c.given_up = false;
+          start(c, "again on request");
+        } else {
+          c.held = true;
+        }
+        return;
+      }
+      spdlog::info("{}: {} {} (pid {})", cfg_.control_channel, m.command, c.spec.name, c.pid);
+      c.held = m.command == "stop";
+      c.restart_requested = m.command == "restart";
+      c.terminated = true;
+      terminateChild(c);
+      c.kill_at = Clock::now() + secs(cfg_.stop_timeout);
+    } else if (m.command == "start") {
+      if (c.running) return;
+      c.held = c.given_up = false;
+      c.restart_at.reset();
+      start(c, "on request");
+    } else {
+      spdlog::warn("{}: unknown command '{}' (stop, start, restart)", cfg_.control_channel, app::printable(m.command));
+      answer_ = false;
+    }
+  }
+
   bool startAll(bus::Bus& bus) {
     for (auto& c : children_) {
       if (app::stopRequested()) return false;
-      c.pid = spawn(c, scenario_, url_);
+      c.pid = spawn(c, scenario_, url_, run_dir_);
       c.running = true;
       c.ready = false;
       c.started = Clock::now();
@@ -281,7 +267,8 @@ class Launcher {
     if (!c.running) return;
     const auto now = Clock::now();
     if (c.kill_at && now >= *c.kill_at) {
-      spdlog::error("{} (hung) did not stop within {:.1f} s of SIGTERM: SIGKILL", c.spec.name, cfg_.stop_timeout);
+      spdlog::error("{}{} did not stop within {:.1f} s of SIGTERM: SIGKILL", c.spec.name, c.hung ? " (hung)" : "",
+                    cfg_.stop_timeout);
       signalChild(c, SIGKILL);
       c.killed = true;
       c.kill_at.reset();
@@ -309,9 +296,13 @@ class Launcher {
   /// Starts a child that ended unexpectedly again (its first heartbeat is not waited for: the
   /// others keep running meanwhile).
   void restart(Child& c) {
-    c.restart_at.reset();
     ++c.restarts;
-    c.pid = spawn(c, scenario_, url_);
+    start(c, fmt::format("again ({} of {})", c.restarts, c.spec.restart));
+  }
+
+  void start(Child& c, const std::string& how) {
+    c.restart_at.reset();
+    c.pid = spawn(c, scenario_, url_, run_dir_);
     c.running = true;
     c.ready = false;
     c.killed = false;
@@ -321,7 +312,7 @@ class Launcher {
     c.last_heartbeat.reset();
     c.warned_silent = false;
     c.started = Clock::now();
-    spdlog::info("started {} again (pid {}, {} of {})", c.spec.name, c.pid, c.restarts, c.spec.restart);
+    spdlog::info("started {} {} (pid {})", c.spec.name, how, c.pid);
   }
 
   /// Collects the child's exit status if it has ended (blocking=false: just look).
@@ -380,6 +371,11 @@ class Launcher {
   std::string scenario_, url_;
   std::vector<Child> children_;
   std::optional<app::Heartbeat> hb_;
+  std::string host_ = app::hostName();
+  std::string run_dir_;
+  bool own_run_dir_ = false;
+  bool answer_ = false;  ///< a command changed a child: publish the heartbeat now
+  app::ProcessTable table_;  ///< every heartbeat on the bus, for the status table
   /// The launcher's heartbeat counters: children in the system file, running now, failed for good
   /// (non-critical ones given up), started again so far.
   app::Heartbeat::Counters counters() const {
@@ -389,8 +385,20 @@ class Launcher {
       given_up += c.given_up;
       restarts += c.restarts;
     }
-    return {{"children", static_cast<int64_t>(children_.size())}, {"running", running}, {"given_up", given_up},
-            {"restarts", restarts}};
+    app::Heartbeat::Counters out{{"children", static_cast<int64_t>(children_.size())}, {"running", running},
+                                 {"given_up", given_up}, {"restarts", restarts}};
+    for (const auto& c : children_)
+      for (auto& kv : app::childCounters(c.spec.name, c.pid, state(c), c.restarts)) out.push_back(std::move(kv));
+    return out;
+  }
+
+  static app::ProcState state(const Child& c) {
+    using S = app::ProcState;
+    if (c.running) return c.ready ? S::Running : S::Starting;
+    if (c.restart_at) return S::Restarting;
+    if (c.held) return S::Stopped;
+    if (c.given_up || (c.pid > 0 && failed(c))) return S::Failed;
+    return c.pid > 0 ? S::Exited : S::Starting;
   }
 };
 

@@ -14,7 +14,8 @@ int main(int argc, char** argv) {
                "hang) and stops the processes of a system file.\n"
                "A udpm:// URL without recv_buf_size gets the system file's recv_buf_size (default 4194304) for "
                "every child; a child silent for heartbeat_timeout (default 3 s) is stopped as hung; a child with "
-               "`critical: false` that fails is reported and the others keep running (exit status 1 at the end)."};
+               "`critical: false` that fails is reported and the others keep running (exit status 1 at the end); a status "
+               "table every status_period (10 s); `lcmloc-ctl proc stop|start|restart NAME` on control_channel."};
   app::CommonOptions opts;
   opts.config = "-";  // placeholder: the system file names the scenario unless --config is given
   app::addCommonOptions(app, opts);

@@ -23,23 +23,28 @@ std::string withReceiveBuffer(const std::string& url, int bytes) {
   return url + sep + "recv_buf_size=" + std::to_string(bytes);
 }
 
-long long receiveBufferOf(const std::string& url) {
-  if (url.rfind("udpm://", 0) != 0) return 0;
+std::optional<std::string> urlOption(const std::string& url, const std::string& key) {
   const auto q = url.find('?');
-  if (q == std::string::npos) return 0;
+  if (q == std::string::npos) return std::nullopt;
   for (std::size_t pos = q + 1; pos < url.size();) {
     std::size_t end = url.find('&', pos);
     if (end == std::string::npos) end = url.size();
     const std::string opt = url.substr(pos, end - pos);
-    if (opt.rfind("recv_buf_size=", 0) == 0) return std::atoll(opt.c_str() + 14);
+    if (opt.rfind(key + "=", 0) == 0) return opt.substr(key.size() + 1);
     pos = end + 1;
   }
-  return 0;
+  return std::nullopt;
 }
 
-long long kernelRmemMax() {
+long long receiveBufferOf(const std::string& url) {
+  if (url.rfind("udpm://", 0) != 0) return 0;
+  const auto v = urlOption(url, "recv_buf_size");
+  return v ? std::atoll(v->c_str()) : 0;
+}
+
+long long kernelRmemMax(const std::string& path) {
   long long v = -1;
-  if (std::FILE* f = std::fopen("/proc/sys/net/core/rmem_max", "r")) {
+  if (std::FILE* f = std::fopen(path.c_str(), "r")) {
     if (std::fscanf(f, "%lld", &v) != 1) v = -1;
     std::fclose(f);
   }

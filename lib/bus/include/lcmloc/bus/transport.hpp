@@ -10,6 +10,7 @@
 #include <map>
 #include <memory>
 #include <stdexcept>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,9 +32,11 @@ std::string defaultLcmUrl();
 std::string withReceiveBuffer(const std::string& url, int bytes);
 /// The recv_buf_size a udpm:// URL sets (0 when none or not udpm).
 long long receiveBufferOf(const std::string& url);
+/// The value of option key in the URL's query ("udpm://...?ttl=1&..."); nullopt when absent.
+std::optional<std::string> urlOption(const std::string& url, const std::string& key);
 /// The kernel's net.core.rmem_max [bytes]: the largest SO_RCVBUF a process without
-/// CAP_NET_ADMIN gets (-1 when it cannot be read).
-long long kernelRmemMax();
+/// CAP_NET_ADMIN gets (-1 when it cannot be read), read from path.
+long long kernelRmemMax(const std::string& path = "/proc/sys/net/core/rmem_max");
 
 /// msg.decode(data, 0, size) with lcm-gen's field helpers inlined into it. Without this GCC
 /// calls its big-endian helper once per field (out of line, a byte at a time): at 100 Hz
