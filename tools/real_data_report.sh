@@ -24,7 +24,7 @@ run() {
   rm -rf "$dir"
   echo "== $name"
   "$BIN/lcmloc-convert" "$@" -o "$dir/csv" > "$dir.convert.txt"
-  "$BIN/lcmloc-import" "$dir/csv" -o "$dir/import" > "$dir.import.txt"
+  "$BIN/lcmloc-import" "$dir/csv" -o "$dir/import" > "$dir.import.txt" || [[ $? -eq 3 ]]  # 3: rows refused, the rest imported
   grep "noise fit:" "$dir.import.txt" || true
   local filter
   filter=$(sed -n 's/^    type: \([a-z_]*\).*/\1/p' "$dir/import/config.yaml" | head -1)

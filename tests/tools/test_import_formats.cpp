@@ -316,7 +316,7 @@ TEST(ImportFormats, AGroundTruthOfPositionOnlyIsScoredOnThePosition) {
 
 // Bad rows through the command line: an id missing from the map, time going backwards, an
 // unknown landmark id: each refused and listed with file, line and reason, counted, and the
-// rest imported (exit 0).
+// rest imported (exit 3: damaged input, the work done with its intact part).
 TEST(ImportFormats, BadRowsAreListedAndCountedByTheCommandAndTheRestImported) {
   const auto d = tempDir("bad_rows");
   write(d / "map.csv", "id,x,y\n1,5,0\n");
@@ -324,7 +324,8 @@ TEST(ImportFormats, BadRowsAreListedAndCountedByTheCommandAndTheRestImported) {
   write(d / "odometry.csv", "time,delta_s,delta_theta\n1.0,0.1,0\n1.1,0.1,0\n0.9,0.1,0\n1.2,0.1,0\n");
   const fs::path out = d / "out";
   auto [code, text] = runCommand(LCMLOC_IMPORT_BIN, d.string() + " -o " + out.string(), d);
-  ASSERT_EQ(code, 0) << text;
+  ASSERT_EQ(code, app::kExitInputDamaged) << text;
+  EXPECT_HAS(text, "3 row(s) refused (listed above): the rest is imported; exit 3 (damaged input)");
   EXPECT_HAS(text, (d / "landmarks.csv").string() + ":3: landmark id 9 not in the map");
   EXPECT_HAS(text, (d / "landmarks.csv").string() + ":5: time 1.05 before the previous row's 1.2");
   EXPECT_HAS(text, (d / "odometry.csv").string() + ":4: time 0.9 not after the previous row's 1.1");

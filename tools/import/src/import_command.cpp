@@ -47,6 +47,11 @@ int runImport(const app::SystemConfig& cfg, ImportCommand c) {
     spdlog::error("nothing usable in '{}': no valid row in any recognised file", io.dir);
     return app::kExitRuntimeError;
   }
+  if (!r.refusals.empty()) {  // the rest is imported: the exit code says the input had bad rows
+    spdlog::warn("{} row(s) refused (listed above): the rest is imported; exit {} (damaged input)", r.refusals.size(),
+                 app::kExitInputDamaged);
+    return app::kExitInputDamaged;
+  }
   return app::kExitOk;
 }
 
