@@ -881,3 +881,19 @@ TEST(LogWriter, AFullQueueDropsAreCountedPerChannelAndEverythingElseIsWritten) {
   EXPECT_EQ(w.files()[1], (dir / "w-001.lcmlog").string());
   fs::remove_all(dir);
 }
+
+// A file that is not an LCM log at all (text, no sync word) is said to be so by each command,
+// with exit 3 (damaged input), and nothing is made up from it.
+TEST_F(LogTools, AFileThatIsNoLogIsSaidToBeNoneByEveryCommand) {
+  {
+    std::ofstream f(path("notes.lcmlog"));
+    for (int i = 0; i < 100; ++i) f << "this is a line of text, not an LCM log\n";
+  }
+  for (const std::string args : {"info " + path("notes.lcmlog"), "cut " + path("notes.lcmlog") + " -o " + path("c.lcmlog")}) {
+    const ToolRun r = tool(args);
+    EXPECT_EQ(r.rc, 3) << args << "\n" << r.out << r.err;
+    EXPECT_NE((r.out + r.err).find("no LCM event in the whole file (3900 bytes, no sync word 0xEDA1DA01"),
+              std::string::npos)
+        << args << "\n" << r.out << r.err;
+  }
+}

@@ -82,7 +82,10 @@ void LogScanner::closeDamage(int64_t resume_at) {
   const int64_t skipped = resume_at - dmg_start_;
   bytes_unreadable_ += skipped;
   std::ostringstream s;
-  if (resume_at >= file_size_)
+  if (resume_at >= file_size_ && dmg_start_ == 0 && events_read_ == 0)
+    s << "no LCM event in the whole file (" << skipped << " bytes, no sync word 0xEDA1DA01 followed by a whole "
+      << "event): not an LCM log, or damaged throughout";
+  else if (resume_at >= file_size_)
     s << "log ends in a damaged or truncated event: the last " << skipped << " bytes from byte "
       << dmg_start_ << " could not be read (" << events_read_ << " events read before)";
   else
