@@ -68,6 +68,16 @@ TEST(StreamGuard, APublisherThatRestartsIsTakenAndReplacesItsSilentStream) {
   EXPECT_TRUE(g.observe("ODOMETRY", 5001, kT0 + 5001 * kPeriod).held());
 }
 
+TEST(StreamGuard, OneMessageWithAWrongTimeDoesNotReplaceTheEstablishedStream) {
+  bus::StreamGuard g;
+  for (int i = 0; i < 100; ++i) g.observe("ODOMETRY", i, kT0 + i * kPeriod);
+  g.observe("ODOMETRY", 7000, kT0 + 100 * kPeriod);  // another stream's first
+  g.observe("ODOMETRY", 100, kT0 + 100 * kPeriod);
+  const auto v = g.observe("ODOMETRY", 7001, int64_t{1} << 61);  // its second, far in the future
+  EXPECT_TRUE(v.held());
+  EXPECT_EQ(g.observe("ODOMETRY", 101, kT0 + 101 * kPeriod).kind, Kind::Taken);
+}
+
 TEST(StreamGuard, AStreamThatStartsOverWithinItsOwnSeqsIsOneStream) {
   bus::StreamGuard g;
   for (int i = 0; i < 100; ++i) g.observe("ODOMETRY", i, kT0 + i * kPeriod);

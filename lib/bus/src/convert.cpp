@@ -275,6 +275,10 @@ std::optional<core::GpsInput> toCore(const lcmloc::gps_fix_t& m, const std::stri
     fail(why, "latitude/longitude out of range");
     return std::nullopt;
   }
+  if (m.position_std < 0) {  // (NaN: not known, the filter's default; 0 too)
+    fail(why, "position_std must be >= 0 (0 or NaN: not known)");
+    return std::nullopt;
+  }
   const double h = std::isfinite(m.altitude) ? m.altitude : frame.datum().altitude;
   double z = 0.0;
   frame.toLocal(m.latitude, m.longitude, h, in.x, in.y, z);
@@ -340,6 +344,10 @@ std::optional<core::BearingsInput> toCore(const lcmloc::landmark_bearings_t& m, 
   }
   for (double b : m.bearings)
     if (!finiteField(b, "bearings[]", why)) return std::nullopt;
+  if (m.bearing_std < 0) {  // (NaN or 0: the engine's default)
+    fail(why, "bearing_std must be >= 0 (0 or NaN: the default)");
+    return std::nullopt;
+  }
   core::BearingsInput in;
   in.utime = m.utime;
   in.seq = m.seq;

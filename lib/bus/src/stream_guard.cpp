@@ -41,6 +41,7 @@ StreamVerdict StreamGuard::observe(const std::string& channel, int64_t seq, int6
     if (c.has_other) {
       ++c.est_since_other;
       c.other_mark = c.other.last_utime;
+      c.other_since_mark = 0;
     }
     return v;
   }
@@ -49,7 +50,8 @@ StreamVerdict StreamGuard::observe(const std::string& channel, int64_t seq, int6
     ++c.other.count;
     v.first_seq = c.other.first_seq;
     v.first_utime = c.other.first_utime;
-    if (c.other.last_utime - c.other_mark >= kSilenceUs) {  // the established stream is gone
+    ++c.other_since_mark;
+    if (c.other_since_mark >= kReplaceAfter && c.other.last_utime - c.other_mark >= kSilenceUs) {  // the established one is gone
       c.est = c.other;
       c.has_other = false;
       c.reported = false;
@@ -72,6 +74,7 @@ StreamVerdict StreamGuard::observe(const std::string& channel, int64_t seq, int6
   c.has_other = true;
   c.est_since_other = 0;
   c.other_mark = utime;
+  c.other_since_mark = 0;
   return v;
 }
 

@@ -32,8 +32,9 @@ struct StreamVerdict {
 ///    taken;
 ///  - it goes on from the other stream: taken while the established stream has not published
 ///    since the other began (a restarted publisher, a lone corrupt seq), held once it has (two
-///    publishers); when the established stream stays silent for kSilenceUs of the other's
-///    message time, the other replaces it;
+///    publishers); when the established stream stays silent for kReplaceAfter of the other's
+///    messages in a row spanning at least kSilenceUs of their message time, the other replaces
+///    it (one message with a wrong time cannot);
 ///  - neither: it starts the other stream, and is taken (a corrupt seq costs nothing; what a
 ///    lone wrong message can do is bounded by the fusion's input checks).
 /// Two publishers whose seqs interleave within kMaxAhead of each other are not told apart.
@@ -41,6 +42,7 @@ class StreamGuard {
  public:
   static constexpr int64_t kMaxAhead = 1000;          ///< as SeqTracker::kMaxUnconfirmedGap
   static constexpr int64_t kSilenceUs = 2'000'000;    ///< 2 s
+  static constexpr int64_t kReplaceAfter = 10;        ///< messages
   StreamVerdict observe(const std::string& channel, int64_t seq, int64_t utime);
   /// Other publishers found (one per detection), and their messages held.
   int64_t detections() const { return detections_; }
@@ -56,6 +58,7 @@ class StreamGuard {
     bool has_other = false, reported = false;
     int64_t est_since_other = 0;  ///< established messages since the other stream began
     int64_t other_mark = 0;       ///< the other's last utime when the established one last published
+    int64_t other_since_mark = 0; ///< the other's messages since then
   };
   std::unordered_map<std::string, Channel> channels_;
   int64_t detections_ = 0, held_ = 0;
