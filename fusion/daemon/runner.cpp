@@ -89,7 +89,7 @@ std::optional<core::FilterState> DaemonRunner::lastPoseOnBus(std::string* filter
 void DaemonRunner::start(bus::MessageBus& bus) {
   bus_ = &bus;
   const bool hold = opts_.init_from_bus > 0 || !opts_.checkpoint.empty();
-  daemon_ = std::make_unique<FusionDaemon>(cfg_, bus, FusionDaemon::Options{hold, true});
+  daemon_ = std::make_unique<FusionDaemon>(cfg_, bus, FusionDaemon::Options{hold, true, true, &timing_});
   hb_ = std::make_unique<app::Heartbeat>(bus, cfg_.channels.heartbeat, "lcmloc-fusion",
                                             [this] { return daemon_->counters(); });
   if (hold) {
@@ -119,7 +119,18 @@ void DaemonRunner::start(bus::MessageBus& bus) {
   FusionDaemon* d = daemon_.get();
   bus.subscribe<lcmloc::pose_t>(cfg_.channels.pose,
                                 [d](const std::string&, const lcmloc::pose_t& m, int64_t) { d->checkEcho(m); });
-  last_checkpoint_ = std::chrono::steady_clock::now();
+  last_checkpoint_ = last_timing_ = std::chrono::steady_clock::now();
+}
+
+void DaemonRunner::publishTiming() {
+  const auto now = std::chrono::steady_clock::now();
+  if (now - last_timing_ < std::chrono::seconds(1)) return;
+  last_timing_ = now;
+  const auto wall = std::chrono::duration_cast<std::chrono::microseconds>(
+      std::chrono::system_clock::now().time_since_epoch());
+  lcmloc::fusion_timing_t m = timing_.report(wall.count());
+  m.seq = timing_seq_++;
+  bus_->publish(cfg_.channels.timing, m);
 }
 
 void DaemonRunner::saveCheckpoint() {
@@ -138,6 +149,7 @@ void DaemonRunner::saveCheckpoint() {
 void DaemonRunner::step(int timeout_ms) {
   hb_->tick();
   bus_->handle(timeout_ms);
+  publishTiming();
   if (!opts_.checkpoint.empty() &&
       std::chrono::steady_clock::now() - last_checkpoint_ >= std::chrono::duration<double>(opts_.checkpoint_period)) {
     saveCheckpoint();

@@ -3,12 +3,13 @@
 #include "lcmloc/app/cli.hpp"
 #include "lcmloc/core/filter.hpp"
 #include "lcmloc/ctl/control.hpp"
+#include "lcmloc/ctl/status.hpp"
 
 using namespace lcmloc;
 
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-ctl: send a command to the fusion daemon (FUSION_CONTROL) and print its answer from "
-               "FUSION_STATUS."};
+               "FUSION_STATUS, or print its status and timing (status)."};
   app.footer("lcmloc-ctl's own exit codes: 4 no answer within --timeout, 5 the daemon refused the command "
              "(1: no daemon on the bus).");
   app::CommonOptions opts;
@@ -31,12 +32,14 @@ int main(int argc, char** argv) {
   sw->add_option("--param", c.params, "filter parameter KEY=VALUE (dotted keys for nesting: gate.value=6.635)");
   sw->add_option("--params", c.params_yaml, "filter parameters as a YAML flow map, e.g. '{gate: {value: 6.635}}'");
   app.add_subcommand("reset", "reset every filter to the configured initial state");
+  auto* st = app.add_subcommand("status", "print the daemon's status and timing (FUSION_STATUS, FUSION_TIMING)");
   auto* sp = app.add_subcommand("set-pose", "re-initialise x [m], y [m], theta [rad]: X Y THETA [--std SX SY STH]");
   sp->add_option("pose", c.pose, "X Y THETA")->expected(3)->required();
   sp->add_option("--std", c.stddev, "1-sigma of x [m], y [m], theta [rad]")->expected(3);
 
   return app::runProcess(app, argc, argv, opts, "lcmloc-ctl", [&]() -> int {
     const auto cfg = app::loadSystemConfig(opts.config);
+    if (app.got_subcommand(st)) return ctl::status(cfg, opts.lcm_url, timeout);
     c.kind = app.got_subcommand(sw) ? ctl::Command::Switch
              : app.got_subcommand(sp) ? ctl::Command::SetPose : ctl::Command::Reset;
     return ctl::send(cfg, opts.lcm_url, ctl::makeCommand(c), timeout, utime);
