@@ -110,10 +110,11 @@ FusionDaemon::FusionDaemon(const app::SystemConfig& cfg, bus::MessageBus& bus, O
   subscribe(ch.control, &DaemonIntake::control);
   inputs.push_back(ch.control);
 
-  spdlog::info("filter {} (shadow: {}), {} markers, reorder window {:.3f} s; in: {}; out: {}, {}, {}",
+  spdlog::info("filter {} (shadow: {}), {} markers, reorder window {:.3f} s; in: {}; out: {}{}, {}, {}{}",
                cfg.fusion.filter.type, cfg.fusion.shadow.empty() ? "none" : fmt::format("{}", fmt::join(cfg.fusion.shadow, ", ")),
-               markers, cfg.fusion.reorder_window, fmt::format("{}", fmt::join(inputs, ", ")), ch.pose, ch.gate,
-               ch.status);
+               markers, cfg.fusion.reorder_window, fmt::format("{}", fmt::join(inputs, ", ")), ch.pose,
+               opts.control ? ", " + ch.pose_control + " (control pose)" : "", ch.gate, ch.status,
+               opts.timing ? ", " + ch.timing : "");
   if (!hold_) publishStatus("started", "filter " + engine_->activeFilter(), 0);
 }
 
