@@ -231,8 +231,15 @@ BenchResult run(const BenchOptions& o) {
   r.rss_peak_kb = statusKb(daemon, "VmHWM");
   ::kill(daemon, SIGTERM);
   ::kill(bare, SIGKILL);
-  int status = 0;
-  ::waitpid(daemon, &status, 0);
+  const auto stop_deadline = Clock::now() + std::chrono::seconds(5);  // a hung daemon is killed
+  while (::waitpid(daemon, nullptr, WNOHANG) == 0) {
+    if (Clock::now() > stop_deadline) {
+      ::kill(daemon, SIGKILL);
+      ::waitpid(daemon, nullptr, 0);
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
   ::waitpid(bare, nullptr, 0);
   stop = true;
   relay_thread.join();
