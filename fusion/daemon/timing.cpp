@@ -20,6 +20,7 @@ void DaemonTiming::expire(std::deque<Sample>& d, int64_t now_us) const {
 
 void DaemonTiming::arrived(const std::string& channel, int64_t msg_utime, int64_t recv_utime) {
   Channel& c = channels_[channel];
+  if (c.delays.empty() && c.last == 0) c.first = recv_utime;
   c.last = recv_utime;
   c.delays.push_back({recv_utime, static_cast<double>(recv_utime - msg_utime) * 1e-6});
   expire(c.delays, recv_utime);
@@ -41,7 +42,8 @@ lcmloc::fusion_timing_t DaemonTiming::report(int64_t now_us) {
     for (const Sample& s : c.delays) v.push_back(s.value);
     m.channel.push_back(name);
     m.count.push_back(static_cast<int64_t>(v.size()));
-    m.rate.push_back(static_cast<double>(v.size()) / m.window);
+    const double span = std::min(m.window, static_cast<double>(now_us - c.first) * 1e-6);
+    m.rate.push_back(span > 0 ? static_cast<double>(v.size()) / span : 0.0);
     m.age.push_back(static_cast<double>(now_us - c.last) * 1e-6);
     m.delay_max.push_back(v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()));
     m.delay_p50.push_back(quantile(v, 0.5));

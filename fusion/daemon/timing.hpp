@@ -32,7 +32,8 @@ class DaemonTiming {
   };
   struct Channel {
     std::deque<Sample> delays;
-    int64_t last = 0;  ///< [us, wall] last arrival
+    int64_t first = 0;  ///< [us, wall] first arrival (a channel younger than the window: its rate over its age)
+    int64_t last = 0;   ///< [us, wall] last arrival
   };
   void expire(std::deque<Sample>& d, int64_t now_us) const;
   int64_t window_us_;

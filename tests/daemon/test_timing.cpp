@@ -32,6 +32,7 @@ TEST(DaemonTiming, DelayAgeRateAndStepQuantilesOverTheWindow) {
   fusion::DaemonTiming t(1000000);  // 1 s window
   // 100 messages 10 ms apart, arriving 2 ms late, the last one 9 ms late; an old one 1.5 s before.
   t.arrived("GPS", 0, 500000);
+  EXPECT_DOUBLE_EQ(t.report(1000000).rate[0], 2.0) << "one message in its first 0.5 s";
   for (int k = 0; k < 100; ++k) t.arrived("ODOMETRY", 1000000 + k * 10000, 1000000 + k * 10000 + (k == 99 ? 9000 : 2000));
   for (int k = 1; k <= 100; ++k) t.step(k * 1e-5, 1990000);  // 10 us .. 1 ms
   const auto r = t.report(1999000 + 3000);  // 3 ms after the last arrival; the first one 1 s before

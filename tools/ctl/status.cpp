@@ -34,11 +34,15 @@ int status(const app::SystemConfig& cfg, const std::string& lcm_url, double time
   bus.subscribe<lcmloc::fusion_timing_t>(
       cfg.channels.timing, [&](const std::string&, const lcmloc::fusion_timing_t& m, int64_t) { timing = m; });
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout);
-  while (!timing && std::chrono::steady_clock::now() < deadline && !app::stopRequested()) bus.handle(50);
+  // FUSION_TIMING comes once per wall second, FUSION_STATUS once per fusion.status_period of
+  // message time (and at events): both are waited for.
+  while (!(timing && st) && std::chrono::steady_clock::now() < deadline && !app::stopRequested()) bus.handle(50);
   if (st)
     std::cout << fmt::format("filter {}, status {}, last event {} at utime {}; in {}, used {}, rejected {}, gaps {}\n",
                              app::printable(st->filter), st->status, app::printable(st->event), st->utime,
                              st->messages_in, st->messages_used, st->messages_rejected, st->sequence_gaps);
+  else
+    std::cout << fmt::format("no {} within {:.1f} s\n", cfg.channels.status, timeout);
   if (!timing) {
     std::cout << fmt::format("no {} within {:.1f} s: is lcmloc-fusion running?\n", cfg.channels.timing, timeout);
     return kExitNoAnswer;

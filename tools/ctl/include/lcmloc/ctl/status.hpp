@@ -15,8 +15,7 @@ namespace lcmloc::ctl {
 /// processing time p50 / p99 / max [ms].
 void printTiming(std::ostream& out, const lcmloc::fusion_timing_t& t);
 
-/// Waits up to timeout [s, wall] for a FUSION_TIMING (and takes the newest FUSION_STATUS seen
-/// meanwhile), prints both. Returns app::kExitOk, or kExitNoAnswer when no timing came.
+/// Waits up to timeout [s, wall] for a FUSION_TIMING and a FUSION_STATUS, prints what came. Returns app::kExitOk, or kExitNoAnswer when no timing came.
 int status(const app::SystemConfig& cfg, const std::string& lcm_url, double timeout);
 
 }  // namespace lcmloc::ctl
