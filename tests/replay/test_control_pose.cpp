@@ -13,6 +13,7 @@
 #include "lcmloc/app/csv.hpp"
 #include "lcmloc/core/control_pose.hpp"
 #include "lcmloc/core/engine.hpp"
+#include "lcmloc/core/input_order.hpp"
 #include "lcmloc/drivers/scenario_map.hpp"
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
@@ -163,24 +164,61 @@ TEST_F(ControlPoseTest, EqualsTheCanonicalStateWhenNoMotionWaits) {
   active->predict(u);
   core::ControlPredictor predictor(std::make_shared<const core::MapIndex>(map));
   const core::FilterState canonical = active->state();
-  const core::FilterState& none = predictor.pose(*active, cfg_.fusion.filter, {});
+  const core::FilterState& none = predictor.pose(*active, cfg_.fusion.filter, 1, {});
   EXPECT_EQ(none.utime, canonical.utime);
   EXPECT_EQ(none.x, canonical.x);
   EXPECT_EQ(none.P, canonical.P);
   core::ImuInput imu;
   imu.utime = 20000;
   const core::EngineInput imu_in{"IMU", 1, imu.utime, imu};
-  const core::FilterState& unused = predictor.pose(*active, cfg_.fusion.filter, {&imu_in});
+  const core::FilterState& unused =
+      predictor.pose(*active, cfg_.fusion.filter, 1, {{core::canonicalKey(imu_in), &imu_in}});
   EXPECT_EQ(unused.x, canonical.x);
   EXPECT_EQ(unused.utime, canonical.utime);
   // One increment waiting: moved by it, its covariance grown, stamped with its time.
   u.utime = 20000;
   const core::EngineInput odo_in{"ODOMETRY", 2, u.utime, u};
-  const core::FilterState moved = predictor.pose(*active, cfg_.fusion.filter, {&odo_in});
+  const core::FilterState moved =
+      predictor.pose(*active, cfg_.fusion.filter, 1, {{core::canonicalKey(odo_in), &odo_in}});
   EXPECT_EQ(moved.utime, 20000);
   EXPECT_NEAR(std::hypot(moved.x(0) - canonical.x(0), moved.x(1) - canonical.x(1)), 0.2, 0.01);
   EXPECT_GT((moved.P.topLeftCorner<3, 3>().trace()), (canonical.P.topLeftCorner<3, 3>().trace()));
   EXPECT_EQ(active->state().x, canonical.x) << "the canonical filter is not touched";
+}
+
+// Going on from the motion composed before (the same canonical state, more motion waiting after
+// it) gives the numbers composing all of it again gives; a new canonical state, or motion
+// waiting before what was composed (a late arrival), starts afresh.
+TEST_F(ControlPoseTest, ComposingOnlyTheNewMotionEqualsComposingItAll) {
+  const core::MarkerMap map = app::csv::loadMap(cfg_.fusion.map_file);
+  const auto shared = std::make_shared<const core::MapIndex>(map);
+  auto active = core::makeFilter(cfg_.fusion.filter, map);
+  std::vector<core::EngineInput> in;
+  for (int k = 0; k < 12; ++k) {
+    core::OdometryInput u;
+    u.utime = 10000 * (k + 1);
+    u.delta_s = 0.1 + 0.01 * k;
+    u.has_steering = true;
+    u.steering = 0.02 * std::sin(k);
+    in.push_back(core::EngineInput{"ODOMETRY", k, u.utime, u});
+  }
+  auto waiting = [&](std::vector<int> ks) {
+    std::vector<core::ControlPredictor::Waiting> w;
+    for (int k : ks) w.push_back({core::canonicalKey(in[k]), &in[k]});
+    return w;
+  };
+  core::ControlPredictor going_on(shared);
+  const std::vector<std::vector<int>> steps{{0}, {0, 1}, {0, 1, 2, 3}, {0, 2, 3}, {0, 1, 2, 3}, {1, 2, 3, 4}};
+  const std::vector<int64_t> versions{1, 1, 1, 1, 1, 2};
+  for (std::size_t s = 0; s < steps.size(); ++s) {
+    if (s == 5) active->predict(std::get<core::OdometryInput>(in[0].payload));  // released: a new canonical state
+    core::ControlPredictor fresh(shared);
+    const core::FilterState expected = fresh.pose(*active, cfg_.fusion.filter, versions[s], waiting(steps[s]));
+    const core::FilterState& got = going_on.pose(*active, cfg_.fusion.filter, versions[s], waiting(steps[s]));
+    EXPECT_EQ(got.x, expected.x) << "step " << s;
+    EXPECT_EQ(got.P, expected.P) << "step " << s;
+    EXPECT_EQ(got.utime, expected.utime) << "step " << s;
+  }
 }
 
 // Through the engine: the control pose is published for each odometry message as it is pushed,

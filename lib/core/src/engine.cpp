@@ -56,7 +56,7 @@ struct FusionEngine::Impl final : InputOrder::Client {
   ImuSaturationWatch imu;
   InputOrder order;
   ControlPredictor control;
-  std::vector<const EngineInput*> waiting;  ///< emitControl's motion inputs (storage reused)
+  std::vector<ControlPredictor::Waiting> waiting;  ///< emitControl's (storage reused)
   /// [m] The smallest distance between two markers of the map (+inf: fewer than two): after a
   /// gap whose spread exceeds half of it, the marker taken may be a neighbour ("ambiguous").
   const double marker_spacing;
@@ -86,11 +86,13 @@ struct FusionEngine::Impl final : InputOrder::Client {
   /// waiting in the reorder window.
   void emitControl() {
     waiting.clear();
-    order.forEachQueued([this](const EngineInput& e) {
+    order.forEachQueued([this](const OrderKey& key, const EngineInput& e) {
       if (std::holds_alternative<OdometryInput>(e.payload) || std::holds_alternative<ImuInput>(e.payload))
-        waiting.push_back(&e);
+        waiting.push_back({key, &e});
     });
-    out.on_control(control.pose(bank.active(), bank.activeConfig(), waiting));
+    // Every change of the canonical state comes with a processed input, but for those below
+    // (flush, initialize, reset), which start the control pose afresh.
+    out.on_control(control.pose(bank.active(), bank.activeConfig(), counters.processed, waiting));
   }
 
   // InputOrder::Client
@@ -234,10 +236,12 @@ bool FusionEngine::push(EngineInput&& in) {
 void FusionEngine::flush() {
   impl_->order.flush();
   impl_->decimation.publishPending();  // output_every > 1: the state after the last input
+  impl_->control.invalidate();
 }
 
 void FusionEngine::initialize(const FilterState& state) {
   impl_->bank.initialize(state);
+  impl_->control.invalidate();
   impl_->gaps.resumeFrom(state.utime);
   impl_->last_status = impl_->bank.active().state().status;
 }

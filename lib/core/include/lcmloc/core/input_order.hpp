@@ -48,7 +48,7 @@ class InputOrder {
   int64_t newest() const { return guard_.newest(); }
   /// [us] Message time the inputs confirming a new time base span at least.
   int64_t confirmSpan() const { return guard_.confirmSpan(); }
-  /// f(input) for every input waiting in the window, in canonical order (held ones not).
+  /// f(key, input) for every input waiting in the window, in canonical order (held ones not).
   template <typename F>
   void forEachQueued(F&& f) const { window_.forEachQueued(std::forward<F>(f)); }
   /// Inputs waiting in the window.

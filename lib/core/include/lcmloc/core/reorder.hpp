@@ -79,10 +79,10 @@ class ReorderBuffer {
     while (!empty()) pop(sink);
   }
 
-  /// f(item) for every item waiting, in canonical order (nothing is released).
+  /// f(key, item) for every item waiting, in canonical order (nothing is released).
   template <typename F>
   void forEachQueued(F&& f) const {
-    for (std::size_t i = head_; i < keys_.size(); ++i) f(static_cast<const T&>(slots_[keys_[i].slot]));
+    for (std::size_t i = head_; i < keys_.size(); ++i) f(keys_[i].key, static_cast<const T&>(slots_[keys_[i].slot]));
   }
 
   std::size_t size() const { return keys_.size() - head_; }
