@@ -50,12 +50,18 @@ FusionDaemon::FusionDaemon(const app::SystemConfig& cfg, bus::MessageBus& bus)
 FusionDaemon::FusionDaemon(const app::SystemConfig& cfg, bus::MessageBus& bus, Options opts)
     : cfg_(cfg), bus_(bus), intake_(cfg), hold_(opts.hold) {
   echo_ = opts.echo;
+  timing_ = opts.timing;
   status_period_us_ = static_cast<int64_t>(std::llround(cfg.fusion.status_period * 1e6));
   if (echo_) echoes_.resize(kEchoSeqs);
   core::EngineConfig ec = app::engineConfig(cfg);
   max_jump_us_ = ec.max_time_jump_us;
   core::EngineOutputs out;
   out.on_state = [this](const std::string& f, bool active, const core::FilterState& s) { publishState(f, active, s); };
+  if (opts.control) {
+    control_out_.channel = cfg.channels.pose_control;
+    control_out_.seq = &out_seq_[control_out_.channel];
+    out.on_control = [this](const core::FilterState& s) { publishControl(s); };
+  }
   out.on_decision = [this](const std::string& f, bool, const core::GateDecision& d) {
     bus_.publish(cfg_.channels.gate, bus::toLcm(d, f, out_seq_[cfg_.channels.gate]++));
     // Every decision is on the GATE channel; a rejection is a debug line (a replay of a real
@@ -112,10 +118,11 @@ FusionDaemon::FusionDaemon(const app::SystemConfig& cfg, bus::MessageBus& bus, O
   subscribe(ch.control, &DaemonIntake::control);
   inputs.push_back(ch.control);
 
-  spdlog::info("filter {} (shadow: {}), {} markers, reorder window {:.3f} s; in: {}; out: {}, {}, {}",
+  spdlog::info("filter {} (shadow: {}), {} markers, reorder window {:.3f} s; in: {}; out: {}{}, {}, {}{}",
                cfg.fusion.filter.type, cfg.fusion.shadow.empty() ? "none" : fmt::format("{}", fmt::join(cfg.fusion.shadow, ", ")),
-               markers, cfg.fusion.reorder_window, fmt::format("{}", fmt::join(inputs, ", ")), ch.pose, ch.gate,
-               ch.status);
+               markers, cfg.fusion.reorder_window, fmt::format("{}", fmt::join(inputs, ", ")), ch.pose,
+               opts.control ? ", " + ch.pose_control + " (control pose)" : "", ch.gate, ch.status,
+               opts.timing ? ", " + ch.timing : "");
   if (!hold_) publishStatus("started", "filter " + engine_->activeFilter(), 0);
 }
 
@@ -389,6 +396,13 @@ void FusionDaemon::publishState(const std::string& filter, bool active, const co
     if (next_status_utime_ != INT64_MIN) publishStatus("periodic", rejects_.period(), s.utime);
     if (__builtin_add_overflow(s.utime, period, &next_status_utime_)) next_status_utime_ = INT64_MAX;
   }
+}
+
+void FusionDaemon::publishControl(const core::FilterState& s) {
+  PoseOut& po = control_out_;
+  po.filter = engine_->activeFilter();
+  const std::size_t size = bus::encodePose(s, po.filter, (*po.seq)++, po.bytes);
+  bus_.publishRaw(po.channel, po.bytes.data(), size);
 }
 
 void FusionDaemon::publishStatus(const std::string& event, const std::string& detail, int64_t utime) {

@@ -1,8 +1,10 @@
 #pragma once
 // The fusion daemon: LCM in (the sensor inputs of inputs.hpp, FUSION_CONTROL), validation and
-// conversion, core::FusionEngine, LCM out (POSE, POSE_<TYPE>, GATE, FUSION_STATUS).
+// conversion, core::FusionEngine, LCM out (POSE, POSE_<TYPE>, GATE, FUSION_STATUS, and with
+// Options::control POSE_CONTROL).
 // Bad input never stops it: each rejected message gets a log line (rate-limited) and a status
 // event, and is counted.
+#include <chrono>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -10,9 +12,11 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "inputs.hpp"
+#include "timing.hpp"
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/app/heartbeat.hpp"
 #include "lcmloc/app/log_throttle.hpp"
@@ -102,6 +106,12 @@ class FusionDaemon {
     bool hold = false;
     /// Remember what it publishes on POSE, for checkEcho (live only).
     bool echo = false;
+    /// Publish the control pose on channels.pose_control as each odometry or IMU input is taken
+    /// (core::EngineOutputs::on_control). The canonical outputs are the same either way.
+    bool control = false;
+    /// Measure each message's delay and processing time on the wall clock into this (live only;
+    /// nothing of it reaches the estimate). Null: nothing measured.
+    DaemonTiming* timing = nullptr;
   };
   FusionDaemon(const app::SystemConfig& cfg, bus::MessageBus& bus);
   FusionDaemon(const app::SystemConfig& cfg, bus::MessageBus& bus, Options opts);
@@ -155,8 +165,12 @@ class FusionDaemon {
   void subscribe(const std::string& channel, void (DaemonIntake::*take)(const std::string&, const T&, IntakeItem&)) {
     bus_.subscribe<T>(
         channel,
-        [this, take](const std::string& c, const T& m, int64_t) {
+        [this, take](const std::string& c, const T& m, int64_t recv_utime) {
+          if (!timing_) return intakeOne([&](IntakeItem& item) { (intake_.*take)(c, m, item); });
+          if constexpr (!std::is_same_v<T, lcmloc::fusion_control_t>) timing_->arrived(c, m.utime, recv_utime);
+          const auto t0 = std::chrono::steady_clock::now();
           intakeOne([&](IntakeItem& item) { (intake_.*take)(c, m, item); });
+          timing_->step(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), recv_utime);
         },
         [this](const std::string& c, const std::string& why) {
           intakeOne([&](IntakeItem& item) { intake_.decodeError(c, why, item); });
@@ -187,6 +201,7 @@ class FusionDaemon {
   void reject(const std::string& ch, int64_t seq, int64_t utime, const std::string& why, const std::string& reason = "");
   void publishState(const std::string& filter, bool active, const core::FilterState& s);
   void publishStatus(const std::string& event, const std::string& detail, int64_t utime);
+  void publishControl(const core::FilterState& s);
   std::string poseChannel(const std::string& filter, bool active) const;
 
   const app::SystemConfig& cfg_;
@@ -208,6 +223,7 @@ class FusionDaemon {
     std::vector<uint8_t> bytes;  ///< bus::encodePose's output
   };
   std::vector<PoseOut> pose_out_;
+  PoseOut control_out_;  ///< the control pose's (Options::control)
   /// The last kEchoSeqs POSE this daemon published on the active channel, by seq: a fingerprint
   /// of utime, filter and state, and whether it came back already.
   static constexpr int64_t kEchoSeqs = 8192;
@@ -216,6 +232,7 @@ class FusionDaemon {
     bool heard = false;
   };
   bool echo_ = false;  ///< Options::echo
+  DaemonTiming* timing_ = nullptr;  ///< Options::timing
   std::vector<Echo> echoes_;
   int64_t pose_seqs_ = 0;  ///< seqs published on the active POSE channel (the next one's seq)
   int64_t foreign_outputs_ = 0;

@@ -93,7 +93,7 @@ void DaemonRunner::start(bus::MessageBus& bus) {
   const bool hold = opts_.init_from_bus > 0 || saved_.has_value();
   if (!opts_.checkpoint.empty() && !saved_)
     spdlog::info("no checkpoint {} yet: starting from the configured initial state", opts_.checkpoint);
-  daemon_ = std::make_unique<FusionDaemon>(cfg_, bus, FusionDaemon::Options{hold, true});
+  daemon_ = std::make_unique<FusionDaemon>(cfg_, bus, FusionDaemon::Options{hold, true, true, &timing_});
   hb_ = std::make_unique<app::Heartbeat>(bus, cfg_.channels.heartbeat, "lcmloc-fusion",
                                             [this] { return daemon_->counters(); });
   if (hold) {
@@ -123,7 +123,18 @@ void DaemonRunner::start(bus::MessageBus& bus) {
   FusionDaemon* d = daemon_.get();
   bus.subscribe<lcmloc::pose_t>(cfg_.channels.pose,
                                 [d](const std::string&, const lcmloc::pose_t& m, int64_t) { d->checkEcho(m); });
-  last_checkpoint_ = std::chrono::steady_clock::now();
+  last_checkpoint_ = last_timing_ = std::chrono::steady_clock::now();
+}
+
+void DaemonRunner::publishTiming() {
+  const auto now = std::chrono::steady_clock::now();
+  if (now - last_timing_ < std::chrono::seconds(1)) return;
+  last_timing_ = now;
+  const auto wall = std::chrono::duration_cast<std::chrono::microseconds>(
+      std::chrono::system_clock::now().time_since_epoch());
+  lcmloc::fusion_timing_t m = timing_.report(wall.count());
+  m.seq = timing_seq_++;
+  bus_->publish(cfg_.channels.timing, m);
 }
 
 void DaemonRunner::saveCheckpoint() {
@@ -142,6 +153,7 @@ void DaemonRunner::saveCheckpoint() {
 void DaemonRunner::step(int timeout_ms) {
   hb_->tick();
   bus_->handle(timeout_ms);
+  publishTiming();
   if (!opts_.checkpoint.empty() &&
       std::chrono::steady_clock::now() - last_checkpoint_ >= std::chrono::duration<double>(opts_.checkpoint_period)) {
     saveCheckpoint();

@@ -2,8 +2,8 @@
 // lcmloc-fusion's process around the FusionDaemon, over any bus::MessageBus (the program runs
 // it over LCM, the unit tests over the MemoryBus): the command line beyond the common options, the
 // hand-over from a running daemon (--init-from-bus) or a checkpoint (--checkpoint), the check of
-// its own POSE echo (another daemon on the bus), the heartbeat, the periodic checkpoint and the
-// stop.
+// its own POSE echo (another daemon on the bus), the heartbeat, the wall-clock timing
+// (FUSION_TIMING), the periodic checkpoint and the stop.
 #include <chrono>
 #include <memory>
 #include <optional>
@@ -56,6 +56,8 @@ class DaemonRunner {
   /// The last usable POSE of the running daemon on the bus (and its filter), see start().
   std::optional<core::FilterState> lastPoseOnBus(std::string* filter);
   void saveCheckpoint();
+  /// FUSION_TIMING (fusion_timing_t) once per wall second.
+  void publishTiming();
 
   app::SystemConfig cfg_;  ///< (the daemon keeps a reference to it)
   RunnerOptions opts_;
@@ -65,7 +67,9 @@ class DaemonRunner {
   std::unique_ptr<app::Heartbeat> hb_;
   /// A failing write is logged when it starts failing and when it works again (not every period).
   bool checkpoint_failing_ = false, checkpoint_written_ = false;
-  std::chrono::steady_clock::time_point last_checkpoint_;
+  std::chrono::steady_clock::time_point last_checkpoint_, last_timing_;
+  DaemonTiming timing_;
+  int64_t timing_seq_ = 0;
 };
 
 }  // namespace lcmloc::fusion

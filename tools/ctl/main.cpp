@@ -5,13 +5,14 @@
 #include "lcmloc/core/filter.hpp"
 #include "lcmloc/ctl/control.hpp"
 #include "lcmloc/ctl/processes.hpp"
+#include "lcmloc/ctl/status.hpp"
 
 using namespace lcmloc;
 
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-ctl: send a command to the fusion daemon (FUSION_CONTROL) and print its answer from "
-               "FUSION_STATUS; print the processes on the bus (status); stop, start or restart a process under a "
-               "launcher (proc)."};
+               "FUSION_STATUS; print the processes on the bus and the daemon's status and timing (status); stop, start or "
+               "restart a process under a launcher (proc)."};
   app.footer("lcmloc-ctl's own exit codes: 4 no answer within --timeout, 5 the daemon refused the command "
              "(1: no daemon on the bus; status: no heartbeat on the bus).");
   app::CommonOptions opts;
@@ -43,7 +44,11 @@ int main(int argc, char** argv) {
 
   return app::runProcess(app, argc, argv, opts, "lcmloc-ctl", [&]() -> int {
     const auto cfg = app::loadSystemConfig(opts.config);
-    if (app.got_subcommand(pcs.status)) return ctl::status(cfg, opts.lcm_url, pcs.listen);
+    if (app.got_subcommand(pcs.status)) {  // the processes, then the fusion daemon's status and timing
+      const int processes = ctl::status(cfg, opts.lcm_url, pcs.listen);
+      const int fusion = ctl::fusionStatus(cfg, opts.lcm_url, timeout);
+      return processes == app::kExitOk ? app::kExitOk : fusion;
+    }
     if (app.got_subcommand(pcs.proc)) return ctl::proc(cfg, opts.lcm_url, pcs.command, timeout);
     c.kind = app.got_subcommand(sw) ? ctl::Command::Switch
              : app.got_subcommand(sp) ? ctl::Command::SetPose : ctl::Command::Reset;

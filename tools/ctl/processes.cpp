@@ -89,7 +89,8 @@ int proc(const app::SystemConfig& cfg, const std::string& lcm_url, const ProcCom
 
 void addProcessCommands(CLI::App& app, ProcessCommands& pcs) {
   pcs.status = app.add_subcommand("status", "print every process on the bus: host, pid, state, restarts, CPU %, RSS, "
-                                            "message rates, heartbeat age (from HEARTBEAT)");
+                                            "message rates, heartbeat age (from HEARTBEAT); then the fusion daemon's "
+                                            "status and timing (FUSION_STATUS, FUSION_TIMING)");
   pcs.status->add_option("--listen", pcs.listen, "[s] to listen for heartbeats (two at least, for the rates)")
       ->check(app::positive())
       ->check(app::wallSeconds())

@@ -25,6 +25,9 @@ int main(int argc, char** argv) {
   app.add_flag("--no-shadow", o.no_shadow, "run no shadow filters")->excludes(o_shadow);
   app.add_flag("--with-inputs", o.with_inputs,
                "copy the input events to the output too (all but the old outputs, HEARTBEAT and LCM_SELF_TEST)");
+  app.add_flag("--control", o.control,
+               "write the control pose too (channels.pose_control, POSE_CONTROL), as the daemon published it live "
+               "given the log's event order as the order of arrival");
   app.add_flag("--one-thread", o.one_thread,
                "read the log and apply it in one thread (by default a second thread reads, decodes and validates "
                "ahead); the output is the same either way");

@@ -39,8 +39,8 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr std::pair<const char*, std::string ChannelConfig::*> kChannelKeys[] = {
     {"ground_truth", &ChannelConfig::ground_truth}, {"odometry", &ChannelConfig::odometry},
     {"magruler_fault", &ChannelConfig::magruler_fault}, {"fault_events", &ChannelConfig::fault_events},
-    {"pose", &ChannelConfig::pose}, {"gate", &ChannelConfig::gate}, {"control", &ChannelConfig::control},
-    {"status", &ChannelConfig::status}, {"heartbeat", &ChannelConfig::heartbeat}, {"imu", &ChannelConfig::imu},
+    {"pose", &ChannelConfig::pose}, {"pose_control", &ChannelConfig::pose_control}, {"gate", &ChannelConfig::gate}, {"control", &ChannelConfig::control},
+    {"status", &ChannelConfig::status}, {"timing", &ChannelConfig::timing}, {"heartbeat", &ChannelConfig::heartbeat}, {"imu", &ChannelConfig::imu},
     {"gps", &ChannelConfig::gps}, {"landmarks", &ChannelConfig::landmarks}, {"beacons", &ChannelConfig::beacons},
     {"vision", &ChannelConfig::vision}};
 
@@ -57,14 +57,14 @@ void parseChannels(KeyReader& root, ChannelConfig& c) {
   for (const auto& [key, name] : named)
     if (name.empty() || name.find_first_of(" \t\n") != std::string::npos)
       throw ConfigError(root.file(), "channels." + key, "a channel name must be non-empty and without blanks");
-  const std::vector<std::string> outputs{"pose", "gate", "status", "control", "heartbeat"};
+  const std::vector<std::string> outputs{"pose", "pose_control", "gate", "status", "timing", "control", "heartbeat"};
   for (const auto& [out_key, out_name] : named) {
     if (std::find(outputs.begin(), outputs.end(), out_key) == outputs.end()) continue;
     for (const auto& [key, name] : named)
       if (key != out_key && name == out_name)
         throw ConfigError(root.file(), "channels." + out_key,
-                          "'" + out_name + "' is also channels." + key + ": each of pose, gate, status, control "
-                          "and heartbeat needs a channel of its own");
+                          "'" + out_name + "' is also channels." + key + ": each of pose, pose_control, gate, status, "
+                          "timing, control and heartbeat needs a channel of its own");
   }
 }
 

@@ -8,6 +8,7 @@
 
 #include "filter_internal.hpp"
 #include "lcmloc/core/commands.hpp"
+#include "lcmloc/core/control_pose.hpp"
 #include "lcmloc/core/filter_bank.hpp"
 #include "lcmloc/core/fix_stage.hpp"
 #include "lcmloc/core/input_order.hpp"
@@ -54,6 +55,8 @@ struct FusionEngine::Impl final : InputOrder::Client {
   Commands commands;
   ImuSaturationWatch imu;
   InputOrder order;
+  ControlPredictor control;
+  std::vector<ControlPredictor::Waiting> waiting;  ///< emitControl's (storage reused)
   /// [m] The smallest distance between two markers of the map (+inf: fewer than two): after a
   /// gap whose spread exceeds half of it, the marker taken may be a neighbour ("ambiguous").
   const double marker_spacing;
@@ -63,7 +66,7 @@ struct FusionEngine::Impl final : InputOrder::Client {
       : cfg(std::move(c)), map(std::make_shared<const MapIndex>(std::move(m))), out(std::move(o)), bank(cfg.filter, cfg.shadow, map, out),
         decimation(cfg.output_every, bank), gaps(cfg.odometry_gap, bank, decimation, out),
         fixes(cfg, bank, out, counters), commands(bank, fixes, out),
-        order(cfg.reorder_window_us, cfg.max_time_jump_us, *this), marker_spacing(map->closestPair()),
+        order(cfg.reorder_window_us, cfg.max_time_jump_us, *this), control(map), marker_spacing(map->closestPair()),
         last_status(bank.active().state().status) {}
 
   /// Every part starts afresh (a new time base; the active filter's type is kept).
@@ -75,7 +78,21 @@ struct FusionEngine::Impl final : InputOrder::Client {
     fixes.reset();
     commands.reset();
     imu.reset();
+    control.invalidate();
     last_status = bank.active().state().status;
+  }
+
+  /// The control pose now (EngineOutputs::on_control): the active state and the motion inputs
+  /// waiting in the reorder window.
+  void emitControl() {
+    waiting.clear();
+    order.forEachQueued([this](const OrderKey& key, const EngineInput& e) {
+      if (std::holds_alternative<OdometryInput>(e.payload) || std::holds_alternative<ImuInput>(e.payload))
+        waiting.push_back({key, &e});
+    });
+    // Every change of the canonical state comes with a processed input, but for those below
+    // (flush, initialize, reset), which start the control pose afresh.
+    out.on_control(control.pose(bank.active(), bank.activeConfig(), counters.processed, waiting));
   }
 
   // InputOrder::Client
@@ -195,7 +212,10 @@ struct FusionEngine::Impl final : InputOrder::Client {
                 events::ImuSaturated{refOf(in), m.accel[0], bank.activeConfig().gnss.accel_saturation, active.name(), n});
   }
   void handle(const EngineInput& in, const BearingsInput& b) { fixes.process(in, b); }
-  void handle(const EngineInput& in, const ControlCommand& c) { commands.apply(in, c); }
+  void handle(const EngineInput& in, const ControlCommand& c) {
+    commands.apply(in, c);
+    control.invalidate();  // a switch may keep the type and change the parameters
+  }
 };
 
 FusionEngine::FusionEngine(EngineConfig cfg, MarkerMap map, EngineOutputs out)
@@ -205,15 +225,23 @@ FusionEngine::~FusionEngine() = default;
 FusionEngine::FusionEngine(FusionEngine&&) noexcept = default;
 FusionEngine& FusionEngine::operator=(FusionEngine&&) noexcept = default;
 
-bool FusionEngine::push(EngineInput&& in) { return impl_->order.push(std::move(in)); }
+bool FusionEngine::push(EngineInput&& in) {
+  const bool motion = impl_->out.on_control && (std::holds_alternative<OdometryInput>(in.payload) ||
+                                                std::holds_alternative<ImuInput>(in.payload));
+  const bool taken = impl_->order.push(std::move(in));
+  if (taken && motion) impl_->emitControl();
+  return taken;
+}
 
 void FusionEngine::flush() {
   impl_->order.flush();
   impl_->decimation.publishPending();  // output_every > 1: the state after the last input
+  impl_->control.invalidate();
 }
 
 void FusionEngine::initialize(const FilterState& state) {
   impl_->bank.initialize(state);
+  impl_->control.invalidate();
   impl_->gaps.resumeFrom(state.utime);
   impl_->last_status = impl_->bank.active().state().status;
 }

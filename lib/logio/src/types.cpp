@@ -7,6 +7,7 @@
 #include "lcmloc/fault_event_t.hpp"
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/fusion_status_t.hpp"
+#include "lcmloc/fusion_timing_t.hpp"
 #include "lcmloc/gate_decision_t.hpp"
 #include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"
@@ -60,6 +61,10 @@ void visit(const fusion_control_t& m, Visitor& v) { F(utime); F(seq); F(command)
 void visit(const fusion_status_t& m, Visitor& v) {
   F(utime); F(seq); F(filter); F(status); F(event); F(detail); F(messages_in); F(messages_used);
   F(messages_rejected); F(sequence_gaps);
+}
+void visit(const fusion_timing_t& m, Visitor& v) {
+  F(utime); F(seq); F(window); F(num_channels); F(channel); F(delay_p50); F(delay_max); F(age); F(rate); F(count);
+  F(steps); F(step_p50); F(step_p99); F(step_max);
 }
 void visit(const gate_decision_t& m, Visitor& v) {
   F(utime); F(seq); F(filter); F(sensor); F(measurement_seq); F(dim); F(innovation); F(mahalanobis); F(gate);
@@ -123,7 +128,8 @@ TypeInfo entry() {
 
 const std::vector<TypeInfo>& knownTypes() {
   static const std::vector<TypeInfo> types{
-      entry<fault_event_t>(),  entry<fusion_control_t>(), entry<fusion_status_t>(), entry<gate_decision_t>(),
+      entry<fault_event_t>(),  entry<fusion_control_t>(), entry<fusion_status_t>(), entry<fusion_timing_t>(),
+      entry<gate_decision_t>(),
       entry<gps_fix_t>(),      entry<ground_truth_t>(),   entry<heartbeat_t>(),     entry<imu_t>(),
       entry<landmark_bearings_t>(), entry<logger_status_t>(), entry<magruler_t>(), entry<odometry_t>(),
       entry<pose_t>(), entry<landmark_obs_t>(), entry<beacon_range_t>()};

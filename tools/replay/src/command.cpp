@@ -54,6 +54,7 @@ int runCommand(const simconfig::SimSystemConfig& cfg, const CommandOptions& o) {
   ro.input = o.input;
   ro.output = o.output;
   ro.with_inputs = o.with_inputs;
+  ro.control = o.control;
   ro.progress_period_s = o.progress_s;
   ro.read_ahead = !o.one_thread;
   ro.stop = [] { return app::stopRequested(); };

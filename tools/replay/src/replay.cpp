@@ -20,7 +20,7 @@
 namespace lcmloc::replay {
 
 bool isDaemonOutput(const app::ChannelConfig& ch, const std::string& c) {
-  if (c == ch.pose || c == ch.gate || c == ch.status) return true;
+  if (c == ch.pose || c == ch.pose_control || c == ch.gate || c == ch.status) return true;
   // shadow filters: POSE_<TYPE>
   const std::size_t n = ch.pose.size();
   if (c.size() > n + 1 && c[n] == '_' && c.compare(0, n, ch.pose) == 0) return true;
@@ -393,7 +393,7 @@ ReplayResult replayLog(const app::SystemConfig& cfg, const ReplayOptions& opts) 
   alignas(replay::kLinePair) Reader reader(opts.input, cfg, opts);
   r.file_size = reader.fileSize();
   alignas(replay::kLinePair) LogBus bus(opts.output);
-  alignas(replay::kLinePair) fusion::FusionDaemon daemon(cfg, bus);
+  alignas(replay::kLinePair) fusion::FusionDaemon daemon(cfg, bus, fusion::FusionDaemon::Options{false, false, opts.control});
   reader.attach(bus, daemon);
   alignas(replay::kLinePair) Applier applier(bus, daemon, opts, r);
   if (opts.read_ahead)

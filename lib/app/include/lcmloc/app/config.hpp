@@ -41,9 +41,13 @@ struct ChannelConfig {
   std::string magruler_fault = "MAGRULER_FAULT";  ///< where the injector publishes
   std::string fault_events = "FAULT_EVENTS";
   std::string pose = "POSE";
+  /// The control pose (the canonical one with the motion still in the reorder window on top,
+  /// published as each odometry or IMU message arrives): lcmloc-fusion; lcmloc-replay --control.
+  std::string pose_control = "POSE_CONTROL";
   std::string gate = "GATE";
   std::string control = "FUSION_CONTROL";
   std::string status = "FUSION_STATUS";
+  std::string timing = "FUSION_TIMING";  ///< fusion_timing_t: lcmloc-fusion's wall-clock timing
   std::string heartbeat = "HEARTBEAT";
   std::string imu = "IMU";
   std::string gps = "GPS";

@@ -8,6 +8,7 @@
 //   OutputDecimation  a state after every N-th odometry message (output_every)
 //   LandmarkFixStage  three-landmark fixes through each filter's gate
 //   Commands          switch, reset, set_pose, and their answers
+//   ControlPredictor  the control pose: the active state and the motion still in the window
 // A new time base (time went back) starts every part afresh.
 #include <memory>
 #include <string>
@@ -32,7 +33,8 @@ class FusionEngine {
   /// left as it was. An input beyond the time-jump guard is held (true) and taken or dropped
   /// later (see EngineConfig::max_time_jump_us). A command waits in the window until an input
   /// other than a command is newer than it by the window (or flush()); one more than
-  /// max_time_jump_us ahead of the newest input is refused ("too_new").
+  /// max_time_jump_us ahead of the newest input is refused ("too_new"). An odometry or IMU
+  /// input taken is followed by the control pose (EngineOutputs::on_control, when set).
   bool push(EngineInput&& in);
   bool push(const EngineInput& in) { return push(EngineInput(in)); }
   /// Processes everything still queued (end of log / shutdown).

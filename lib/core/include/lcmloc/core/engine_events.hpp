@@ -131,6 +131,10 @@ struct EngineOutputs {
   std::function<void(const std::string& filter, bool is_active, const FilterState&)> on_state;
   std::function<void(const std::string& filter, bool is_active, const GateDecision&)> on_decision;
   std::function<void(const EngineEvent&)> on_event;
+  /// The control pose (ControlPredictor) after every odometry or IMU input the engine took, the
+  /// moment it was pushed: the active filter's state with the inputs still waiting in the reorder
+  /// window composed on top. Unset: none is computed.
+  std::function<void(const FilterState&)> on_control;
 
   void event(EventKind kind, int64_t utime, EventFields fields) const {
     if (on_event) on_event(EngineEvent{kind, utime, std::move(fields)});

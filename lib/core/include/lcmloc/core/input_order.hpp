@@ -4,6 +4,7 @@
 // utime, then by the rank of the input's kind (kCanonicalRank), then by a stable hash of its
 // channel, then by seq.
 #include <cstdint>
+#include <utility>
 
 #include "lcmloc/core/engine_input.hpp"
 #include "lcmloc/core/reorder.hpp"
@@ -47,6 +48,9 @@ class InputOrder {
   int64_t newest() const { return guard_.newest(); }
   /// [us] Message time the inputs confirming a new time base span at least.
   int64_t confirmSpan() const { return guard_.confirmSpan(); }
+  /// f(key, input) for every input waiting in the window, in canonical order (held ones not).
+  template <typename F>
+  void forEachQueued(F&& f) const { window_.forEachQueued(std::forward<F>(f)); }
   /// Inputs waiting in the window.
   std::size_t queued() const { return window_.size(); }
   /// Nothing queued, held or released: time starts over.

@@ -79,6 +79,12 @@ class ReorderBuffer {
     while (!empty()) pop(sink);
   }
 
+  /// f(key, item) for every item waiting, in canonical order (nothing is released).
+  template <typename F>
+  void forEachQueued(F&& f) const {
+    for (std::size_t i = head_; i < keys_.size(); ++i) f(keys_[i].key, static_cast<const T&>(slots_[keys_[i].slot]));
+  }
+
   std::size_t size() const { return keys_.size() - head_; }
   bool empty() const { return head_ == keys_.size(); }
   bool contains(const OrderKey& key) const {

@@ -18,6 +18,7 @@ struct CommandOptions {
   std::string shadow;   ///< overrides fusion.shadow: comma-separated filter types ("" = none)
   bool no_shadow = false;
   bool with_inputs = false;
+  bool control = false;  ///< ReplayOptions::control
   bool one_thread = false;
   double progress_s = 2.0;  ///< [s, wall] between progress lines; 0 = none
   bool bench = false;       ///< the benchmark instead (bench_options)

@@ -23,6 +23,9 @@ struct ReplayOptions {
   /// Also copy the input events to the output (all channels except the daemon's outputs, the
   /// heartbeats and LCM_SELF_TEST), so the output log is complete for lcmloc-evaluate.
   bool with_inputs = false;
+  /// Also write the control pose (channels.pose_control) the live daemon published: the input
+  /// log's event order stands for the order the messages arrived in.
+  bool control = false;
   double progress_period_s = 2.0;  ///< [s, wall] between progress lines (<= 0: none)
   /// Two threads: one reads the log and runs the daemon's intake on each message (decoding,
   /// validation, the sequence check: fusion::DaemonIntake), the other the rest of the daemon
@@ -65,7 +68,8 @@ struct ReplayResult {
 /// std::invalid_argument / app::ConfigError on a bad filter configuration.
 ReplayResult replayLog(const app::SystemConfig& cfg, const ReplayOptions& opts);
 
-/// Output channels of the daemon under cfg: POSE, POSE_<TYPE> of each shadow, GATE, FUSION_STATUS.
+/// Output channels of the daemon under cfg: POSE, POSE_CONTROL, POSE_<TYPE> of each shadow, GATE,
+/// FUSION_STATUS.
 bool isDaemonOutput(const app::ChannelConfig& ch, const std::string& channel);
 
 /// A synthetic log (for the benchmark and tests): the vehicle drives laps of an oval track
