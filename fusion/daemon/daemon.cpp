@@ -354,7 +354,8 @@ void FusionDaemon::publishState(const std::string& filter, bool active, const co
   if (next_status_utime_ != INT64_MIN && core::apartBy(next_status_utime_, s.utime, 2 * period))
     next_status_utime_ = INT64_MIN;
   if (s.utime >= next_status_utime_) {
-    if (next_status_utime_ != INT64_MIN) publishStatus("periodic", "", s.utime);
+    // (the detail: the self-calibration estimates of a filter that has them, else empty)
+    if (next_status_utime_ != INT64_MIN) publishStatus("periodic", core::calibrationSummary(s), s.utime);
     if (__builtin_add_overflow(s.utime, period, &next_status_utime_)) next_status_utime_ = INT64_MAX;
   }
 }

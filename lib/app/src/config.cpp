@@ -166,15 +166,19 @@ static void parseCalibration(KeyReader& r, core::FilterConfig::Calibration& k) {
   else if (bias == "per_beacon") k.beacon_bias = BB::PerBeacon;
   else if (!bias.empty())
     throw ConfigError(r.file(), n.keyPath("beacon_bias"), "'" + bias + "' is not one of off, shared, per_beacon");
+  n.get("beacon_bias_mean", k.beacon_bias_mean, -1e3, 1e3);
   n.get("beacon_bias_std", k.beacon_bias_std, 1e-9, 1e3);
   n.get("beacon_bias_rw", k.beacon_bias_rw, 0.0, 10.0);
   n.get("odo_scale", k.odo_scale);
+  n.get("odo_scale_mean", k.odo_scale_mean, -0.9, 10.0);
   n.get("odo_scale_std", k.odo_scale_std, 1e-9, 1.0);
   n.get("odo_scale_rw", k.odo_scale_rw, 0.0, 1.0);
   n.get("yaw_rate_scale", k.yaw_rate_scale);
-  n.get("yaw_rate_scale_std", k.yaw_rate_scale_std, 1e-9, 1.0);
+  n.get("yaw_rate_scale_mean", k.yaw_rate_scale_mean, -10.0, 10.0);
+  n.get("yaw_rate_scale_std", k.yaw_rate_scale_std, 1e-9, 10.0);
   n.get("yaw_rate_scale_rw", k.yaw_rate_scale_rw, 0.0, 1.0);
   n.get("yaw_rate_bias", k.yaw_rate_bias);
+  n.get("yaw_rate_bias_mean", k.yaw_rate_bias_mean, -1.0, 1.0);
   n.get("yaw_rate_bias_std", k.yaw_rate_bias_std, 1e-9, 1.0);
   n.get("yaw_rate_bias_rw", k.yaw_rate_bias_rw, 0.0, 1.0);
   n.finish();

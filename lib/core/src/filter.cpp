@@ -73,6 +73,9 @@ void validate(const FilterConfig& c) {
   for (const auto& [rw, name] : {std::pair{k.beacon_bias_rw, "beacon_bias_rw"}, {k.odo_scale_rw, "odo_scale_rw"},
                                  {k.yaw_rate_scale_rw, "yaw_rate_scale_rw"}, {k.yaw_rate_bias_rw, "yaw_rate_bias_rw"}})
     require(std::isfinite(rw) && rw >= 0, std::string("calibration.") + name + " must be >= 0");
+  for (const auto& [mean, name] : {std::pair{k.beacon_bias_mean, "beacon_bias_mean"}, {k.odo_scale_mean, "odo_scale_mean"},
+                                   {k.yaw_rate_scale_mean, "yaw_rate_scale_mean"}, {k.yaw_rate_bias_mean, "yaw_rate_bias_mean"}})
+    require(std::isfinite(mean), std::string("calibration.") + name + " must be finite");
 }
 
 }  // namespace

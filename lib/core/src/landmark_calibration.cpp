@@ -12,28 +12,30 @@ detail::CalibrationLayout detail::CalibrationLayout::of(const FilterConfig& c, c
   const auto& k = c.calibration;
   CalibrationLayout l;
   l.names = {"x", "y", "theta"};
-  std::vector<double> p0;
-  auto add = [&l, &p0](const std::string& name, double std0) {
+  std::vector<double> x0, p0;
+  auto add = [&l, &x0, &p0](const std::string& name, double mean, double std0) {
     l.names.push_back(name);
+    x0.push_back(mean);
     p0.push_back(std0 * std0);
     return l.size() - 1;
   };
-  if (k.odo_scale) l.odo_scale = add("cal_odo_scale", k.odo_scale_std);
-  if (k.yaw_rate_scale) l.yaw_rate_scale = add("cal_yaw_rate_scale", k.yaw_rate_scale_std);
-  if (k.yaw_rate_bias) l.yaw_rate_bias = add("cal_yaw_rate_bias", k.yaw_rate_bias_std);
+  if (k.odo_scale) l.odo_scale = add("cal_odo_scale", k.odo_scale_mean, k.odo_scale_std);
+  if (k.yaw_rate_scale) l.yaw_rate_scale = add("cal_yaw_rate_scale", k.yaw_rate_scale_mean, k.yaw_rate_scale_std);
+  if (k.yaw_rate_bias) l.yaw_rate_bias = add("cal_yaw_rate_bias", k.yaw_rate_bias_mean, k.yaw_rate_bias_std);
   if (k.beacon_bias == BB::Shared) {
-    l.bias0 = add("cal_beacon_bias", k.beacon_bias_std);
+    l.bias0 = add("cal_beacon_bias", k.beacon_bias_mean, k.beacon_bias_std);
   } else if (k.beacon_bias == BB::PerBeacon) {
     if (map.size() > static_cast<std::size_t>(kMaxBeaconBiasStates))
       throw std::invalid_argument("filter config: calibration.beacon_bias per_beacon takes at most " +
                                   std::to_string(kMaxBeaconBiasStates) + " map entries (the map has " +
                                   std::to_string(map.size()) + "): use shared");
     for (const Marker& m : map) {
-      const int i = add("cal_beacon_bias_" + std::to_string(m.id), k.beacon_bias_std);
+      const int i = add("cal_beacon_bias_" + std::to_string(m.id), k.beacon_bias_mean, k.beacon_bias_std);
       if (l.bias0 < 0) l.bias0 = i;
       l.bias_ids.push_back(m.id);
     }
   }
+  l.x0 = Eigen::Map<const Eigen::VectorXd>(x0.data(), static_cast<Eigen::Index>(x0.size()));
   l.p0 = Eigen::Map<const Eigen::VectorXd>(p0.data(), static_cast<Eigen::Index>(p0.size()));
   return l;
 }

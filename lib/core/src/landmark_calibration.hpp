@@ -20,7 +20,7 @@ struct CalibrationLayout {
   int bias0 = -1;             ///< first beacon-bias state
   std::vector<int> bias_ids;  ///< per-beacon: the map id of each bias state (empty: shared)
   std::vector<std::string> names;  ///< x, y, theta, then the calibration states' names
-  Eigen::VectorXd p0;         ///< prior variances of the calibration states (after the pose)
+  Eigen::VectorXd x0, p0;     ///< prior means and variances of the calibration states (after the pose)
   int size() const { return static_cast<int>(names.size()); }
 
   /// The layout of c.calibration over the map (per-beacon: one state per map entry, in map

@@ -209,10 +209,11 @@ class LandmarkUkf final : public Filter {
     ukf_.reset(initialX(), initialP());
     evidence_.clear();
   }
-  /// The initial state: the configuration's pose, every calibration state 0.
+  /// The initial state: the configuration's pose, the calibration states' prior means.
   typename U::Vector initialX() const {
     typename U::Vector x = U::Vector::Zero();
     x.template head<3>() = cfg_.initial_pose;
+    for (int i = 3; i < N; ++i) x[i] = cal_.x0[i - 3];
     return x;
   }
   /// The initial covariance: p0_diag, then the calibration states' prior variances.
