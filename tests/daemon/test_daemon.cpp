@@ -360,6 +360,8 @@ TEST_F(DaemonTest, CalibrationStatesAreReportedAndRoundTripThroughTheCheckpoint)
   // A checkpoint whose calibration has been learnt: the next daemon starts from it.
   ck->state.x[3] = 0.031;
   ck->state.x[4] = -0.004;
+  ck->state.P.bottomRows(2).setZero();
+  ck->state.P.rightCols(2).setZero();
   ck->state.P(3, 3) = 1e-6;
   ck->state.P(4, 4) = 4e-8;
   fusion::writeCheckpoint(ro.checkpoint, ck->state, ck->filter);
