@@ -393,7 +393,14 @@ void FusionDaemon::publishState(const std::string& filter, bool active, const co
   if (next_status_utime_ != INT64_MIN && core::apartBy(next_status_utime_, s.utime, 2 * period))
     next_status_utime_ = INT64_MIN;
   if (s.utime >= next_status_utime_) {
-    if (next_status_utime_ != INT64_MIN) publishStatus("periodic", rejects_.period(), s.utime);
+    // (the detail: the self-calibration estimates of a filter that has them, then the inputs
+    // refused since the last periodic status; empty when neither)
+    if (next_status_utime_ != INT64_MIN) {
+      std::string detail = core::calibrationSummary(s);
+      if (const std::string rejected = rejects_.period(); !rejected.empty())
+        detail += (detail.empty() ? "" : "; ") + rejected;
+      publishStatus("periodic", detail, s.utime);
+    }
     if (__builtin_add_overflow(s.utime, period, &next_status_utime_)) next_status_utime_ = INT64_MAX;
   }
 }

@@ -185,6 +185,36 @@ TEST(Config, UnknownKeyNamesFileKeyPathAndValidKeys) {
   EXPECT_NE(in_list.find("faults[0].at: unknown key"), std::string::npos) << in_list;
 }
 
+// fusion.filter.calibration: each state switched on by its key with its prior and random walk;
+// off by default; a value outside its range or an unknown mode names the key.
+TEST(Config, CalibrationKeysOfTheLandmarkFilter) {
+  using BB = lcmloc::core::FilterConfig::Calibration::BeaconBias;
+  EXPECT_FALSE(app::parseSystemConfig("", "c.yaml").fusion.filter.calibration.any());
+  const auto c = app::parseSystemConfig(
+      "fusion: {filter: {type: ukf_landmarks, calibration: {beacon_bias: per_beacon, beacon_bias_std: 0.3, "
+      "odo_scale: true, odo_scale_mean: 0.02, odo_scale_rw: 0.001, yaw_rate_scale: true, yaw_rate_scale_std: 0.4, "
+      "yaw_rate_bias: true, yaw_rate_bias_std: 0.02}}}",
+      "c.yaml").fusion.filter.calibration;
+  EXPECT_EQ(c.beacon_bias, BB::PerBeacon);
+  EXPECT_EQ(c.beacon_bias_std, 0.3);
+  EXPECT_TRUE(c.odo_scale && c.yaw_rate_scale && c.yaw_rate_bias);
+  EXPECT_EQ(c.odo_scale_mean, 0.02);
+  EXPECT_EQ(c.odo_scale_rw, 0.001);
+  EXPECT_EQ(c.yaw_rate_scale_std, 0.4);
+  EXPECT_EQ(c.yaw_rate_bias_std, 0.02);
+  EXPECT_EQ(app::parseSystemConfig("fusion: {filter: {calibration: {beacon_bias: shared}}}", "c.yaml")
+                .fusion.filter.calibration.beacon_bias, BB::Shared);
+  EXPECT_NE(processErrorOf("fusion: {filter: {calibration: {beacon_bias: each}}}")
+                .find("fusion.filter.calibration.beacon_bias: 'each' is not one of off, shared, per_beacon"),
+            std::string::npos);
+  EXPECT_NE(processErrorOf("fusion: {filter: {calibration: {odo_scale_std: 0}}}")
+                .find("fusion.filter.calibration.odo_scale_std: value 0 out of range"),
+            std::string::npos);
+  EXPECT_NE(processErrorOf("fusion: {filter: {calibration: {yaw_rate_bias_rw: -1}}}")
+                .find("fusion.filter.calibration.yaw_rate_bias_rw"),
+            std::string::npos);
+}
+
 // yaml-cpp reads the first of two equal keys and drops the other without a word: a second
 // `scenario:` appended to a file, or a flow map with `type` twice, was silently ignored.
 TEST(Config, AKeyGivenTwiceIsAnError) {

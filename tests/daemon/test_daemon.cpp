@@ -434,3 +434,56 @@ TEST_F(DaemonTest, TheCheckpointHoldsTheActiveStateAtTheStop) {
   EXPECT_NEAR(ck->state.x(1), poses(cfg_.channels.pose).back().state[1], 1e-9);
   fs::remove_all(dir);
 }
+
+// ukf_landmarks' self-calibration states (FilterConfig::Calibration): the periodic status says
+// their estimates, the checkpoint holds them, and a daemon started from a checkpoint starts
+// from them (values and variances), not from their priors.
+TEST_F(DaemonTest, CalibrationStatesAreReportedAndRoundTripThroughTheCheckpoint) {
+  const fs::path dir = fs::temp_directory_path() / ("lcmloc_daemon_cal_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  cfg_.fusion.filter.type = "ukf_landmarks";
+  cfg_.fusion.filter.calibration.odo_scale = true;
+  cfg_.fusion.filter.calibration.odo_scale_std = 0.04;
+  cfg_.fusion.filter.calibration.yaw_rate_bias = true;
+  fusion::RunnerOptions ro;
+  ro.checkpoint = (dir / "fusion.ck").string();
+  {
+    fusion::DaemonRunner runner(cfg_, ro);
+    runner.start(bus_);
+    for (int64_t k = 0; k < 250; ++k) bus_.inject(cfg_.channels.odometry, odometry(k, kT0 + k * kStep));
+    while (bus_.queued() > 0) runner.step(0);
+    EXPECT_EQ(runner.finish(), app::kExitOk);
+  }
+  const auto periodic = events("periodic");
+  ASSERT_FALSE(periodic.empty());
+  EXPECT_EQ(periodic.back().detail.rfind("calibration: odo_scale 0 +- 0.04, yaw_rate_bias 0 +- ", 0), 0u)
+      << periodic.back().detail;
+  auto ck = fusion::readCheckpoint(ro.checkpoint);
+  ASSERT_TRUE(ck.has_value());
+  EXPECT_EQ(ck->filter, "ukf_landmarks");
+  ASSERT_EQ(ck->state.names, (std::vector<std::string>{"x", "y", "theta", "cal_odo_scale", "cal_yaw_rate_bias"}));
+
+  // A checkpoint whose calibration has been learnt: the next daemon starts from it.
+  ck->state.x[3] = 0.031;
+  ck->state.x[4] = -0.004;
+  ck->state.P.bottomRows(2).setZero();
+  ck->state.P.rightCols(2).setZero();
+  ck->state.P(3, 3) = 1e-6;
+  ck->state.P(4, 4) = 4e-8;
+  fusion::writeCheckpoint(ro.checkpoint, ck->state, ck->filter);
+  const int64_t t1 = ck->state.utime;
+  {
+    fusion::DaemonRunner runner(cfg_, ro);
+    runner.start(bus_);
+    for (int64_t k = 1; k <= 3; ++k) bus_.inject(cfg_.channels.odometry, odometry(300 + k, t1 + k * kStep));
+    while (bus_.queued() > 0) runner.step(0);
+    const core::FilterState s = runner.daemon().activeState();
+    ASSERT_EQ(s.names, ck->state.names);
+    EXPECT_NEAR(s.x[3], 0.031, 1e-12);
+    EXPECT_NEAR(s.x[4], -0.004, 1e-12);
+    EXPECT_NEAR(s.P(3, 3), 1e-6, 1e-8);  // (3 odometry steps of random walk)
+    EXPECT_NEAR(s.P(4, 4), 4e-8, 1e-9);
+    EXPECT_EQ(runner.finish(), app::kExitOk);
+  }
+  fs::remove_all(dir);
+}

@@ -161,6 +161,36 @@ void parseLogger(KeyReader& root, LoggerConfig& l) {
 ConfigError::ConfigError(const std::string& file, const std::string& key, const std::string& reason)
     : std::runtime_error(describe(file, key, reason)) {}
 
+
+/// fusion.filter.calibration (ukf_landmarks' self-calibration states; docs/config.md).
+static void parseCalibration(KeyReader& r, core::FilterConfig::Calibration& k) {
+  using BB = core::FilterConfig::Calibration::BeaconBias;
+  KeyReader n(r.child("calibration"), r.file(), r.keyPath("calibration"));
+  std::string bias;
+  n.get("beacon_bias", bias);
+  if (bias == "off") k.beacon_bias = BB::Off;
+  else if (bias == "shared") k.beacon_bias = BB::Shared;
+  else if (bias == "per_beacon") k.beacon_bias = BB::PerBeacon;
+  else if (!bias.empty())
+    throw ConfigError(r.file(), n.keyPath("beacon_bias"), "'" + bias + "' is not one of off, shared, per_beacon");
+  n.get("beacon_bias_mean", k.beacon_bias_mean, -1e3, 1e3);
+  n.get("beacon_bias_std", k.beacon_bias_std, 1e-9, 1e3);
+  n.get("beacon_bias_rw", k.beacon_bias_rw, 0.0, 10.0);
+  n.get("odo_scale", k.odo_scale);
+  n.get("odo_scale_mean", k.odo_scale_mean, -0.9, 10.0);
+  n.get("odo_scale_std", k.odo_scale_std, 1e-9, 1.0);
+  n.get("odo_scale_rw", k.odo_scale_rw, 0.0, 1.0);
+  n.get("yaw_rate_scale", k.yaw_rate_scale);
+  n.get("yaw_rate_scale_mean", k.yaw_rate_scale_mean, -10.0, 10.0);
+  n.get("yaw_rate_scale_std", k.yaw_rate_scale_std, 1e-9, 10.0);
+  n.get("yaw_rate_scale_rw", k.yaw_rate_scale_rw, 0.0, 1.0);
+  n.get("yaw_rate_bias", k.yaw_rate_bias);
+  n.get("yaw_rate_bias_mean", k.yaw_rate_bias_mean, -1.0, 1.0);
+  n.get("yaw_rate_bias_std", k.yaw_rate_bias_std, 1e-9, 1.0);
+  n.get("yaw_rate_bias_rw", k.yaw_rate_bias_rw, 0.0, 1.0);
+  n.finish();
+}
+
 core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterConfig& base,
                                      const std::string& file, const std::string& key_prefix) {
   core::FilterConfig c = base;
@@ -240,6 +270,7 @@ core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterC
     l.get("beacon_std", c.landmarks.beacon_std, 1e-9, 1e6);
     l.finish();
   }
+  parseCalibration(r, c.calibration);
   ins_config::parseInsFilter(r, c.ins);
   r.finish();
   // What only the values together decide (p0_diag > 0 where a range allows 0, the sigma-point

@@ -2,7 +2,9 @@
 // (delta_s, delta_theta; a robot may turn in place), range-bearing observations of map
 // landmarks with a known id (association given) or an unknown one (nearest neighbour in
 // Mahalanobis distance among the map, then the chi-square gate), and range-only beacon ranges
-// (1-D update, gated). See docs/import_formats.md.
+// (1-D update, gated). See docs/import_formats.md. With FilterConfig::calibration switched on,
+// the state is augmented with self-calibration states (landmark_calibration.hpp): the odometry
+// step is corrected by its scale and bias states, a beacon's range by its bias state.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -10,6 +12,7 @@
 #include <vector>
 
 #include "filter_internal.hpp"
+#include "landmark_calibration.hpp"
 #include "landmark_evidence.hpp"
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/ruler_model.hpp"
@@ -24,13 +27,16 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr AngleMask kThetaMask = 1u << 2;
 constexpr AngleMask kBearingMask = 1u << 1;
 
+/// N: 3 (no calibration) or 3 + the calibration states of layout.
+template <int N>
 class LandmarkUkf final : public Filter {
-  using U = Ukf<3>;
+  using U = Ukf<N>;
 
  public:
-  LandmarkUkf(const FilterConfig& c, SharedMapIndex map)
+  LandmarkUkf(const FilterConfig& c, SharedMapIndex map, detail::CalibrationLayout layout)
       : cfg_(c), map_(std::move(map)), gated_(c.gate.enabled), gate2_(gated_ ? c.gate.threshold(2) : kInf),
-        gate1_(gated_ ? c.gate.threshold(1) : kInf), ukf_(c.sigma, kThetaMask) {
+        gate1_(gated_ ? c.gate.threshold(1) : kInf), ukf_(c.sigma, kThetaMask), cal_(std::move(layout)),
+        names_(cal_.names) {
     book_.caps = detail::lockoutCaps(cfg_, names_);
     book_.inflate = false;  // a lock-out is a status; the way back is evidence_ (re-localization)
     reset();
@@ -48,13 +54,12 @@ class LandmarkUkf final : public Filter {
     s.status = book_.status;
   }
   void initialize(const FilterState& from) override {
-    Eigen::VectorXd x(3);
-    Eigen::MatrixXd P(3, 3);
-    x = cfg_.initial_pose;
-    P = Mat3(cfg_.p0_diag.asDiagonal());
+    Eigen::VectorXd x = initialX();
+    Eigen::MatrixXd P = initialP();
     detail::copyMatching(from, names_, x, P);
     ukf_.reset(x, P);
     utime_ = from.utime;
+    last_odometry_.reset();
     book_.reset();
   }
   bool uses(Measurement m) const override {
@@ -65,12 +70,37 @@ class LandmarkUkf final : public Filter {
     const double dth = headingIncrement(odo, cfg_.wheelbase);
     if (!std::isfinite(odo.delta_s) || !std::isfinite(dth)) return;
     const double ds = odo.delta_s;
-    const SinCosNear mid(ukf_.x()(2) + 0.5 * dth);  // the sigma points' midpoint headings lie around it
-    auto f = [ds, dth, &mid](const U::Vector& s) -> U::Vector { return propagatePose(s, ds, dth, mid); };
-    U::Matrix Q = U::Matrix::Zero();
-    Q.diagonal() = detail::poseProcessNoise(cfg_, ds, dth);
-    if (ukf_.predict(f, Q)) utime_ = odo.utime;
-    evidence_.move(ds, dth);
+    if constexpr (N == 3) {
+      const SinCosNear mid(ukf_.x()(2) + 0.5 * dth);  // the sigma points' midpoint headings lie around it
+      auto f = [ds, dth, &mid](const typename U::Vector& s) -> typename U::Vector {
+        return propagatePose(s, ds, dth, mid);
+      };
+      typename U::Matrix Q = U::Matrix::Zero();
+      Q.diagonal() = detail::poseProcessNoise(cfg_, ds, dth);
+      if (ukf_.predict(f, Q)) utime_ = odo.utime;
+      evidence_.move(ds, dth);
+    } else {
+      // The step's time for the yaw-rate bias: since the previous increment (none: 0).
+      const double dt = last_odometry_ && odo.utime > *last_odometry_ ? 1e-6 * double(odo.utime - *last_odometry_) : 0.0;
+      last_odometry_ = odo.utime;
+      double ds_m, dth_m;  // the step corrected by the mean calibration
+      cal_.correct(ukf_.x(), ds, dth, dt, ds_m, dth_m);
+      const SinCosNear mid(ukf_.x()(2) + 0.5 * dth_m);
+      const detail::CalibrationLayout& cal = cal_;
+      auto f = [ds, dth, dt, &mid, &cal](const typename U::Vector& s) -> typename U::Vector {
+        double ds_c, dth_c;
+        cal.correct(s, ds, dth, dt, ds_c, dth_c);
+        typename U::Vector o = s;
+        o.template head<3>() = propagatePose(Pose(s.template head<3>()), ds_c, dth_c, mid);
+        return o;
+      };
+      Eigen::VectorXd q = Eigen::VectorXd::Zero(N);
+      q.head<3>() = detail::poseProcessNoise(cfg_, ds_m, dth_m);
+      cal_.addProcessNoise(cfg_.calibration, ds, dth, dt, q);
+      typename U::Matrix Q = typename U::Vector(q).asDiagonal();
+      if (ukf_.predict(f, Q)) utime_ = odo.utime;
+      evidence_.move(ds_m, dth_m);
+    }
   }
 
   std::optional<Relocalization> takeRelocalization() override { return std::exchange(relocalized_, std::nullopt); }
@@ -79,7 +109,7 @@ class LandmarkUkf final : public Filter {
 
   std::optional<GateDecision> update(const LandmarkObservation& obs) override {
     GateDecision d = decision(obs.utime, obs.sensor, obs.seq, gate2_);
-    U::Sigmas X;
+    typename U::Sigmas X;
     if (!std::isfinite(obs.range) || !(obs.range >= 0) || !std::isfinite(obs.bearing) ||
         !ukf_.sigmaPoints(X)) {
       d.reason = "bad_input";
@@ -89,10 +119,10 @@ class LandmarkUkf final : public Filter {
     const double bs = obs.bearing_std > 0 ? obs.bearing_std : cfg_.landmarks.bearing_std;
     const Mat2 R = Vec2(rs * rs, bs * bs).asDiagonal();
     const Vec2 z(obs.range, wrapAngle(obs.bearing));
-    Innovation<3, 2> best, cand;
+    Innovation<N, 2> best, cand;
     int best_id = -1;
     auto h_of = [](const Marker& m) {
-      return [&m](const U::Vector& s) { return predictRangeBearing(s, m.x, m.y); };
+      return [&m](const typename U::Vector& s) { return predictRangeBearing(Pose(s.template head<3>()), m.x, m.y); };
     };
     if (obs.landmark_id >= 0) {
       const Marker* known = map_->find(obs.landmark_id);
@@ -102,7 +132,7 @@ class LandmarkUkf final : public Filter {
         return d;
       }
       const Marker& m = *known;
-      if (ukf_.innovate<2>(X, h_of(m), R, z, kBearingMask, best)) best_id = m.id;
+      if (ukf_.template innovate<2>(X, h_of(m), R, z, kBearingMask, best)) best_id = m.id;
       finish(d, best_id, best, gate2_);
       if (d.accepted) evidence_.clear();
       else if (d.reason == "gate") relocalize(d, obs, m, rs, bs);
@@ -113,14 +143,14 @@ class LandmarkUkf final : public Filter {
       // within range + slack of it, in map order.
       const auto& P = ukf_.P();
       const double slack = 4.0 * std::sqrt(std::max(P(0, 0) + P(1, 1), 0.0) + rs * rs);
-      const Vec3 pose = ukf_.x();
+      const Vec3 pose = ukf_.x().template head<3>();
       int inside = 0;  // candidates the gate would accept
       map_->near(pose.x(), pose.y(), MapIndex::widen(obs.range + slack, pose.x(), pose.y()), near_);
       for (const uint32_t i : near_) {
         const Marker& m = (*map_)[i];
         const double dist = std::hypot(m.x - pose.x(), m.y - pose.y());
         if (std::abs(dist - obs.range) > slack) continue;
-        if (!ukf_.innovate<2>(X, h_of(m), R, z, kBearingMask, cand)) continue;
+        if (!ukf_.template innovate<2>(X, h_of(m), R, z, kBearingMask, cand)) continue;
         inside += cand.mahalanobis <= gate2_;
         if (best_id < 0 || cand.mahalanobis < best.mahalanobis) {
           best = cand;
@@ -143,7 +173,7 @@ class LandmarkUkf final : public Filter {
 
   std::optional<GateDecision> update(const BeaconRange& b) override {
     GateDecision d = decision(b.utime, b.sensor, b.seq, gate1_);
-    U::Sigmas X;
+    typename U::Sigmas X;
     if (!std::isfinite(b.range) || !(b.range >= 0) || !ukf_.sigmaPoints(X)) {
       d.reason = "bad_input";
       return d;
@@ -159,13 +189,15 @@ class LandmarkUkf final : public Filter {
     Eigen::Matrix<double, 1, 1> R, z;
     R(0, 0) = rs * rs;
     z(0, 0) = b.range;
-    auto h = [&m](const U::Vector& s) {
+    const int bias = cal_.biasIndex(m.id);  // its range-bias state (-1: none)
+    auto h = [&m, bias](const typename U::Vector& s) {
       Eigen::Matrix<double, 1, 1> r;
       r(0, 0) = std::hypot(m.x - s.x(), m.y - s.y());
+      if (bias >= 0) r(0, 0) += s[bias];
       return r;
     };
-    Innovation<3, 1> in;
-    const int id = ukf_.innovate<1>(X, h, R, z, 0u, in) ? m.id : -1;
+    Innovation<N, 1> in;
+    const int id = ukf_.template innovate<1>(X, h, R, z, 0u, in) ? m.id : -1;
     return finish(d, id, in, gate1_);
   }
 
@@ -174,8 +206,22 @@ class LandmarkUkf final : public Filter {
 
  private:
   void reset() {
-    ukf_.reset(cfg_.initial_pose, Mat3(cfg_.p0_diag.asDiagonal()));
+    ukf_.reset(initialX(), initialP());
     evidence_.clear();
+  }
+  /// The initial state: the configuration's pose, the calibration states' prior means.
+  typename U::Vector initialX() const {
+    typename U::Vector x = U::Vector::Zero();
+    x.template head<3>() = cfg_.initial_pose;
+    for (int i = 3; i < N; ++i) x[i] = cal_.x0[i - 3];
+    return x;
+  }
+  /// The initial covariance: p0_diag, then the calibration states' prior variances.
+  typename U::Matrix initialP() const {
+    typename U::Matrix P = U::Matrix::Zero();
+    P.template topLeftCorner<3, 3>() = Mat3(cfg_.p0_diag.asDiagonal());
+    for (int i = 3; i < N; ++i) P(i, i) = cal_.p0[i - 3];
+    return P;
   }
   /// A refused observation of a known landmark is evidence: when enough of them agree on a pose
   /// (LandmarkEvidence), the filter starts again from it, and d says so.
@@ -183,8 +229,16 @@ class LandmarkUkf final : public Filter {
     const auto f = evidence_.add(obs.utime, m.id, m.x, m.y, obs.range, wrapAngle(obs.bearing), rs, bs,
                                  std::isfinite(gate2_) ? gate2_ : 9.21);
     if (!f) return;
-    const Vec3 before = ukf_.x();
-    ukf_.reset(f->pose, f->P);
+    const Vec3 before = ukf_.x().template head<3>();
+    // The pose from the evidence; the calibration states keep their estimate and variance (their
+    // correlation with the old pose is dropped with it).
+    typename U::Vector x = ukf_.x();
+    typename U::Matrix P = ukf_.P();
+    x.template head<3>() = f->pose;
+    P.template topRows<3>().setZero();
+    P.template leftCols<3>().setZero();
+    P.template topLeftCorner<3, 3>() = f->P;
+    ukf_.reset(x, P);
     book_.reset();
     Relocalization r;
     r.utime = obs.utime;
@@ -201,7 +255,7 @@ class LandmarkUkf final : public Filter {
     d.reason = "relocalized";
   }
   template <int M>
-  GateDecision finish(GateDecision& d, int id, Innovation<3, M>& in, double gate) {
+  GateDecision finish(GateDecision& d, int id, Innovation<N, M>& in, double gate) {
     utime_ = std::max(utime_, d.utime);
     return book_.finish(d, id, in, gate, gated_, ukf_, cfg_);
   }
@@ -212,18 +266,31 @@ class LandmarkUkf final : public Filter {
   bool gated_;
   double gate2_, gate1_;
   U ukf_;
-  std::vector<std::string> names_{"x", "y", "theta"};
+  detail::CalibrationLayout cal_;
+  std::vector<std::string> names_;
   int64_t utime_ = 0;
+  std::optional<int64_t> last_odometry_;  ///< the previous increment's time (the yaw-rate bias's dt)
   detail::GateBook book_;  ///< gate decisions and lock-out
   detail::LandmarkEvidence evidence_;  ///< refused observations of known landmarks, for re-localization
   std::optional<Relocalization> relocalized_;
 };
 
+/// The filter with N states when the layout has N (3 + up to 3 + kMaxBeaconBiasStates).
+template <int N>
+std::unique_ptr<Filter> makeSized(const FilterConfig& cfg, const SharedMapIndex& map, detail::CalibrationLayout l) {
+  if constexpr (N > 6 + detail::kMaxBeaconBiasStates) {
+    return nullptr;
+  } else {
+    if (l.size() == N) return std::make_unique<LandmarkUkf<N>>(cfg, map, std::move(l));
+    return makeSized<N + 1>(cfg, map, std::move(l));
+  }
+}
+
 }  // namespace
 
 std::unique_ptr<Filter> detail::makeLandmarkFilter(const FilterConfig& cfg, const SharedMapIndex& map) {
   if (cfg.type != "ukf_landmarks") return nullptr;
-  return std::make_unique<LandmarkUkf>(cfg, map);
+  return makeSized<3>(cfg, map, CalibrationLayout::of(cfg, map->markers()));
 }
 
 }  // namespace lcmloc::core

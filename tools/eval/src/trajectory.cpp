@@ -65,6 +65,7 @@ TrackScore scoreTrack(const EstimateTrack& track, const std::vector<TruthPose>& 
   TrackScore sc;
   sc.channel = track.channel;
   sc.filters = track.filters;
+  sc.calibration = track.calibration;
   sc.estimates = static_cast<int64_t>(track.poses.size());
   if (!track.poses.empty()) {
     sc.first_utime = track.poses.front().utime;

@@ -113,6 +113,13 @@ class TrajectoryDecoder {
       }
     }
     t.poses.push_back(e);
+    // The self-calibration states ("cal_*", FilterConfig::Calibration) of the newest estimate.
+    t.calibration.clear();
+    for (std::size_t i = 3; i < m.state.size() && i < m.state_names.size(); ++i) {
+      if (m.state_names[i].rfind("cal_", 0) != 0) continue;
+      const double var = i < m.covariance.size() && i < m.covariance[i].size() ? m.covariance[i][i] : NAN;
+      t.calibration.push_back({m.state_names[i].substr(4), m.state[i], std::sqrt(std::max(var, 0.0))});
+    }
   }
 
   void truth(const lcm::LogEvent& ev) {

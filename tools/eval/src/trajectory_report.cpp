@@ -51,6 +51,11 @@ json trackJson(const TrackScore& s) {
   j["without_covariance"] = s.without_covariance;
   j["first_utime"] = s.first_utime;
   j["last_utime"] = s.last_utime;
+  if (!s.calibration.empty()) {  // the final self-calibration estimates (filters that have them)
+    json c = json::object();
+    for (const auto& v : s.calibration) c[v.name] = {{"value", number(v.value)}, {"sigma", number(v.sigma)}};
+    j["calibration"] = c;
+  }
   if (s.scored == 0) {
     j["position_error_m"] = nullptr;
     j["heading_error_rad"] = nullptr;
@@ -233,6 +238,11 @@ void printTrajectorySummary(std::ostream& os, const TrajectoryLog& log, const st
       if (d.segments)
         os << "  drift over " << std::setprecision(0) << d.length_m << " m: mean " << std::setprecision(2)
            << d.mean_pct << "%, max " << d.max_pct << "% (" << d.segments << " segments)\n";
+    if (!s.calibration.empty()) {
+      os << "  calibration (final):" << std::defaultfloat << std::setprecision(4);
+      for (const auto& c : s.calibration) os << " " << c.name << " " << c.value << " +- " << std::setprecision(2) << c.sigma << std::setprecision(4);
+      os << std::fixed << "\n";
+    }
   }
   if (!gates.by_filter_sensor.empty()) {
     // (the filter column as wide as its longest name: replay:dead_reckoning is 21 characters)

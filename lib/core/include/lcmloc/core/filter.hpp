@@ -142,6 +142,32 @@ struct FilterConfig {
     double bearing_std = 0.02;    ///< landmark bearing, 1 sigma [rad]
     double beacon_std = 0.1;      ///< beacon range, 1 sigma [m]
   } landmarks;
+  /// "ukf_landmarks" only: self-calibration states appended to (x, y, theta), each switched on
+  /// here (all off by default: the filter is then the 3-state one). Each starts at its prior
+  /// mean (0 unless given) with its prior 1-sigma and follows a random walk. See docs/config.md "Self-calibration".
+  ///   odometer scale k:   delta_s_true = (1 + k) delta_s
+  ///   yaw-rate scale g, bias b:  delta_theta_true = (1 + g) delta_theta - b dt
+  ///   beacon range bias c: range = distance + c (one shared, or one per map entry)
+  struct Calibration {
+    enum class BeaconBias { Off, Shared, PerBeacon };
+    BeaconBias beacon_bias = BeaconBias::Off;
+    double beacon_bias_mean = 0.0;    ///< prior mean of c (every beacon's) [m]
+    double beacon_bias_std = 0.5;     ///< prior 1 sigma of c [m]
+    double beacon_bias_rw = 1e-3;     ///< random walk of c [m/sqrt(s)]
+    bool odo_scale = false;
+    double odo_scale_mean = 0.0;      ///< prior mean of k [-]
+    double odo_scale_std = 0.05;      ///< prior 1 sigma of k [-]
+    double odo_scale_rw = 1e-4;       ///< random walk of k per metre travelled [1/sqrt(m)]
+    bool yaw_rate_scale = false;
+    double yaw_rate_scale_mean = 0.0; ///< prior mean of g [-]
+    double yaw_rate_scale_std = 0.1;  ///< prior 1 sigma of g [-]
+    double yaw_rate_scale_rw = 1e-4;  ///< random walk of g per radian turned [1/sqrt(rad)]
+    bool yaw_rate_bias = false;
+    double yaw_rate_bias_mean = 0.0;  ///< prior mean of b [rad/s]
+    double yaw_rate_bias_std = 0.01;  ///< prior 1 sigma of b [rad/s]
+    double yaw_rate_bias_rw = 1e-4;   ///< random walk of b [rad/s/sqrt(s)]
+    bool any() const { return beacon_bias != BeaconBias::Off || odo_scale || yaw_rate_scale || yaw_rate_bias; }
+  } calibration;
   /// "odo_ins" and "odo_ins_uncal" only (they also use initial_pose for the start heading).
   InsFilterConfig ins;
 };
@@ -286,6 +312,18 @@ std::string unusableState(const FilterState& s);
 inline constexpr double kMaxAbsPosition = 1e7;
 /// Largest usable variance (any state): kMaxAbsPosition squared.
 inline constexpr double kMaxVariance = kMaxAbsPosition * kMaxAbsPosition;
+
+/// A self-calibration state of a filter's state (FilterConfig::Calibration): its name without
+/// the "cal_" its state name starts with (odo_scale, yaw_rate_scale, yaw_rate_bias, beacon_bias,
+/// beacon_bias_<id>), its estimate and 1 sigma.
+struct CalibrationValue {
+  std::string name;
+  double value = 0.0, sigma = 0.0;
+};
+/// The self-calibration states of s, in state order (none when it has none).
+std::vector<CalibrationValue> calibrationValues(const FilterState& s);
+/// "calibration: odo_scale -0.012 +- 0.004, ..." ("" when s has no calibration state).
+std::string calibrationSummary(const FilterState& s);
 
 /// Names accepted by makeFilter.
 std::vector<std::string> filterTypes();

@@ -17,6 +17,7 @@
 
 #include "lcmloc/bus/geodesy.hpp"
 #include "lcmloc/core/chi2.hpp"
+#include "lcmloc/core/filter.hpp"
 #include "lcmloc/core/scoring.hpp"
 #include "lcmloc/logio/log_reader.hpp"
 
@@ -48,6 +49,8 @@ struct EstimateTrack {
   std::string channel;
   std::vector<std::string> filters;  ///< filter names seen on the channel, in order of appearance
   std::vector<Estimate> poses;
+  /// The newest estimate's self-calibration states (none when its filter has none).
+  std::vector<core::CalibrationValue> calibration;
 };
 
 /// One reference sample. gps_fix_t truth has no heading, nor has ground_truth_t truth with a NaN
@@ -166,6 +169,7 @@ struct TrackScore {
   std::vector<DriftStats> drift;
   ConsistencyStats nees3, nees2;         ///< over (x, y, theta) and over (x, y)
   std::vector<ScoredPose> points;
+  std::vector<core::CalibrationValue> calibration;  ///< the track's (EstimateTrack::calibration)
 };
 
 /// Scores one track; truth must be sorted by utime.
