@@ -238,6 +238,8 @@ public final class PoseModelTest {
         panel.paint(img.createGraphics());
         int track = count(img, PosePanel.TRACK), ellipse = count(img, PosePanel.ELLIPSE);
         int mapPx = count(img, PosePanel.MAP), band = count(img, PosePanel.BAND);
+        int rejected = count(img, PosePanel.REJECTED);
+        check(rejected > 100, "rejected decisions painted red: " + rejected);
         check(track > 200, "track pixels painted: " + track);
         check(ellipse > 60, "ellipse pixels painted: " + ellipse);
         check(mapPx > 100, "map pixels painted: " + mapPx);

@@ -14,8 +14,8 @@ import java.util.Map;
 import javax.swing.JPanel;
 
 /**
- * Paints a {@link PoseModel}: above, the map, the track, the scaled 3-sigma ellipse, the vehicle
- * and the gate's decisions in world coordinates (x right, y up, equal scale); below, the NIS strip
+ * Paints a {@link PoseModel}: above, the map, the gate's decisions, the track, the scaled 3-sigma
+ * ellipse and the vehicle in world coordinates (x right, y up, equal scale); below, the NIS strip
  * against its 95 % chi-square band. Holds no state but what it paints from.
  */
 public final class PosePanel extends JPanel {
@@ -72,6 +72,15 @@ public final class PosePanel extends JPanel {
         for (MapCsv.Element e : map) {
             g.fillRect(v.px(e.x) - 2, v.py(e.y) - 2, 5, 5);
         }
+        int from = Math.max(0, s.marks.size() - SHOWN_MARKS);
+        for (int pass = 0; pass < 2; ++pass) { // rejected last, so that accepted ones do not hide them
+            for (PoseModel.Mark m : s.marks.subList(from, s.marks.size())) {
+                if (m.accepted != (pass == 0)) {
+                    continue;
+                }
+                paintMark(g, v, m);
+            }
+        }
         g.setColor(TRACK);
         g.setStroke(new BasicStroke(1.5f));
         Path2D.Double track = new Path2D.Double();
@@ -84,17 +93,6 @@ public final class PosePanel extends JPanel {
             }
         }
         g.draw(track);
-        int from = Math.max(0, s.marks.size() - SHOWN_MARKS);
-        for (PoseModel.Mark m : s.marks.subList(from, s.marks.size())) {
-            g.setColor(m.accepted ? ACCEPTED : REJECTED);
-            MapCsv.Element e = byId.get(m.markerId);
-            if (e != null) {
-                g.drawLine(v.px(m.x), v.py(m.y), v.px(e.x), v.py(e.y));
-                g.drawOval(v.px(e.x) - 5, v.py(e.y) - 5, 10, 10);
-            } else {
-                g.drawOval(v.px(m.x) - 4, v.py(m.y) - 4, 8, 8);
-            }
-        }
         PoseModel.Point last = s.last();
         if (s.covariance != null) {
             Ellipse e = Ellipse.of(s.covariance[0], s.covariance[1], s.covariance[2], 3.0);
@@ -119,6 +117,17 @@ public final class PosePanel extends JPanel {
         g.fillOval(cx - 4, cy - 4, 9, 9);
         g.drawLine(cx, cy, cx + (int) Math.round(16 * Math.cos(last.theta)),
             cy - (int) Math.round(16 * Math.sin(last.theta)));
+    }
+
+    private void paintMark(Graphics2D g, View v, PoseModel.Mark m) {
+        g.setColor(m.accepted ? ACCEPTED : REJECTED);
+        MapCsv.Element e = byId.get(m.markerId);
+        if (e != null) {
+            g.drawLine(v.px(m.x), v.py(m.y), v.px(e.x), v.py(e.y));
+            g.drawOval(v.px(e.x) - 5, v.py(e.y) - 5, 10, 10);
+        } else {
+            g.drawOval(v.px(m.x) - 4, v.py(m.y) - 4, 8, 8);
+        }
     }
 
     private static String fmt(double k) {
