@@ -61,7 +61,7 @@ public final class PosePanel extends JPanel {
     private void paintWorld(Graphics2D g, PoseModel.Snapshot s, int w, int h) {
         View v = View.fit(s, map, w, h - 40, 40);
         g.setColor(Color.BLACK);
-        g.drawString(title + "  filter " + s.filter + "  status " + s.status + "  poses " + s.poses
+        g.drawString(title + "  filter " + s.filter + "  status " + statusName(s.status) + "  poses " + s.poses
             + "  decisions " + s.decisions, 6, 14);
         g.drawString(mapNote, 6, 30);
         if (v == null) {
@@ -127,6 +127,16 @@ public final class PosePanel extends JPanel {
             g.drawOval(v.px(e.x) - 5, v.py(e.y) - 5, 10, 10);
         } else {
             g.drawOval(v.px(m.x) - 4, v.py(m.y) - 4, 8, 8);
+        }
+    }
+
+    static String statusName(int status) {
+        switch (status) {
+            case 0: return "ok";
+            case 1: return "dead reckoning";
+            case 2: return "lock-out";
+            case 3: return "uninitialized";
+            default: return String.valueOf(status);
         }
     }
 

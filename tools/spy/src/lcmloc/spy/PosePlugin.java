@@ -1,13 +1,16 @@
 package lcmloc.spy;
 
+import java.awt.Window;
 import java.awt.event.ActionEvent;
 import java.awt.event.WindowAdapter;
 import java.awt.event.WindowEvent;
+import java.beans.PropertyVetoException;
 import java.io.IOException;
 import java.nio.file.Path;
 import java.nio.file.Paths;
 import java.util.Collections;
 import java.util.List;
+import java.util.concurrent.atomic.AtomicBoolean;
 import java.util.regex.Pattern;
 
 import javax.swing.AbstractAction;
@@ -15,6 +18,7 @@ import javax.swing.Action;
 import javax.swing.JDesktopPane;
 import javax.swing.JFrame;
 import javax.swing.JInternalFrame;
+import javax.swing.SwingUtilities;
 import javax.swing.Timer;
 import javax.swing.event.InternalFrameAdapter;
 import javax.swing.event.InternalFrameEvent;
@@ -109,13 +113,28 @@ public final class PosePlugin implements SpyPlugin {
         lcm.subscribe(gateRegex, sub);
         Timer timer = new Timer(200, e -> panel.repaint());
         timer.start();
+        AtomicBoolean closed = new AtomicBoolean();
         Runnable close = () -> {
-            timer.stop();
-            lcm.unsubscribe(poseRegex, sub);
-            lcm.unsubscribe(gateRegex, sub);
+            if (closed.compareAndSet(false, true)) {
+                timer.stop();
+                lcm.unsubscribe(poseRegex, sub);
+                lcm.unsubscribe(gateRegex, sub);
+            }
+        };
+        WindowAdapter onWindowClose = new WindowAdapter() {
+            @Override
+            public void windowClosing(WindowEvent e) {
+                close.run();
+            }
+
+            @Override
+            public void windowClosed(WindowEvent e) {
+                close.run();
+            }
         };
         String title = "lcmloc pose view: " + cd.name;
         if (desktop != null) {
+            // lcm-spy's menu opens a 500x400 window holding desktop: grown to the view's size.
             JInternalFrame frame = new JInternalFrame(title, true, true, true, true);
             frame.setContentPane(panel);
             frame.pack();
@@ -126,18 +145,24 @@ public final class PosePlugin implements SpyPlugin {
                 }
             });
             desktop.add(frame);
+            Window window = SwingUtilities.getWindowAncestor(desktop);
+            if (window != null) {
+                window.addWindowListener(onWindowClose);
+                window.setSize(Math.max(window.getWidth(), frame.getWidth() + 40),
+                    Math.max(window.getHeight(), frame.getHeight() + 60));
+            }
             frame.setVisible(true);
+            try {
+                frame.setMaximum(true);
+            } catch (PropertyVetoException e) {
+                // stays at its packed size
+            }
         } else {
             JFrame frame = new JFrame(title);
             frame.setDefaultCloseOperation(JFrame.DISPOSE_ON_CLOSE);
             frame.setContentPane(panel);
             frame.pack();
-            frame.addWindowListener(new WindowAdapter() {
-                @Override
-                public void windowClosed(WindowEvent e) {
-                    close.run();
-                }
-            });
+            frame.addWindowListener(onWindowClose);
             frame.setVisible(true);
         }
     }
