@@ -14,7 +14,7 @@ LCMLOC_PACKAGES=(
   libeigen3-dev libspdlog-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev googletest libbenchmark-dev libnanoflann-dev
   default-jdk-headless libjchart2d-java
-  gnuplot-nox iproute2
+  gnuplot-nox iproute2 xvfb xauth
   gpsd gpsd-clients libgps-dev libgeographiclib-dev
   util-linux time bc procps
   libboost-dev

@@ -12,7 +12,7 @@ cmake --install "$build" --prefix "$prefix" > "$tmp/install.log"
 
 fail() { echo "FAIL: $*" >&2; exit 1; }
 for f in bin/lcmloc-fusion bin/lcmloc-replay bin/lcmloc-logger share/lcmloc/config/paper.yaml \
-         share/java/lcmloc_types.jar share/doc/lcmloc/README.md; do
+         share/java/lcmloc_types.jar share/java/lcmloc_spy.jar share/doc/lcmloc/README.md; do
   [[ -e $prefix/$f ]] || fail "$f not installed"
 done
 for f in "$prefix"/bin/*; do
