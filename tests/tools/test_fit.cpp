@@ -193,3 +193,26 @@ TEST(FitInnovations, RowsWithTheirOwnSigmaAndTooFewDecisionsAreNotFittedAndSaid)
   EXPECT_NE(notes.find("carry their own sigma"), std::string::npos) << notes;
   EXPECT_NE(notes.find("fewer than 20"), std::string::npos) << notes;
 }
+
+// The odometry's distance and turn scales against the truth: an odometry whose turn is -2 times
+// the truth's (a wheel distance wrong and the wheels swapped) and whose distance is 1.1 times
+// it, against a truth of position only (its direction of travel gives the turn).
+TEST(FitNoise, TheOdometrysScalesAreFittedAgainstAPositionOnlyTruth) {
+  auto r = circle(0.05, 0.02, 0.0, 15);
+  for (auto& o : r.odometry) {
+    o.delta_theta *= -2.0;
+    o.delta_s *= 1.1;
+  }
+  for (auto& t : r.truth) t.has_heading = false;
+  const auto f = fit::fitAgainstTruth(r);
+  ASSERT_TRUE(f.odometry_scale && f.yaw_rate_scale);
+  EXPECT_NEAR(f.odometry_scale->ratio, 1.0 / 1.1, 0.01);
+  EXPECT_NEAR(f.yaw_rate_scale->ratio, -0.5, 0.03);
+  EXPECT_TRUE(f.odometry_scale->significant());
+  EXPECT_TRUE(f.yaw_rate_scale->significant());
+  // The same odometry unscaled: 1 within its uncertainty.
+  const auto g = fit::fitAgainstTruth(circle(0.05, 0.02, 0.0, 16));
+  ASSERT_TRUE(g.odometry_scale && g.yaw_rate_scale);
+  EXPECT_FALSE(g.odometry_scale->significant()) << g.odometry_scale->ratio << " +- " << g.odometry_scale->se;
+  EXPECT_FALSE(g.yaw_rate_scale->significant()) << g.yaw_rate_scale->ratio << " +- " << g.yaw_rate_scale->se;
+}

@@ -121,6 +121,80 @@ void fitOdometry(const Recording& r, const FitOptions& opt, NoiseFit& f) {
   f.pw_turn = q_turn;
 }
 
+/// The truth's heading at utime, or its direction of travel when it has none (over the shortest
+/// interval around utime in which it moved min_move metres, at most 2 s each side).
+std::optional<double> truthHeading(const std::vector<TruthSample>& t, int64_t utime, int64_t max_gap,
+                                   double min_move = 0.05) {
+  const auto p = truthAt(t, utime, max_gap);
+  if (!p) return std::nullopt;
+  if (p->has_heading) return p->heading;
+  for (int64_t dt = 50000; dt <= 2000000; dt += 50000) {
+    const auto a = truthAt(t, utime - dt, max_gap), b = truthAt(t, utime + dt, max_gap);
+    if (!a || !b) return std::nullopt;
+    if (std::hypot(b->x - a->x, b->y - a->y) >= min_move) return std::atan2(b->y - a->y, b->x - a->x);
+  }
+  return std::nullopt;
+}
+
+/// Least squares y = c x through the origin: c and its standard error.
+NoiseFit::Scale throughOrigin(const std::vector<double>& x, const std::vector<double>& y) {
+  NoiseFit::Scale s;
+  s.n = static_cast<int64_t>(x.size());
+  double xx = 0, xy = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    xx += x[i] * x[i];
+    xy += x[i] * y[i];
+  }
+  if (xx <= 0 || s.n < 2) return s;
+  s.ratio = xy / xx;
+  double rss = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) rss += std::pow(y[i] - s.ratio * x[i], 2);
+  s.se = std::sqrt(rss / static_cast<double>(s.n - 1) / xx);
+  return s;
+}
+
+/// The odometry's distance and turn scales against the truth over windows of about 1 s.
+void fitScales(const Recording& r, const FitOptions& opt, NoiseFit& f) {
+  const int64_t max_gap = static_cast<int64_t>(opt.max_truth_gap_s * 1e6);
+  const int64_t max_odo_gap = static_cast<int64_t>(opt.max_odometry_gap_s * 1e6);
+  std::vector<double> ds_odo, ds_truth, dth_odo, dth_truth;
+  std::size_t i = 0;
+  while (i + 1 < r.odometry.size()) {
+    double s = 0, turned = 0;
+    std::size_t j = i + 1;
+    bool broken = false;
+    for (; j < r.odometry.size(); ++j) {
+      const auto& o = r.odometry[j];
+      if (o.utime - r.odometry[j - 1].utime > max_odo_gap) {
+        broken = true;
+        break;
+      }
+      s += o.delta_s;
+      turned += core::headingIncrement(o, r.wheelbase);
+      if (o.utime - r.odometry[i].utime >= 1000000) break;
+    }
+    if (broken || j >= r.odometry.size()) {
+      i = j;
+      continue;
+    }
+    const int64_t ta = r.odometry[i].utime, tb = r.odometry[j].utime;
+    const auto a = truthAt(r.truth, ta, max_gap), b = truthAt(r.truth, tb, max_gap);
+    if (a && b && std::fabs(s) > 0.02) {  // a chord of about 1 s: the distance for a scale
+      ds_odo.push_back(std::fabs(s));
+      ds_truth.push_back(std::hypot(b->x - a->x, b->y - a->y));
+    }
+    const auto ha = truthHeading(r.truth, ta, max_gap), hb = truthHeading(r.truth, tb, max_gap);
+    if (ha && hb && std::fabs(turned) > 0.1 && std::fabs(turned) < 2.5) {  // a turn, less than half a circle
+      dth_odo.push_back(turned);
+      dth_truth.push_back(core::wrapAngle(*hb - *ha));
+    }
+    i = j;
+  }
+  if (ds_odo.size() >= 5) f.odometry_scale = throughOrigin(ds_odo, ds_truth);
+  if (dth_odo.size() >= 5) f.yaw_rate_scale = throughOrigin(dth_odo, dth_truth);
+  else f.notes.push_back("yaw-rate scale: " + std::to_string(dth_odo.size()) + " windows that turn (5 needed): not fitted");
+}
+
 }  // namespace
 
 Residuals residualStats(std::vector<double> v) {
@@ -195,7 +269,10 @@ NoiseFit fitAgainstTruth(const Recording& r, const FitOptions& opt) {
   }
   if (!gps.empty()) f.gps = residualStats(gps);
 
-  if (!r.odometry.empty()) fitOdometry(r, opt, f);
+  if (!r.odometry.empty()) {
+    fitOdometry(r, opt, f);
+    fitScales(r, opt, f);
+  }
   return f;
 }
 

@@ -29,6 +29,13 @@ void printFit(const NoiseFit& f, const LogRead& read) {
     std::printf("odometry: %lld windows: pw_diag [%.4g, %.4g, %.4g] per %g m, pw_turn %.4g rad^2/rad\n",
                 static_cast<long long>(f.odometry_windows), (*f.pw_diag)[0], (*f.pw_diag)[1], (*f.pw_diag)[2],
                 r.pw_distance, *f.pw_turn);
+  auto scale = [](const char* what, const std::optional<NoiseFit::Scale>& v) {
+    if (v)
+      std::printf("%s: truth = %.4g x odometry (+- %.2g, %lld windows)%s\n", what, v->ratio, v->se,
+                  static_cast<long long>(v->n), v->significant() ? ": not 1" : "");
+  };
+  scale("odometry distance scale", f.odometry_scale);
+  scale("odometry turn scale", f.yaw_rate_scale);
   for (const auto& n : f.notes) std::printf("note: %s\n", n.c_str());
 }
 

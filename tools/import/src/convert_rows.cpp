@@ -71,8 +71,10 @@ bool checkStd(const std::string& name, std::size_t c, double v, std::string& why
 }
 
 /// Ground truth, position only: the initial heading is the direction of travel from the first
-/// row to the first row at least this far from it [m].
-constexpr double kTravelForHeading = 1.0;
+/// row to the first row at least this far from it [m]: far enough for a motion-capture or RTK
+/// truth's noise (millimetres to a centimetre), near enough that the vehicle has not turned yet
+/// (a chord of a metre in a labyrinth or a parking manoeuvre bends).
+constexpr double kTravelForHeading = 0.1;
 /// A ground-truth position further from the origin than this is refused [m] (the bound of
 /// fusion.filter.initial_pose, where the first one goes).
 constexpr double kMaxPosition = 1e7;

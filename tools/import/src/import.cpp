@@ -142,6 +142,14 @@ std::string fittedConfig(const ImportOptions& opt, ImportResult& r, bool with_ma
     r.noise_fit.push_back(fmt::format("noise fit: odometry pw_diag [{:.4g}, {:.4g}, {:.4g}] per {} m, pw_turn {:.4g} ({} windows)",
                                       (*f.pw_diag)[0], (*f.pw_diag)[1], (*f.pw_diag)[2], read.recording.pw_distance,
                                       *f.pw_turn, f.odometry_windows));
+  auto scale = [&r](const char* what, const std::optional<fit::NoiseFit::Scale>& v) {
+    if (v)
+      r.noise_fit.push_back(fmt::format("noise fit: odometry {} scale: truth = {:.4g} x odometry (+- {:.2g}, {} windows){}",
+                                        what, v->ratio, v->se, v->n,
+                                        v->significant() ? ": not 1 (see fusion.filter.calibration)" : ""));
+  };
+  scale("distance", f.odometry_scale);
+  scale("turn", f.yaw_rate_scale);
   for (const auto& n : f.notes) r.noise_fit.push_back("noise fit: " + n);
   return text;
 }

@@ -3,6 +3,8 @@
 // its data has a truth): each sensor's residuals against what the truth says it should have
 // measured, and the odometry's error growth against the truth's motion, give the filter's
 // measurement and process noise. No middleware: the log is read in fit_log.cpp.
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -50,6 +52,18 @@ struct NoiseFit {
   std::optional<core::Vec3> pw_diag;
   std::optional<double> pw_turn;
   int64_t odometry_windows = 0;
+  /// Scales of the odometry against the truth, by least squares over windows of about 1 s:
+  /// truth distance = (1 + k) odometry distance, truth turn = (1 + g) odometry turn (the turn from
+  /// the truth heading, or from its direction of travel when it has none). `ratio` = 1 + k or
+  /// 1 + g, `se` its standard error, `n` the windows.
+  struct Scale {
+    double ratio = 1.0, se = 0.0;
+    int64_t n = 0;
+    /// The ratio differs from 1 by more than 3 standard errors and by more than `min` (a scale
+    /// the filter should start from, rather than from 1).
+    bool significant(double min = 0.02) const { return n >= 5 && std::abs(ratio - 1.0) > std::max(3.0 * se, min); }
+  };
+  std::optional<Scale> odometry_scale, yaw_rate_scale;
   std::vector<std::string> notes;  ///< what could not be fitted and why
 };
 
