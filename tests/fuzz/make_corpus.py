@@ -112,6 +112,12 @@ def lcm_input(t):
     write("lcm_input", "landmarks", input_seed(LANDMARK, odo[:5] + made[:2] + odo[5:]))
     write("lcm_input", "control", input_seed(PAPER, odo[:5] + made[3:] + odo[5:]))
     write("lcm_input", "vision", input_seed(INS_VISION, made[2:3]))
+    # The same through the intake only (fuzz_lcm_input.cpp: byte 0's high bit).
+    d = os.path.join(HERE, "corpus", "lcm_input")
+    for name in sorted(os.listdir(d)):
+        if name.startswith("seed_") and not name.startswith("seed_intake_"):
+            data = open(os.path.join(d, name), "rb").read()
+            write("lcm_input", "intake_" + name[len("seed_"):], bytes([data[0] | 0x80]) + data[1:])
     # The dictionary: every type's fingerprint (the first 8 bytes of its messages).
     with open(os.path.join(HERE, "lcm_input.dict"), "w") as f:
         f.write("# The fingerprints of the lcmloc types (make_corpus.py).\n")
