@@ -20,18 +20,19 @@ namespace lcmloc::fuzz {
 
 /// A directory of this process's own, removed at exit.
 inline const std::filesystem::path& scratchDir() {
-  static const std::filesystem::path dir = [] {
+  // Never destroyed: the removal at exit runs after the destructors of function-local statics.
+  static const std::filesystem::path* const dir = [] {
     namespace fs = std::filesystem;
     const fs::path base = fs::is_directory("/dev/shm") ? fs::path("/dev/shm") : fs::temp_directory_path();
-    fs::path d = base / ("lcmloc_fuzz_" + std::to_string(::getpid()));
-    fs::create_directories(d);
+    auto* d = new fs::path(base / ("lcmloc_fuzz_" + std::to_string(::getpid())));
+    fs::create_directories(*d);
     std::atexit([] {
       std::error_code ec;
       std::filesystem::remove_all(scratchDir(), ec);
     });
     return d;
   }();
-  return dir;
+  return *dir;
 }
 
 /// Writes size bytes to scratchDir()/name (replacing it); returns its path.
