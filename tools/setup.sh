@@ -1,7 +1,8 @@
 # shellcheck shell=bash
 # Shared set-up of tools/test.sh and tools/demo.sh (sourced, not run):
-#   lcmloc_install_packages  installs the Debian packages that are missing (apt-get update first;
-#                            skipped entirely when everything is present)
+#   lcmloc_install_packages [P...]  installs the Debian packages that are missing (apt-get update
+#                            first; skipped entirely when everything is present): P..., by
+#                            default LCMLOC_PACKAGES
 #   lcmloc_multicast_route   adds the loopback multicast route udpm:// needs, if there is none
 #   lcmloc_build             configures build/ (Release) and builds with all cores
 # Environment: LCMLOC_BUILD_DIR (default <repo>/build).
@@ -19,6 +20,10 @@ LCMLOC_PACKAGES=(
   util-linux time bc procps
   libboost-dev
 )
+# What the sanitizer build and the fuzz targets need besides (tools/sanitize.sh, tools/fuzz.sh):
+# clang, its runtimes (libFuzzer, ASan, UBSan: libclang-rt-14-dev, only recommended by clang)
+# and llvm-symbolizer (llvm-14) for the reports' stack traces.
+LCMLOC_SANITIZER_PACKAGES=(clang libclang-rt-14-dev llvm-14)
 
 lcmloc_log() { echo "[lcmloc] $*" >&2; }
 
@@ -30,12 +35,13 @@ lcmloc_as_root() {
 }
 
 lcmloc_install_packages() {
-  local missing=() p
-  for p in "${LCMLOC_PACKAGES[@]}"; do
+  local missing=() p wanted=("$@")
+  ((${#wanted[@]})) || wanted=("${LCMLOC_PACKAGES[@]}")
+  for p in "${wanted[@]}"; do
     dpkg-query -W -f='${Status}\n' "$p" 2> /dev/null | grep -q '^install ok installed$' || missing+=("$p")
   done
   if ((${#missing[@]} == 0)); then
-    lcmloc_log "all ${#LCMLOC_PACKAGES[@]} packages present"
+    lcmloc_log "all ${#wanted[@]} packages present"
     return 0
   fi
   lcmloc_log "installing missing packages: ${missing[*]}"
