@@ -473,10 +473,11 @@ TEST_F(DaemonTest, CalibrationStatesAreReportedAndRoundTripThroughTheCheckpoint)
   fusion::writeCheckpoint(ro.checkpoint, ck->state, ck->filter);
   const int64_t t1 = ck->state.utime;
   {
+    bus::MemoryBus bus;  // (the first runner's subscriptions stay on bus_: a bus of its own)
     fusion::DaemonRunner runner(cfg_, ro);
-    runner.start(bus_);
-    for (int64_t k = 1; k <= 3; ++k) bus_.inject(cfg_.channels.odometry, odometry(300 + k, t1 + k * kStep));
-    while (bus_.queued() > 0) runner.step(0);
+    runner.start(bus);
+    for (int64_t k = 1; k <= 3; ++k) bus.inject(cfg_.channels.odometry, odometry(300 + k, t1 + k * kStep));
+    while (bus.queued() > 0) runner.step(0);
     const core::FilterState s = runner.daemon().activeState();
     ASSERT_EQ(s.names, ck->state.names);
     EXPECT_NEAR(s.x[3], 0.031, 1e-12);
