@@ -285,3 +285,44 @@ TEST_F(LauncherTest, RestartsBackOffUpToTheLimit) {
                            "world finished"})
     EXPECT_NE(out.find(said), std::string::npos) << said << "\n" << out;
 }
+
+// Bad system files and requests: a program that does not exist and a process with restart: 0
+// (crashing) are each said and left, while the others run on; a duplicate process name is a
+// configuration error naming both; `lcmloc-ctl proc` for a host that never answers says so.
+TEST_F(LauncherTest, AMissingProgramARestartLimitOfZeroADuplicateNameAndASilentHostAreEachSaid) {
+  const std::string crash = writeFile("crash.sh", "#!/bin/sh\nsleep 0.3\nexit 5\n");
+  fs::permissions(crash, fs::perms::owner_all);
+  const std::string sys = system("ready_timeout: 0.1\nrestart_delay: 0.2\n",
+                                 "  - {name: ghost, executable: /nonexistent/lcmloc-ghost, critical: false}\n"
+                                 "  - {name: crash, executable: " + crash + ", restart: 0, critical: false}\n"
+                                 "  - {name: odometry, executable: " + std::string(LCMLOC_ODOMETRY) + "}\n");
+  Child launcher(LCMLOC_LAUNCHER, {"--system", sys, "--lcm-url", url_}, path("launcher.out"));
+  const int pid = firstPid("lcmloc-odometry", 15s);
+  ASSERT_GT(pid, 0) << launcher.output();
+  std::this_thread::sleep_for(1500ms);  // the crash, and no restart of it
+  // lcmloc-ctl proc for a host no launcher runs on: no answer, said with the host.
+  Child ctl(LCMLOC_CTL, {"proc", "restart", "odometry", "--host", "no-such-host", "--lcm-url", url_, "--timeout", "1.5"},
+            path("ctl.out"));
+  const auto ctl_rc = ctl.wait(15s);
+  ASSERT_TRUE(ctl_rc.has_value()) << ctl.output();
+  EXPECT_EQ(*ctl_rc, 4) << ctl.output();
+  EXPECT_NE(ctl.output().find("no-such-host"), std::string::npos) << ctl.output();
+  // The others ran on: the odometry driver is the same process all along.
+  EXPECT_TRUE(waitFor([&] { return pids_["lcmloc-odometry"].size() == 1; }, 2s));
+  EXPECT_EQ(::kill(pid, 0), 0) << "odometry driver still running";
+  launcher.signal(SIGINT);
+  ASSERT_EQ(waitExit(launcher, 15s), std::optional<int>(1)) << launcher.output();
+  const std::string out = launcher.output();
+  EXPECT_NE(out.find("ghost"), std::string::npos) << out;
+  EXPECT_NE(out.find("/nonexistent/lcmloc-ghost"), std::string::npos) << out;
+  EXPECT_NE(out.find("crash ended unexpectedly (exit 5)"), std::string::npos) << out;
+  EXPECT_EQ(out.find("starting it again"), std::string::npos) << out;  // restart: 0
+
+  // A duplicate name: a configuration error (exit 2) naming both entries.
+  const std::string dup = system("", "  - {name: odometry, executable: " + std::string(LCMLOC_ODOMETRY) + "}\n" +
+                                         "  - {name: odometry, executable: " + std::string(LCMLOC_MAGRULER) + "}\n");
+  Child bad(LCMLOC_LAUNCHER, {"--system", dup, "--lcm-url", url_}, path("dup.out"));
+  ASSERT_EQ(bad.wait(10s), std::optional<int>(2)) << bad.output();
+  EXPECT_NE(bad.output().find("processes[1].name: 'odometry' is also the name of processes[0]"), std::string::npos)
+      << bad.output();
+}
