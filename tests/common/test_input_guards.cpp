@@ -132,3 +132,39 @@ TEST(LimitCheck, OdometryBeyondSpeedYawRateOrSteeringIsRefusedSayingWhich) {
   off.check(odo("ODOMETRY", kT0, 0.1, 0.0));
   EXPECT_EQ(off.check(odo("ODOMETRY", kT0 + kPeriod, -1.0, 1.0, -1.0, true)), "");
 }
+
+TEST(LimitCheck, ARulerDetectionBeyondItsSpanAndAFixThatJumpsTooFarAreRefused) {
+  bus::InputLimits l;
+  l.max_lateral_offset = 0.75;  // a ruler of half width 0.5
+  l.gps_std = 2.0;
+  bus::LimitCheck c(l);
+  core::RulerDetection d;
+  d.lateral_offset = 0.6;
+  EXPECT_EQ(c.check(core::EngineInput{"MAGRULER", 0, kT0, d}), "");
+  d.lateral_offset = -0.9;
+  const std::string span = c.check(core::EngineInput{"MAGRULER", 1, kT0, d});
+  EXPECT_NE(span.find("lateral offset -0.9 m beyond the ruler's span (0.75 m)"), std::string::npos) << span;
+  auto fix = [](int64_t t, double x, double y, double sd = 0) {
+    core::GpsInput g;
+    g.utime = t;
+    g.x = x;
+    g.y = y;
+    g.position_std = sd;
+    return core::EngineInput{"GPS", 0, t, g};
+  };
+  EXPECT_EQ(c.check(fix(kT0, 0, 0)), "");
+  EXPECT_EQ(c.check(fix(kT0 + 1'000'000, 60, 20)), "");  // 63 m in 1 s: within 70 m/s + 10 sigma
+  // 2 km in 1 s: beyond 70 m/s and 10 sigma of the two fixes (2.83 m each way): refused, and the
+  // next fix is compared with the last one taken.
+  const std::string jump = c.check(fix(kT0 + 2'000'000, 2060, 20));
+  EXPECT_NE(jump.find("fix 2000 m from the previous one 1 s before, beyond fusion.limits.max_speed 70"),
+            std::string::npos)
+      << jump;
+  EXPECT_EQ(c.check(fix(kT0 + 3'000'000, 70, 20)), "");
+  // A fix's own sigma widens the bound.
+  EXPECT_EQ(c.check(fix(kT0 + 4'000'000, 700, 20, 100.0)), "");
+  // No fix: nothing to check.
+  core::GpsInput none;
+  none.has_fix = false;
+  EXPECT_EQ(c.check(core::EngineInput{"GPS", 0, kT0 + 5'000'000, none}), "");
+}

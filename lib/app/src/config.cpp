@@ -120,7 +120,12 @@ void parseFusion(KeyReader& root, FusionConfig& f) {
     x.get("max_speed", f.limits.max_speed, 0.0, 1e4, "0 = off");
     x.get("max_yaw_rate", f.limits.max_yaw_rate, 0.0, 1e4, "0 = off");
     x.get("max_steering", f.limits.max_steering, 0.0, 1.6, "0 = off");
+    x.get("max_fix_jump_sigma", f.limits.max_fix_jump_sigma, 0.0, 1e6, "0 = off");
     x.finish();
+    // The ruler's span (its half width, with half of it again for the detection's noise) and a
+    // fix's sigma when it carries none come from the filter's settings.
+    f.limits.max_lateral_offset = 1.5 * f.filter.ruler_half_width;
+    f.limits.gps_std = f.filter.gnss.gps_std;
   }
   {
     KeyReader x(r.child("landmark_fix"), root.file(), "fusion.landmark_fix");
