@@ -113,14 +113,14 @@ core::EngineInput odo(const std::string& ch, int64_t utime, double ds, double dt
 }  // namespace
 
 TEST(LimitCheck, OdometryBeyondSpeedYawRateOrSteeringIsRefusedSayingWhich) {
-  bus::LimitCheck c;  // 70 m/s, 5 rad/s, 0.8 rad
+  bus::LimitCheck c;  // 70 m/s, 12 rad/s, 0.8 rad
   EXPECT_EQ(c.check(odo("ODOMETRY", kT0, 0.1, 0.0)), "");  // the first: no interval yet
-  EXPECT_EQ(c.check(odo("ODOMETRY", kT0 + kPeriod, 0.3, 0.01)), "");  // 30 m/s, 1 rad/s
+  EXPECT_EQ(c.check(odo("ODOMETRY", kT0 + kPeriod, 0.3, 0.08)), "");  // 30 m/s, 8 rad/s (a small robot spinning)
   const std::string fast = c.check(odo("ODOMETRY", kT0 + 2 * kPeriod, -1.0, 0.0));  // -1 m in 10 ms
   EXPECT_NE(fast.find("100 m/s, beyond fusion.limits.max_speed 70"), std::string::npos) << fast;
   // The refused one did not move the channel's time: the next is over 20 ms.
   EXPECT_EQ(c.check(odo("ODOMETRY", kT0 + 3 * kPeriod, 1.2, 0.0)), "");  // 60 m/s over 20 ms
-  const std::string spin = c.check(odo("ODOMETRY", kT0 + 4 * kPeriod, 0.1, 0.1));  // 10 rad/s
+  const std::string spin = c.check(odo("ODOMETRY", kT0 + 4 * kPeriod, 0.1, 0.15));  // 15 rad/s
   EXPECT_NE(spin.find("max_yaw_rate"), std::string::npos) << spin;
   const std::string steer = c.check(odo("ODOMETRY", kT0 + 4 * kPeriod, 0.1, 0.0, -1.0, true));
   EXPECT_NE(steer.find("steering angle -1 rad beyond fusion.limits.max_steering 0.8"), std::string::npos) << steer;
@@ -128,7 +128,9 @@ TEST(LimitCheck, OdometryBeyondSpeedYawRateOrSteeringIsRefusedSayingWhich) {
   EXPECT_EQ(c.check(odo("ODOMETRY_2", kT0 + 4 * kPeriod, 5.0, 0.0)), "");
   EXPECT_EQ(c.check(core::EngineInput{"GPS", 0, kT0, core::GpsInput{}}), "");
   // 0 = off.
-  bus::LimitCheck off(bus::InputLimits{0, 0, 0, 0.005});
+  bus::InputLimits none;
+  none.max_speed = none.max_yaw_rate = none.max_steering = 0;
+  bus::LimitCheck off(none);
   off.check(odo("ODOMETRY", kT0, 0.1, 0.0));
   EXPECT_EQ(off.check(odo("ODOMETRY", kT0 + kPeriod, -1.0, 1.0, -1.0, true)), "");
 }

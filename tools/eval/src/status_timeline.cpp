@@ -49,7 +49,10 @@ StatusTimeline statusTimeline(const EstimateTrack& track, const std::vector<Gate
   }
   const std::set<std::string> filters(track.filters.begin(), track.filters.end());
   for (const auto& g : gates)
-    if (g.reason == "relocalized" && filters.count(g.filter)) t.relocalizations.push_back({g.utime, g.filter, g.sensor});
+    // (a track lcmloc-evaluate replayed is named after its filter, "replay:ukf_landmarks", as are
+    // its gate decisions; a recorded track's decisions carry the filter's own name)
+    if (g.reason == "relocalized" && (filters.count(g.filter) || g.filter == track.channel))
+      t.relocalizations.push_back({g.utime, g.filter, g.sensor});
   std::stable_sort(t.relocalizations.begin(), t.relocalizations.end(),
                    [](const auto& a, const auto& b) { return a.utime < b.utime; });
   return t;

@@ -103,6 +103,21 @@ std::string configText(const ImportOptions& opt, const std::string& filter, bool
   if (conv.imu_without_mag) gnss.push_back("use_magnetometer: false");  // the IMU rows have no magnetometer
   if (!gnss.empty()) c << "    gnss: {" << fmt::format("{}", fmt::join(gnss, ", ")) << "}\n";
   c << "    gate: {enabled: true, probability: 0.99}\n";
+  // The odometry's scales against the truth, where they differ from 1 beyond their uncertainty:
+  // the filter's self-calibration states start there (ukf_landmarks; docs/configuration.md).
+  std::vector<std::string> cal;
+  auto scale = [&cal](const std::optional<fit::NoiseFit::Scale>& v, const char* key) {
+    if (!v || !v->significant()) return;
+    cal.push_back(fmt::format("{}: true, {}_mean: {}, {}_std: {}", key, key, num(v->ratio - 1.0), key,
+                              num(std::max(3.0 * v->se, 0.05))));
+  };
+  if (fitted && filter == "ukf_landmarks") {
+    scale(fitted->odometry_scale, "odo_scale");
+    scale(fitted->yaw_rate_scale, "yaw_rate_scale");
+  }
+  if (!cal.empty())
+    c << "    calibration: {" << fmt::format("{}", fmt::join(cal, ", "))
+      << "}   # the odometry's scales fitted against the truth\n";
   return c.str();
 }
 
@@ -146,7 +161,7 @@ std::string fittedConfig(const ImportOptions& opt, ImportResult& r, bool with_ma
     if (v)
       r.noise_fit.push_back(fmt::format("noise fit: odometry {} scale: truth = {:.4g} x odometry (+- {:.2g}, {} windows){}",
                                         what, v->ratio, v->se, v->n,
-                                        v->significant() ? ": not 1 (see fusion.filter.calibration)" : ""));
+                                        v->significant() ? ": the filter's calibration state starts there" : ""));
   };
   scale("distance", f.odometry_scale);
   scale("turn", f.yaw_rate_scale);

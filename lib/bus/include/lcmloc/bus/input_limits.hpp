@@ -14,7 +14,9 @@ namespace lcmloc::bus {
 
 struct InputLimits {
   double max_speed = 70.0;      ///< [m/s] the speed an odometry increment implies over its interval; 0 = off
-  double max_yaw_rate = 5.0;    ///< [rad/s] the yaw rate an odometry heading increment implies; 0 = off
+  /// [rad/s] the yaw rate an odometry heading increment implies; 0 = off. A small robot spins at
+  /// 6-8 rad/s (a differential drive of 0.4 m/s wheels 0.1 m apart), a car turns at 1.
+  double max_yaw_rate = 12.0;
   double max_steering = 0.8;    ///< [rad] |steering angle| of car-like odometry; 0 = off
   /// [m] the ruler's span: |lateral offset| of a detection at most this (the filter's
   /// ruler_half_width with a margin, set by the config reader); 0 = off
