@@ -121,7 +121,9 @@ TEST_F(MultiHostTest, ThreeHostsGiveTheOneHostPoseAndTheLoggerMissesNothing) {
   for (const auto& ev : three) {
     ++count[ev.channel];
     if (ev.channel == "POSE") pose_three.push_back(ev.data);
-    if (ev.channel == "LCM_SELF_TEST") continue;
+    // (LCM's self-test and whatever else is too short for a fingerprint, a utime and a seq carry
+    // no seq of ours)
+    if (ev.channel == "LCM_SELF_TEST" || ev.data.size() < 24) continue;
     std::string key = ev.channel;
     if (ev.channel == "HEARTBEAT") {
       const auto hb = decode<lcmloc::heartbeat_t>(ev);
