@@ -8,25 +8,13 @@
 
 #include "daemon/daemon.hpp"
 #include "daemon/timing.hpp"
+#include "hostile_messages.hpp"
 #include "lcmloc/bus/memory_bus.hpp"
 #include "lcmloc/ctl/status.hpp"
 
 using namespace lcmloc;
 
-namespace {
-
-lcmloc::odometry_t odometry(int64_t seq, int64_t utime) {
-  lcmloc::odometry_t m{};
-  m.utime = utime;
-  m.seq = seq;
-  m.delta_s = 0.1;
-  m.has_steering = true;
-  m.steering = 0.01;
-  m.delta_theta = 0.1 * std::tan(0.01) / 2.5;
-  return m;
-}
-
-}  // namespace
+using lcmloc::hostile::odometry;  // (10 m/s with a slight steer)
 
 TEST(DaemonTiming, DelayAgeRateAndStepQuantilesOverTheWindow) {
   fusion::DaemonTiming t(1000000);  // 1 s window
