@@ -10,19 +10,23 @@ usage() {
   sed -n '2,7p' "$0" | sed 's/^# \{0,1\}//'
   cat << 'USAGE'
 
-Usage: tools/fuzz.sh [--time SECONDS] [--regression] [--no-build] [TARGET...]
+Usage: tools/fuzz.sh [--time SECONDS] [--seed N] [--regression] [--no-build] [TARGET...]
   --time S       fuzz each target for S seconds (default 60)
+  --seed N       libFuzzer's random seed (default: a new one each run). With a seed and an empty
+                 build-fuzz/fuzz-corpus, runs try the same inputs in the same order (the targets
+                 are deterministic), so a long run covers the start of a shorter one (CI: 1)
   --regression   run each target once over its committed corpus only (seconds), no fuzzing
   --no-build     use the targets already built
   TARGET         lcm_input, log, config, import (default: all)
 Environment: LCMLOC_FUZZ_BUILD_DIR (default build-fuzz/).
 USAGE
 }
-seconds=60 regression=0 build=1 targets=()
+seconds=60 seed= regression=0 build=1 targets=()
 while (($#)); do
   case $1 in
     -h | --help) usage; exit 0 ;;
     --time) seconds=${2:?--time needs a number of seconds}; shift ;;
+    --seed) seed=${2:?--seed needs a number}; shift ;;
     --regression) regression=1 ;;
     --no-build) build=0 ;;
     -*) echo "unknown option $1" >&2; usage >&2; exit 2 ;;
@@ -31,6 +35,7 @@ while (($#)); do
   shift
 done
 [[ $seconds =~ ^[0-9]+$ && $seconds -gt 0 ]] || { echo "--time: a whole number of seconds > 0" >&2; exit 2; }
+[[ -z $seed || $seed =~ ^[0-9]+$ ]] || { echo "--seed: a whole number" >&2; exit 2; }
 # shellcheck source=tools/setup.sh
 source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
 build_dir="${LCMLOC_FUZZ_BUILD_DIR:-$LCMLOC_ROOT/build-fuzz}"
@@ -68,6 +73,7 @@ for t in "${targets[@]}"; do
   before=$(ls "$found")
   args=(-print_final_stats=1 -timeout=30 -rss_limit_mb=4096 "-artifact_prefix=$found/")
   [[ -f $fuzz_dir/$t.dict ]] && args+=("-dict=$fuzz_dir/$t.dict")
+  [[ -n $seed ]] && args+=("-seed=$seed")
   rc=0
   if ((regression)); then
     "$exe" "${args[@]}" -runs=0 "$fuzz_dir/corpus/$t" > "$log" 2>&1 || rc=$?

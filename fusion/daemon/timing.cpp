@@ -22,7 +22,7 @@ void DaemonTiming::arrived(const std::string& channel, int64_t msg_utime, int64_
   Channel& c = channels_[channel];
   if (c.delays.empty() && c.last == 0) c.first = recv_utime;
   c.last = recv_utime;
-  c.delays.push_back({recv_utime, static_cast<double>(recv_utime - msg_utime) * 1e-6});
+  c.delays.push_back({recv_utime, (static_cast<double>(recv_utime) - static_cast<double>(msg_utime)) * 1e-6});
   expire(c.delays, recv_utime);
 }
 

@@ -2,6 +2,8 @@
 // (bus::StreamGuard) and physical limits (bus::LimitCheck).
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "lcmloc/bus/input_limits.hpp"
 #include "lcmloc/bus/stream_guard.hpp"
 
@@ -45,6 +47,22 @@ TEST(StreamGuard, ALoneCorruptSeqCostsNothing) {
     EXPECT_EQ(g.observe("IMU", seq, kT0 + i * kPeriod).kind, Kind::Taken) << i;
   }
   EXPECT_EQ(g.held(), 0);
+}
+
+TEST(StreamGuard, SeqsAndTimesAtTheEndsOfTheirRangeAreComparedWithoutOverflow) {
+  // A corrupt seq near INT64_MIN, then one near INT64_MAX: their difference does not fit in
+  // int64 (undefined behaviour where it was computed); the second is neither stream's next.
+  constexpr int64_t kMin = std::numeric_limits<int64_t>::min(), kMax = std::numeric_limits<int64_t>::max();
+  bus::StreamGuard g;
+  for (int i = 0; i < 10; ++i) g.observe("ODOMETRY", i, kT0 + i * kPeriod);
+  EXPECT_EQ(g.observe("ODOMETRY", kMin + 3, kMin).kind, Kind::Taken);  // a lone corrupt seq, so far
+  EXPECT_EQ(g.observe("ODOMETRY", kMax - 3, kMax).kind, Kind::Taken);  // another: it does not go on from the first
+  EXPECT_EQ(g.observe("ODOMETRY", 10, kT0 + 10 * kPeriod).kind, Kind::Taken);
+  const auto v = g.observe("ODOMETRY", kMax - 2, kMax);  // this one goes on from it: a second publisher
+  EXPECT_TRUE(v.held());
+  EXPECT_EQ(v.first_seq, kMax - 3);
+  EXPECT_EQ(v.first_utime, kMax);
+  EXPECT_EQ(g.held(), 1);
 }
 
 TEST(StreamGuard, APublisherThatRestartsIsTakenAndReplacesItsSilentStream) {
@@ -91,7 +109,9 @@ TEST(StreamGuard, ASlowEstablishedStreamIsNotReplacedByAFastIntruderWhichIsHeldA
   int64_t held = 0;
   for (int k = 0; k < 100; ++k) {  // an intruder at 10 Hz for 10 s
     const int64_t t = kT0 + 10'000'000 + k * 100'000;
-    if (k % 10 == 0) EXPECT_EQ(g.observe("GPS", 10 + k / 10, t).kind, Kind::Taken) << k;
+    if (k % 10 == 0) {
+      EXPECT_EQ(g.observe("GPS", 10 + k / 10, t).kind, Kind::Taken) << k;
+    }
     const auto v = g.observe("GPS", 7000 + k, t + 1);
     EXPECT_NE(v.kind, Kind::Replaced) << k;
     held += v.held();

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "daemon/daemon.hpp"
@@ -45,6 +46,18 @@ TEST(DaemonTiming, DelayAgeRateAndStepQuantilesOverTheWindow) {
 }
 
 // Timing measured or not, control pose or not: the daemon's POSE is the same bytes.
+TEST(DaemonTiming, AMessageTimeAtTheEndOfItsRangeGivesAFiniteDelay) {
+  // A corrupt utime: received - message time does not fit in int64 (undefined behaviour where it
+  // was computed in integers); the delay is taken in doubles.
+  fusion::DaemonTiming t(1000000);
+  t.arrived("ODOMETRY", std::numeric_limits<int64_t>::min(), 1000000);
+  t.arrived("ODOMETRY", std::numeric_limits<int64_t>::max(), 1000001);
+  const auto r = t.report(1000002);
+  ASSERT_EQ(r.num_channels, 1);
+  EXPECT_GT(r.delay_max[0], 9.2e12);  // s: the first one's, INT64_MAX us behind
+  EXPECT_LT(r.delay_p50[0], -9.2e12);
+}
+
 TEST(DaemonTiming, TheDaemonMeasuresEachMessageAndItsPoseIsTheSame) {
   const app::SystemConfig cfg = app::loadSystemConfig(LCMLOC_PAPER_YAML);
   auto run = [&](fusion::DaemonTiming* timing, bool control) {

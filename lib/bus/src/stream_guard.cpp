@@ -4,10 +4,16 @@
 
 #include <fmt/format.h>
 
+#include "lcmloc/core/time_guard.hpp"
+
 namespace lcmloc::bus {
 namespace {
 
-bool goesOn(int64_t last, int64_t seq) { return seq == last || (seq > last && seq - last <= StreamGuard::kMaxAhead); }
+/// seq goes on from last: the same, or at most kMaxAhead after it (any two int64 seqs, a corrupt
+/// one included, compared without overflow).
+bool goesOn(int64_t last, int64_t seq) {
+  return seq == last || (seq > last && !core::apartBy(seq, last, StreamGuard::kMaxAhead));
+}
 
 void add(int64_t seq, int64_t utime, int64_t& last_seq, int64_t& last_utime) {
   last_seq = std::max(last_seq, seq);
@@ -51,7 +57,7 @@ StreamVerdict StreamGuard::observe(const std::string& channel, int64_t seq, int6
     v.first_seq = c.other.first_seq;
     v.first_utime = c.other.first_utime;
     ++c.other_since_mark;
-    if (c.other_since_mark >= kReplaceAfter && c.other.last_utime - c.other_mark >= kSilenceUs) {  // the established one is gone
+    if (c.other_since_mark >= kReplaceAfter && core::apartBy(c.other.last_utime, c.other_mark, kSilenceUs - 1)) {  // the established one is gone
       c.est = c.other;
       c.has_other = false;
       c.reported = false;
