@@ -61,6 +61,22 @@ std::pair<double, double> fitTwo(const std::vector<double>& e2, const std::vecto
   return {a, b};
 }
 
+/// One window of odometry from index i: the messages after i, each handed to step(o) until it
+/// returns true (the window ends at that one: `whole`), unless two in a row are more than
+/// max_odo_gap apart or the odometry ends first. `end`: the index the next window starts from.
+struct OdometryWindow {
+  std::size_t end = 0;
+  bool whole = false;
+};
+template <typename Step>
+OdometryWindow walkWindow(const std::vector<core::OdometryInput>& odo, std::size_t i, int64_t max_odo_gap, Step&& step) {
+  for (std::size_t j = i + 1; j < odo.size(); ++j) {
+    if (odo[j].utime - odo[j - 1].utime > max_odo_gap) return {j, false};
+    if (step(odo[j])) return {j, true};
+  }
+  return {odo.size(), false};
+}
+
 void fitOdometry(const Recording& r, const FitOptions& opt, NoiseFit& f) {
   const int64_t max_gap = static_cast<int64_t>(opt.max_truth_gap_s * 1e6);
   const int64_t max_odo_gap = static_cast<int64_t>(opt.max_odometry_gap_s * 1e6);
@@ -75,21 +91,15 @@ void fitOdometry(const Recording& r, const FitOptions& opt, NoiseFit& f) {
     }
     core::Pose p(start->x, start->y, start->heading);
     double s = 0, turned = 0;
-    std::size_t j = i + 1;
-    bool broken = false;
-    for (; j < r.odometry.size(); ++j) {
-      const auto& o = r.odometry[j];
-      if (o.utime - r.odometry[j - 1].utime > max_odo_gap) {
-        broken = true;
-        break;
-      }
+    const auto w = walkWindow(r.odometry, i, max_odo_gap, [&](const core::OdometryInput& o) {
       const double dth = core::headingIncrement(o, r.wheelbase);
       p = core::propagatePose(p, o.delta_s, dth);
       s += std::fabs(o.delta_s);
       turned += std::fabs(dth);
-      if (s >= r.pw_distance || o.utime - r.odometry[i].utime >= max_window) break;
-    }
-    if (broken || j >= r.odometry.size()) {
+      return s >= r.pw_distance || o.utime - r.odometry[i].utime >= max_window;
+    });
+    const std::size_t j = w.end;
+    if (!w.whole) {
       i = j;
       continue;
     }
@@ -161,19 +171,13 @@ void fitScales(const Recording& r, const FitOptions& opt, NoiseFit& f) {
   std::size_t i = 0;
   while (i + 1 < r.odometry.size()) {
     double s = 0, turned = 0;
-    std::size_t j = i + 1;
-    bool broken = false;
-    for (; j < r.odometry.size(); ++j) {
-      const auto& o = r.odometry[j];
-      if (o.utime - r.odometry[j - 1].utime > max_odo_gap) {
-        broken = true;
-        break;
-      }
+    const auto w = walkWindow(r.odometry, i, max_odo_gap, [&](const core::OdometryInput& o) {
       s += o.delta_s;
       turned += core::headingIncrement(o, r.wheelbase);
-      if (o.utime - r.odometry[i].utime >= 1000000) break;
-    }
-    if (broken || j >= r.odometry.size()) {
+      return o.utime - r.odometry[i].utime >= 1000000;
+    });
+    const std::size_t j = w.end;
+    if (!w.whole) {
       i = j;
       continue;
     }
