@@ -77,8 +77,8 @@ FusionDaemon::FusionDaemon(const app::SystemConfig& cfg, bus::MessageBus& bus, O
       case core::EventKind::TooOld:
         ++rejected_;
         if (log_throttle_.allow("too_old"))
-          spdlog::warn("rejected input: {} (older than the {:.3f} s reorder window)", app::printable(detail),
-                       cfg_.fusion.reorder_window);
+          spdlog::warn("rejected input: {} (later than the {:.3f} s horizon)", app::printable(detail),
+                       static_cast<double>(engine_->horizonUs()) * 1e-6);
         if (rejects_.note(channelOf(e), "too_old")) publishStatus("rejected_input", "too old: " + detail, e.utime);
         return;
       case core::EventKind::TooNew:  // the time-jump guard dropped it (fusion.max_time_jump)
@@ -87,6 +87,8 @@ FusionDaemon::FusionDaemon(const app::SystemConfig& cfg, bus::MessageBus& bus, O
         if (rejects_.note(channelOf(e), "too_new")) publishStatus("rejected_input", "too new: " + detail, last_utime_);
         return;
       case core::EventKind::OdometryGap:
+      case core::EventKind::HorizonFull:
+      case core::EventKind::SensorStopped:
       case core::EventKind::Ambiguous:  // the estimate may be off: a warning
         spdlog::warn("{}: {}", core::eventName(e.kind), app::printable(detail));
         break;
@@ -118,9 +120,9 @@ FusionDaemon::FusionDaemon(const app::SystemConfig& cfg, bus::MessageBus& bus, O
   subscribe(ch.control, &DaemonIntake::control);
   inputs.push_back(ch.control);
 
-  spdlog::info("filter {} (shadow: {}), {} markers, reorder window {:.3f} s; in: {}; out: {}{}, {}, {}{}",
+  spdlog::info("filter {} (shadow: {}), {} markers, horizon {:.3f} s; in: {}; out: {}{}, {}, {}{}",
                cfg.fusion.filter.type, cfg.fusion.shadow.empty() ? "none" : fmt::format("{}", fmt::join(cfg.fusion.shadow, ", ")),
-               markers, cfg.fusion.reorder_window, fmt::format("{}", fmt::join(inputs, ", ")), ch.pose,
+               markers, static_cast<double>(engine_->horizonUs()) * 1e-6, fmt::format("{}", fmt::join(inputs, ", ")), ch.pose,
                opts.control ? ", " + ch.pose_control + " (control pose)" : "", ch.gate, ch.status,
                opts.timing ? ", " + ch.timing : "");
   if (!hold_) publishStatus("started", "filter " + engine_->activeFilter(), 0);
