@@ -76,9 +76,7 @@ FusionDaemon::FusionDaemon(const app::SystemConfig& cfg, bus::MessageBus& bus, O
     switch (e.kind) {
       case core::EventKind::TooOld:
         ++rejected_;
-        if (log_throttle_.allow("too_old"))
-          spdlog::warn("rejected input: {} (later than the {:.3f} s horizon)", app::printable(detail),
-                       static_cast<double>(engine_->horizonUs()) * 1e-6);
+        if (log_throttle_.allow("too_old")) spdlog::warn("rejected input: {}", app::printable(detail));
         if (rejects_.note(channelOf(e), "too_old")) publishStatus("rejected_input", "too old: " + detail, e.utime);
         return;
       case core::EventKind::TooNew:  // the time-jump guard dropped it (fusion.max_time_jump)
