@@ -19,6 +19,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "daemon/daemon.hpp"
+#include "daemon/inputs.hpp"
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/bus/memory_bus.hpp"
 #include "lcmloc/core/engine.hpp"
@@ -301,4 +302,14 @@ TEST_F(HorizonTest, InputsShuffledWithinTheHorizonGiveTheInOrderCanonicalOutput)
     EXPECT_EQ(c.processed, c0.processed) << "trial " << trial;
     ASSERT_TRUE(got == expected) << "trial " << trial << ": the canonical output differs from the in-order run";
   }
+}
+
+// fusion.sensors takes the channels key of every sensor input the daemon takes, and only those.
+TEST(HorizonConfig, TheSensorKeysAreTheDaemonsInputKinds) {
+  std::vector<std::string> kinds;
+  fusion::forEachSensorInput([&](const auto& kind) { kinds.push_back(kind.name); });
+  std::vector<std::string> keys = app::sensorKeys();
+  std::sort(kinds.begin(), kinds.end());
+  std::sort(keys.begin(), keys.end());
+  EXPECT_EQ(kinds, keys);
 }
