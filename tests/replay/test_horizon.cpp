@@ -304,6 +304,45 @@ TEST_F(HorizonTest, InputsShuffledWithinTheHorizonGiveTheInOrderCanonicalOutput)
   }
 }
 
+// A GPS receiver silent for 7 s (fusion.sensors.gps.period 1 s: said after 5 s of message time
+// of the other inputs): one sensor_stopped and one sensor_resumed on FUSION_STATUS, the pose at
+// the odometry's rate throughout; unwatched (the default), nothing is said.
+TEST_F(HorizonTest, ASensorThatStopsIsSaidOnceAndThePoseGoesOn) {
+  std::vector<Timed> silent;
+  for (const Timed& t : inputs_)
+    if (!(t.event.channel == "GPS" && t.utime >= 3000000 && t.utime < 10000000)) silent.push_back(t);
+  ASSERT_LT(silent.size(), inputs_.size() - 5);
+  auto run = [&](const app::SystemConfig& cfg, std::vector<lcmloc::fusion_status_t>& status) {
+    bus::MemoryBus bus;
+    fusion::FusionDaemon d(cfg, bus);
+    for (const Timed& t : silent) {
+      bus.inject(t.event.channel, t.event.data);
+      bus.deliverAll();
+    }
+    d.shutdown();
+    status = bus.decoded<lcmloc::fusion_status_t>(cfg.channels.status);
+    return bus.decoded<lcmloc::pose_t>(cfg.channels.pose);
+  };
+  app::SystemConfig watched = cfg_;
+  watched.fusion.sensors["gps"].period = 1.0;
+  std::vector<lcmloc::fusion_status_t> st, st_default;
+  const auto poses = run(watched, st);
+  std::vector<std::string> said;
+  for (const auto& s : st)
+    if (s.event == "sensor_stopped" || s.event == "sensor_resumed") said.push_back(s.event + " " + s.detail);
+  ASSERT_EQ(said.size(), 2u);
+  EXPECT_EQ(said[0].rfind("sensor_stopped GPS: no input since utime 2000000, 5.0", 0), 0u) << said[0];
+  EXPECT_EQ(said[1], "sensor_resumed GPS: input again at utime 10000000 after none since utime 2000000");
+  ASSERT_GT(poses.size(), 1000u);
+  int64_t worst = 0;
+  for (std::size_t i = 1; i < poses.size(); ++i) worst = std::max(worst, poses[i].utime - poses[i - 1].utime);
+  EXPECT_LE(worst, 10000) << "a pose after every odometry message";
+  EXPECT_GT(poses.back().utime, 11000000);
+  const auto poses_default = run(cfg_, st_default);
+  for (const auto& s : st_default) EXPECT_EQ(s.event.rfind("sensor_", 0), std::string::npos) << s.event;
+  EXPECT_EQ(poses_default.size(), poses.size());
+}
+
 // fusion.sensors takes the channels key of every sensor input the daemon takes, and only those.
 TEST(HorizonConfig, TheSensorKeysAreTheDaemonsInputKinds) {
   std::vector<std::string> kinds;
