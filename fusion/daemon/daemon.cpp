@@ -435,6 +435,10 @@ void FusionDaemon::shutdown() {
       c.processed, rejected_, c.too_old, c.too_new ? fmt::format(", too new {}", c.too_new) : "", gaps_,
       c.accepted, c.rejected);
   if (covered_ > 0) detail += fmt::format(", covered by the initial state {}", covered_);
+  for (const auto& [ch, l] : engine_->lateInputs())  // (later than the horizon: their lateness, docs/horizon.md)
+    detail += fmt::format(", {} later than the {:.3f} s horizon {} (by up to {:.3f} s)", app::printable(ch),
+                          static_cast<double>(engine_->horizonUs()) * 1e-6, l.count, static_cast<double>(l.max_lateness_us) * 1e-6);
+  if (c.released_early > 0) detail += fmt::format(", released early at fusion.max_queued {}", c.released_early);
   if (const std::string by = rejects_.totals(); !by.empty()) detail += "; rejected by channel and reason: " + by;
   publishStatus("stopped", detail, last_utime_);
   spdlog::info("stopping: {}", detail);

@@ -235,6 +235,12 @@ TEST_F(HorizonTest, AFixDelivered200msLateIsFusedWithinA250msHorizonLiveAsInRepl
       ++said;
   }
   EXPECT_GE(said, 5) << "the first ones of a status period each say their lateness";
+  const auto status = payloads(path("narrow_out.lcmlog"), "FUSION_STATUS");
+  lcmloc::fusion_status_t stopped;
+  ASSERT_GE(stopped.decode(status.back().data(), 0, static_cast<int>(status.back().size())), 0);
+  EXPECT_EQ(stopped.event, "stopped");
+  EXPECT_NE(stopped.detail.find(", GPS later than the 0.100 s horizon " + std::to_string(fixes) + " (by up to 0.200 s)"),
+            std::string::npos) << stopped.detail;
 }
 
 // The golden's inputs, each arriving up to the horizon after its time in many random orders:
