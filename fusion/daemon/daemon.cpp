@@ -76,9 +76,7 @@ FusionDaemon::FusionDaemon(const app::SystemConfig& cfg, bus::MessageBus& bus, O
     switch (e.kind) {
       case core::EventKind::TooOld:
         ++rejected_;
-        if (log_throttle_.allow("too_old"))
-          spdlog::warn("rejected input: {} (older than the {:.3f} s reorder window)", app::printable(detail),
-                       cfg_.fusion.reorder_window);
+        if (log_throttle_.allow("too_old")) spdlog::warn("rejected input: {}", app::printable(detail));
         if (rejects_.note(channelOf(e), "too_old")) publishStatus("rejected_input", "too old: " + detail, e.utime);
         return;
       case core::EventKind::TooNew:  // the time-jump guard dropped it (fusion.max_time_jump)
@@ -87,6 +85,8 @@ FusionDaemon::FusionDaemon(const app::SystemConfig& cfg, bus::MessageBus& bus, O
         if (rejects_.note(channelOf(e), "too_new")) publishStatus("rejected_input", "too new: " + detail, last_utime_);
         return;
       case core::EventKind::OdometryGap:
+      case core::EventKind::HorizonFull:
+      case core::EventKind::SensorStopped:
       case core::EventKind::Ambiguous:  // the estimate may be off: a warning
         spdlog::warn("{}: {}", core::eventName(e.kind), app::printable(detail));
         break;
@@ -118,9 +118,9 @@ FusionDaemon::FusionDaemon(const app::SystemConfig& cfg, bus::MessageBus& bus, O
   subscribe(ch.control, &DaemonIntake::control);
   inputs.push_back(ch.control);
 
-  spdlog::info("filter {} (shadow: {}), {} markers, reorder window {:.3f} s; in: {}; out: {}{}, {}, {}{}",
+  spdlog::info("filter {} (shadow: {}), {} markers, horizon {:.3f} s; in: {}; out: {}{}, {}, {}{}",
                cfg.fusion.filter.type, cfg.fusion.shadow.empty() ? "none" : fmt::format("{}", fmt::join(cfg.fusion.shadow, ", ")),
-               markers, cfg.fusion.reorder_window, fmt::format("{}", fmt::join(inputs, ", ")), ch.pose,
+               markers, static_cast<double>(engine_->horizonUs()) * 1e-6, fmt::format("{}", fmt::join(inputs, ", ")), ch.pose,
                opts.control ? ", " + ch.pose_control + " (control pose)" : "", ch.gate, ch.status,
                opts.timing ? ", " + ch.timing : "");
   if (!hold_) publishStatus("started", "filter " + engine_->activeFilter(), 0);
@@ -435,6 +435,10 @@ void FusionDaemon::shutdown() {
       c.processed, rejected_, c.too_old, c.too_new ? fmt::format(", too new {}", c.too_new) : "", gaps_,
       c.accepted, c.rejected);
   if (covered_ > 0) detail += fmt::format(", covered by the initial state {}", covered_);
+  for (const auto& [ch, l] : engine_->lateInputs())  // (later than the horizon: their lateness, docs/horizon.md)
+    detail += fmt::format(", {} later than the {:.3f} s horizon {} (by up to {:.3f} s)", app::printable(ch),
+                          static_cast<double>(engine_->horizonUs()) * 1e-6, l.count, static_cast<double>(l.max_lateness_us) * 1e-6);
+  if (c.released_early > 0) detail += fmt::format(", released early at fusion.max_queued {}", c.released_early);
   if (const std::string by = rejects_.totals(); !by.empty()) detail += "; rejected by channel and reason: " + by;
   publishStatus("stopped", detail, last_utime_);
   spdlog::info("stopping: {}", detail);

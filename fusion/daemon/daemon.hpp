@@ -153,6 +153,10 @@ class FusionDaemon {
   std::string activeFilter() const { return engine_->activeFilter(); }
   /// Has any input been processed since the start (or the last release)?
   int64_t processed() const { return engine_->counters().processed; }
+  /// The engine's inputs later than the horizon by channel; the horizon [us]; inputs released early.
+  const std::map<std::string, core::LateInputs>& lateInputs() const { return engine_->lateInputs(); }
+  int64_t horizonUs() const { return engine_->horizonUs(); }
+  int64_t releasedEarly() const { return engine_->counters().released_early; }
   int64_t messagesIn() const { return messages_in_; }
   int64_t rejected() const { return rejected_; }
   int64_t gaps() const { return gaps_; }

@@ -132,7 +132,9 @@ void DaemonRunner::publishTiming() {
   last_timing_ = now;
   const auto wall = std::chrono::duration_cast<std::chrono::microseconds>(
       std::chrono::system_clock::now().time_since_epoch());
-  lcmloc::fusion_timing_t m = timing_.report(wall.count());
+  lcmloc::fusion_timing_t m = timing_.report(wall.count(), daemon_->lateInputs());
+  m.horizon = static_cast<double>(daemon_->horizonUs()) * 1e-6;
+  m.released_early = daemon_->releasedEarly();
   m.seq = timing_seq_++;
   bus_->publish(cfg_.channels.timing, m);
 }

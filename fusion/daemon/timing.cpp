@@ -31,7 +31,7 @@ void DaemonTiming::step(double seconds, int64_t now_us) {
   expire(steps_, now_us);
 }
 
-lcmloc::fusion_timing_t DaemonTiming::report(int64_t now_us) {
+lcmloc::fusion_timing_t DaemonTiming::report(int64_t now_us, const std::map<std::string, core::LateInputs>& late) {
   lcmloc::fusion_timing_t m{};
   m.utime = now_us;
   m.window = static_cast<double>(window_us_) * 1e-6;
@@ -47,6 +47,9 @@ lcmloc::fusion_timing_t DaemonTiming::report(int64_t now_us) {
     m.age.push_back(static_cast<double>(now_us - c.last) * 1e-6);
     m.delay_max.push_back(v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()));
     m.delay_p50.push_back(quantile(v, 0.5));
+    const auto l = late.find(name);
+    m.late.push_back(l == late.end() ? 0 : l->second.count);
+    m.late_max.push_back(l == late.end() ? 0.0 : static_cast<double>(l->second.max_lateness_us) * 1e-6);
   }
   m.num_channels = static_cast<int32_t>(m.channel.size());
   expire(steps_, now_us);

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "lcmloc/core/engine_config.hpp"
 #include "lcmloc/fusion_timing_t.hpp"
 
 namespace lcmloc::fusion {
@@ -22,8 +23,9 @@ class DaemonTiming {
   void arrived(const std::string& channel, int64_t msg_utime, int64_t recv_utime);
   /// One message went through the daemon in `seconds` (wall), finished at now_us.
   void step(double seconds, int64_t now_us);
-  /// The figures at wall time now_us (seq left to the publisher).
-  lcmloc::fusion_timing_t report(int64_t now_us);
+  /// The figures at wall time now_us (seq left to the publisher), with the engine's count of
+  /// inputs later than the horizon by channel (message time).
+  lcmloc::fusion_timing_t report(int64_t now_us, const std::map<std::string, core::LateInputs>& late = {});
 
  private:
   struct Sample {

@@ -293,6 +293,49 @@ TEST(Config, TheReorderWindowIsNarrowerThanTheTimeJumpGuard) {
   EXPECT_EQ(errorOf("fusion: {reorder_window: 0.99}"), "(no error)");
 }
 
+// fusion.sensors: each sensor's expected delay widens the horizon (engineConfig maps the key to
+// its channels); a delay that is negative, beyond the horizon's memory bound (fusion.max_horizon)
+// or at the time-jump guard, an unknown sensor key or a reorder window beyond the bound is an
+// error naming the key.
+TEST(Config, SensorDelaysSetTheHorizonWithinItsMemoryBound) {
+  const auto c = app::parseSystemConfig(
+      "channels: {magruler: [RULER_A, RULER_B]}\n"
+      "fusion: {sensors: {gps: {delay: 0.2, period: 0.1}, magruler: {delay: 0.08}}, max_queued: 500}", "s.yaml");
+  EXPECT_DOUBLE_EQ(c.fusion.horizon(), 0.2);
+  const core::EngineConfig ec = app::engineConfig(c);
+  EXPECT_EQ(ec.horizonUs(), 200000);
+  EXPECT_EQ(ec.max_queued, 500u);
+  ASSERT_EQ(ec.sensors.size(), 3u);
+  EXPECT_EQ(ec.sensors.at("GPS").delay_us, 200000);
+  EXPECT_EQ(ec.sensors.at("GPS").period_us, 100000);
+  EXPECT_EQ(ec.sensors.at("RULER_B").delay_us, 80000);
+  EXPECT_EQ(ec.sensors.at("RULER_B").period_us, 0);
+  // The defaults: no sensor, the horizon is the reorder window.
+  const auto d = app::parseSystemConfig("", "d.yaml");
+  EXPECT_TRUE(app::engineConfig(d).sensors.empty());
+  EXPECT_EQ(app::engineConfig(d).horizonUs(), app::engineConfig(d).reorder_window_us);
+
+  EXPECT_EQ(errorOf("fusion: {sensors: {gps: {delay: -0.1}}}"),
+            "test.yaml: fusion.sensors.gps.delay: value -0.1 out of range [0, 2] (0 to fusion.max_horizon: the "
+            "horizon's memory bound)");
+  EXPECT_EQ(errorOf("fusion: {sensors: {vision: {delay: 2.5}}, max_time_jump: 10}"),
+            "test.yaml: fusion.sensors.vision.delay: value 2.5 out of range [0, 2] (0 to fusion.max_horizon: the "
+            "horizon's memory bound)");
+  EXPECT_EQ(errorOf("fusion: {sensors: {vision: {delay: 2.5}}, max_time_jump: 10, max_horizon: 3}"), "(no error)");
+  EXPECT_EQ(errorOf("fusion: {sensors: {gps: {delay: 1.5}}}"),
+            "test.yaml: fusion.sensors.gps.delay: 1.5 s is not less than fusion.max_time_jump (1 s): an input that "
+            "late is taken for a new time base (widen max_time_jump with it, or 0 = off)");
+  EXPECT_EQ(errorOf("fusion: {reorder_window: 3, max_time_jump: 10}"),
+            "test.yaml: fusion.reorder_window: 3 s is more than fusion.max_horizon (2 s), the horizon's memory bound");
+  EXPECT_NE(errorOf("fusion: {sensors: {sonar: {delay: 0.1}}}").find("fusion.sensors.sonar: unknown key"),
+            std::string::npos);
+  EXPECT_NE(errorOf("fusion: {sensors: {gps: {lag: 0.1}}}").find("fusion.sensors.gps.lag: unknown key"),
+            std::string::npos);
+  EXPECT_NE(errorOf("fusion: {max_queued: 0}").find("fusion.max_queued: value 0 out of range"), std::string::npos);
+  EXPECT_NE(errorOf("fusion: {sensors: {gps: {period: -1}}}").find("fusion.sensors.gps.period: value -1 out of range"),
+            std::string::npos);
+}
+
 TEST(Config, OdometryGapKeysAreCheckedAndNamed) {
   const auto c = app::parseSystemConfig("fusion: {max_odometry_gap: 0.5, odometry_gap_accel: 1.0, odometry_gap_yaw_rate: 0.1}", "g.yaml");
   EXPECT_EQ(c.fusion.max_odometry_gap, 0.5);

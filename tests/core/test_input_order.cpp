@@ -29,6 +29,7 @@ struct Client : InputOrder::Client {
   void late(const EngineInput& in, bool duplicate, int64_t processed) override {
     log.push_back("late " + name(in) + (duplicate ? " duplicate" : " after " + std::to_string(processed)));
   }
+  void releasedEarly(const EngineInput& in) override { log.push_back("early " + name(in)); }
   void outlier(const EngineInput& in, bool ahead, int64_t newest) override {
     log.push_back("outlier " + name(in) + (ahead ? " ahead of " : " behind ") + std::to_string(newest));
   }

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <limits>
+#include <map>
 #include <sstream>
 
 #include "daemon/daemon.hpp"
@@ -43,6 +44,31 @@ TEST(DaemonTiming, DelayAgeRateAndStepQuantilesOverTheWindow) {
   ctl::printTiming(text, r);
   EXPECT_NE(text.str().find("ODOMETRY"), std::string::npos) << text.str();
   EXPECT_NE(text.str().find("p99 0.990 ms"), std::string::npos) << text.str();
+}
+
+// The engine's late inputs by channel beside each channel's delay: FUSION_TIMING's late and
+// late_max, printed by lcmloc-ctl status with the horizon.
+TEST(DaemonTiming, LateInputsArePerChannelBesideTheDelays) {
+  fusion::DaemonTiming t(1000000);
+  t.arrived("GPS", 1000000, 1250000);
+  t.arrived("ODOMETRY", 1240000, 1250000);
+  std::map<std::string, core::LateInputs> late;
+  late["GPS"] = core::LateInputs{3, 212000};
+  auto r = t.report(1300000, late);
+  r.horizon = 0.1;
+  r.released_early = 4;
+  ASSERT_EQ(r.num_channels, 2);
+  ASSERT_EQ(r.channel[0], "GPS");
+  EXPECT_EQ(r.late[0], 3);
+  EXPECT_NEAR(r.late_max[0], 0.212, 1e-12);
+  EXPECT_EQ(r.late[1], 0);
+  EXPECT_EQ(r.late_max[1], 0.0);
+  std::ostringstream text;
+  ctl::printTiming(text, r);
+  EXPECT_NE(text.str().find("late max ms"), std::string::npos) << text.str();
+  EXPECT_NE(text.str().find("      3     212.000"), std::string::npos) << text.str();
+  EXPECT_NE(text.str().find("horizon 0.100 s"), std::string::npos) << text.str();
+  EXPECT_NE(text.str().find("released early at its memory bound: 4"), std::string::npos) << text.str();
 }
 
 // Timing measured or not, control pose or not: the daemon's POSE is the same bytes.

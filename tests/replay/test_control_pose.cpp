@@ -67,6 +67,9 @@ class ControlPoseTest : public ::testing::Test {
     }
     return out;
   }
+  /// The control pose's jumps against the canonical corrections, the detections arriving late_us
+  /// after their time.
+  void checkJumps(int64_t late_us);
   fs::path dir_;
   simconfig::SimSystemConfig cfg_;
   std::string log_;
@@ -81,10 +84,24 @@ double angleDiff(double a, double b) { return std::remainder(a - b, 2.0 * M_PI);
 // motion waiting (a heading correction swings the position by at most its angle times the
 // distance waiting).
 TEST_F(ControlPoseTest, NeverJumpsByMoreThanTheCanonicalCorrection) {
+  ASSERT_EQ(app::engineConfig(cfg_).horizonUs(), 50000);
+  checkJumps(30000);
+}
+
+// The same with the detections 200 ms late and a horizon widened for them to 0.25 s
+// (fusion.sensors.magruler.delay): more motion waits under each correction, the bound holds.
+TEST_F(ControlPoseTest, NeverJumpsByMoreThanTheCanonicalCorrectionWithinAWideHorizon) {
+  cfg_.fusion.sensors["magruler"].delay = 0.25;
+  ASSERT_EQ(app::engineConfig(cfg_).horizonUs(), 250000);
+  checkJumps(200000);
+}
+
+void ControlPoseTest::checkJumps(int64_t late_us) {
   const auto all = inputs();
   const core::MarkerMap map = app::csv::loadMap(cfg_.fusion.map_file);
   core::EngineConfig ec = app::engineConfig(cfg_);
-  ASSERT_EQ(ec.reorder_window_us, 50000);
+  // At most the increments of the horizon wait (100 Hz), plus the one pushed.
+  const std::size_t max_waiting = static_cast<std::size_t>(ec.horizonUs() / 10000 + 1);
 
   core::FilterState active;  // the canonical state published last
   bool after_decision = false;
@@ -113,8 +130,8 @@ TEST_F(ControlPoseTest, NeverJumpsByMoreThanTheCanonicalCorrection) {
       scratch->initialize(*control_before);  // the control pose before, moved by this message
       scratch->predict(last_odo);
       const core::FilterState moved = scratch->state();
-      double waiting = 0;  // at most the last 10 increments wait (50 ms at 100 Hz, plus the one pushed)
-      for (std::size_t i = recent_ds.size() > 10 ? recent_ds.size() - 10 : 0; i < recent_ds.size(); ++i)
+      double waiting = 0;
+      for (std::size_t i = recent_ds.size() > max_waiting ? recent_ds.size() - max_waiting : 0; i < recent_ds.size(); ++i)
         waiting += recent_ds[i];
       const double jump_xy = std::hypot(c.x(0) - moved.x(0), c.x(1) - moved.x(1));
       const double jump_th = std::abs(angleDiff(c.x(2), moved.x(2)));
@@ -129,13 +146,13 @@ TEST_F(ControlPoseTest, NeverJumpsByMoreThanTheCanonicalCorrection) {
   };
   core::FusionEngine engine(ec, map, out);
 
-  std::vector<core::EngineInput> late;  // detections waiting for their arrival, 30 ms after their time
+  std::vector<core::EngineInput> late;  // detections waiting for their arrival, late_us after their time
   for (const auto& in : all) {
     if (!std::holds_alternative<core::OdometryInput>(in.payload)) {
       late.push_back(in);
       continue;
     }
-    while (!late.empty() && late.front().utime + 30000 <= in.utime) {
+    while (!late.empty() && late.front().utime + late_us <= in.utime) {
       engine.push(late.front());
       late.erase(late.begin());
     }
@@ -143,6 +160,7 @@ TEST_F(ControlPoseTest, NeverJumpsByMoreThanTheCanonicalCorrection) {
     recent_ds.push_back(std::abs(last_odo.delta_s));
     ASSERT_TRUE(engine.push(in));
   }
+  EXPECT_EQ(engine.counters().too_old, 0);
   std::cout << controls << " control poses, " << corrected << " after corrections, " << moved_by_correction
             << " moved by them, the largest jump " << largest_jump << " m\n";
   EXPECT_GT(controls, 2000);

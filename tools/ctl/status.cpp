@@ -15,11 +15,14 @@ namespace lcmloc::ctl {
 
 void printTiming(std::ostream& out, const lcmloc::fusion_timing_t& t) {
   out << fmt::format("timing over the last {:.1f} s (wall clock; delay = arrival - message time):\n", t.window);
-  out << fmt::format("  {:<20} {:>12} {:>12} {:>9} {:>9}\n", "channel", "delay p50 ms", "delay max ms", "age s",
-                     "rate Hz");
+  out << fmt::format("  {:<20} {:>12} {:>12} {:>9} {:>9} {:>7} {:>11}\n", "channel", "delay p50 ms", "delay max ms",
+                     "age s", "rate Hz", "late", "late max ms");
   for (std::size_t i = 0; i < t.channel.size(); ++i)
-    out << fmt::format("  {:<20} {:>12.3f} {:>12.3f} {:>9.3f} {:>9.1f}\n", app::printable(t.channel[i]),
-                       t.delay_p50[i] * 1e3, t.delay_max[i] * 1e3, t.age[i], t.rate[i]);
+    out << fmt::format("  {:<20} {:>12.3f} {:>12.3f} {:>9.3f} {:>9.1f} {:>7} {:>11.3f}\n", app::printable(t.channel[i]),
+                       t.delay_p50[i] * 1e3, t.delay_max[i] * 1e3, t.age[i], t.rate[i],
+                       i < t.late.size() ? t.late[i] : 0, i < t.late_max.size() ? t.late_max[i] * 1e3 : 0.0);
+  out << fmt::format("  horizon {:.3f} s (late: refused as later than it, since the daemon started); released early "
+                     "at its memory bound: {}\n", t.horizon, t.released_early);
   out << fmt::format("  filter step (one message through the daemon): {} steps, p50 {:.3f} ms, p99 {:.3f} ms, "
                      "max {:.3f} ms\n",
                      t.steps, t.step_p50 * 1e3, t.step_p99 * 1e3, t.step_max * 1e3);

@@ -140,7 +140,7 @@ BenchResult run(const BenchOptions& o) {
   const app::SystemConfig cfg = app::loadSystemConfig(o.config);
   const app::ChannelConfig& ch = cfg.channels;
   BenchResult r;
-  r.reorder_window_s = cfg.fusion.reorder_window;
+  r.reorder_window_s = cfg.fusion.horizon();  // (the reorder window, or a sensor's larger expected delay)
   const pid_t bare = fork();  // (before any thread)
   if (bare < 0) throw std::runtime_error("fork failed");
   if (bare == 0) bareSubscriber(o.lcm_url, ch);
@@ -223,7 +223,7 @@ BenchResult run(const BenchOptions& o) {
     }
     if (measuring && k % 100 == 0) r.rss_last_kb = statusKb(daemon, "VmRSS");
   }
-  std::this_thread::sleep_for(std::chrono::duration<double>(cfg.fusion.reorder_window + 0.05));  // the last poses
+  std::this_thread::sleep_for(std::chrono::duration<double>(cfg.fusion.horizon() + 0.05));  // the last poses
   measuring = false;
   r.daemon_cpu_s = cpuSeconds(daemon) - cpu0_daemon;
   r.bare_cpu_s = cpuSeconds(bare) - cpu0_bare;
@@ -278,7 +278,7 @@ std::string toText(const BenchResult& r) {
   };
   row("raw LCM relay", r.relay);
   row("control pose (POSE_CONTROL)", r.control);
-  row(fmt::format("canonical pose (POSE, window {:.3f} s)", r.reorder_window_s).c_str(), r.canonical);
+  row(fmt::format("canonical pose (POSE, horizon {:.3f} s)", r.reorder_window_s).c_str(), r.canonical);
   s += fmt::format("CPU [s]: daemon {:.3f}, bare subscriber {:.3f} (ratio {:.2f})\n", r.daemon_cpu_s, r.bare_cpu_s,
                    r.bare_cpu_s > 0 ? r.daemon_cpu_s / r.bare_cpu_s : 0.0);
   s += fmt::format("daemon RSS [kB]: after warm-up {}, at the end {}, peak {}\n", r.rss_first_kb, r.rss_last_kb,

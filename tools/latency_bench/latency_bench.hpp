@@ -35,7 +35,7 @@ struct BenchResult {
   Latency relay, control, canonical;
   double daemon_cpu_s = 0, bare_cpu_s = 0;  ///< over the measured span
   int64_t rss_first_kb = 0, rss_last_kb = 0, rss_peak_kb = 0;  ///< daemon (VmRSS after warm-up, at the end; VmHWM)
-  double reorder_window_s = 0;
+  double reorder_window_s = 0;  ///< the fusion horizon (fusion.reorder_window, or a larger fusion.sensors delay)
   int64_t sent = 0;  ///< input messages sent in the measured span
 };
 

@@ -76,6 +76,11 @@ void checkFilterType(const std::string& type, const std::string& file, const std
 
 }  // namespace
 
+const std::vector<std::string>& sensorKeys() {
+  static const std::vector<std::string> keys{"odometry", "magruler", "imu", "gps", "landmarks", "beacons", "vision"};
+  return keys;
+}
+
 void checkFilterList(const std::vector<std::string>& types, const std::string& file, const std::string& key) {
   for (std::size_t i = 0; i < types.size(); ++i) {
     const std::string k = key + "[" + std::to_string(i) + "]";
@@ -87,6 +92,47 @@ void checkFilterList(const std::vector<std::string>& types, const std::string& f
 }
 
 namespace {
+
+/// The sensor keys of `fusion.sensors` (the daemon's input kinds, fusion/daemon/inputs.hpp) and
+/// the channels of each.
+std::vector<std::string> sensorChannels(const ChannelConfig& c, const std::string& key) {
+  if (key == "odometry") return {c.odometry};
+  if (key == "magruler") return c.magruler;
+  if (key == "imu") return {c.imu};
+  if (key == "gps") return {c.gps};
+  if (key == "landmarks") return {c.landmarks};
+  if (key == "beacons") return {c.beacons};
+  if (key == "vision") return {c.vision};
+  return {};
+}
+
+/// fusion.sensors, max_horizon, max_queued, and the horizon within its bounds and the guard.
+void parseHorizon(KeyReader& r, const std::string& file, FusionConfig& f) {
+  r.get("max_horizon", f.max_horizon, 0.0, 10.0);
+  r.get("max_queued", f.max_queued, 1, 10000000);
+  if (f.reorder_window > f.max_horizon)
+    throw ConfigError(file, "fusion.reorder_window",
+                      fmt::format("{} s is more than fusion.max_horizon ({} s), the horizon's memory bound",
+                                  f.reorder_window, f.max_horizon));
+  KeyReader sensors(r.child("sensors"), file, "fusion.sensors");
+  for (const std::string& key : sensorKeys()) {
+    KeyReader x(sensors.child(key), file, "fusion.sensors." + key);
+    FusionConfig::Sensor s = f.sensors.count(key) ? f.sensors[key] : FusionConfig::Sensor{};
+    const char* bound = "0 to fusion.max_horizon: the horizon's memory bound";
+    x.get("delay", s.delay, 0.0, f.max_horizon, bound);
+    x.get("period", s.period, 0.0, 3600.0, "0 = not watched");
+    x.finish();
+    if (s.delay > 0.0 || s.period > 0.0) f.sensors[key] = s;
+    // An input later than max_time_jump is taken for a source whose time started over: a horizon
+    // as wide would hold late inputs only to refuse them.
+    if (f.max_time_jump > 0.0 && s.delay >= f.max_time_jump)
+      throw ConfigError(file, "fusion.sensors." + key + ".delay",
+                        fmt::format("{} s is not less than fusion.max_time_jump ({} s): an input that late is taken "
+                                    "for a new time base (widen max_time_jump with it, or 0 = off)",
+                                    s.delay, f.max_time_jump));
+  }
+  sensors.finish();
+}
 
 void parseFusion(KeyReader& root, FusionConfig& f) {
   KeyReader r(root.child("fusion"), root.file(), "fusion");
@@ -104,6 +150,7 @@ void parseFusion(KeyReader& root, FusionConfig& f) {
                       fmt::format("{} s is not less than fusion.max_time_jump ({} s): an input that late is taken "
                                   "for a new time base, not reordered (widen max_time_jump with it, or 0 = off)",
                                   f.reorder_window, f.max_time_jump));
+  parseHorizon(r, root.file(), f);
   r.get("map_file", f.map_file);
   if (!f.map_file.empty() && f.map_file[0] != '/') {
     const auto slash = root.file().rfind('/');
@@ -367,6 +414,10 @@ core::EngineConfig engineConfig(const SystemConfig& cfg) {
   ec.max_time_jump_us = us(cfg.fusion.max_time_jump);
   ec.odometry_gap = {us(cfg.fusion.max_odometry_gap), cfg.fusion.odometry_gap_accel, cfg.fusion.odometry_gap_yaw_rate,
                      us(cfg.fusion.odometry_period)};
+  ec.max_queued = static_cast<std::size_t>(cfg.fusion.max_queued);
+  for (const auto& [key, s] : cfg.fusion.sensors)
+    for (const std::string& channel : sensorChannels(cfg.channels, key))
+      ec.sensors[channel] = core::SensorExpectation{us(s.delay), us(s.period)};
   return ec;
 }
 

@@ -14,6 +14,7 @@
 #include "lcmloc/core/input_order.hpp"
 #include "lcmloc/core/odometry_gaps.hpp"
 #include "lcmloc/core/output_decimation.hpp"
+#include "lcmloc/core/sensor_watch.hpp"
 
 namespace lcmloc::core {
 namespace {
@@ -55,6 +56,9 @@ struct FusionEngine::Impl final : InputOrder::Client {
   Commands commands;
   ImuSaturationWatch imu;
   InputOrder order;
+  SensorWatch watch;
+  std::map<std::string, LateInputs> late_inputs;  ///< by channel
+  bool horizon_full = false;  ///< released early since the horizon last had room (one event per stretch)
   ControlPredictor control;
   std::vector<ControlPredictor::Waiting> waiting;  ///< emitControl's (storage reused)
   /// [m] The smallest distance between two markers of the map (+inf: fewer than two): after a
@@ -66,12 +70,14 @@ struct FusionEngine::Impl final : InputOrder::Client {
       : cfg(std::move(c)), map(std::make_shared<const MapIndex>(std::move(m))), out(std::move(o)), bank(cfg.filter, cfg.shadow, map, out),
         decimation(cfg.output_every, bank), gaps(cfg.odometry_gap, bank, decimation, out),
         fixes(cfg, bank, out, counters), commands(bank, fixes, out),
-        order(cfg.reorder_window_us, cfg.max_time_jump_us, *this), control(map), marker_spacing(map->closestPair()),
+        order(cfg.horizonUs(), cfg.max_time_jump_us, cfg.max_queued, *this), watch(cfg.sensors), control(map), marker_spacing(map->closestPair()),
         last_status(bank.active().state().status) {}
 
   /// Every part starts afresh (a new time base; the active filter's type is kept).
   void reset() {
     order.reset();
+    watch.restart();
+    horizon_full = false;
     gaps.reset();
     bank.reset();
     decimation.reset();
@@ -108,7 +114,28 @@ struct FusionEngine::Impl final : InputOrder::Client {
   }
   void late(const EngineInput& in, bool duplicate, int64_t processed_utime) override {
     ++counters.too_old;
-    out.event(EventKind::TooOld, in.utime, events::Late{refOf(in), duplicate, processed_utime});
+    const int64_t newest = order.newest();
+    if (!duplicate && newest != INT64_MIN && newest >= in.utime) {
+      LateInputs& l = late_inputs[in.channel];
+      ++l.count;
+      l.max_lateness_us = std::max(l.max_lateness_us, newest - in.utime);
+    }
+    out.event(EventKind::TooOld, in.utime, events::Late{refOf(in), duplicate, processed_utime, newest, order.window()});
+  }
+  void releasedEarly(const EngineInput& in) override {
+    ++counters.released_early;
+    if (horizon_full) return;
+    horizon_full = true;
+    out.event(EventKind::HorizonFull, in.utime,
+              events::ReleasedEarly{refOf(in), order.maxQueued(), order.window(), counters.released_early});
+  }
+  /// After an input was taken: the horizon has room again (at most half full): the next early
+  /// release is said again; the sensor watch sees it.
+  void taken(bool watched, const std::string& channel, int64_t utime) {
+    if (horizon_full && order.queued() <= order.maxQueued() / 2) horizon_full = false;
+    if (!watched) return;
+    watch.input(channel, utime, order.newest(),
+                [this](EventKind kind, int64_t utime, events::SensorSilence s) { out.event(kind, utime, std::move(s)); });
   }
   void outlier(const EngineInput& in, bool ahead, int64_t newest) override {
     ++(ahead ? counters.too_new : counters.too_old);
@@ -134,6 +161,8 @@ struct FusionEngine::Impl final : InputOrder::Client {
       decimation.publishPending();
       reset();
       e.restarted = bank.active().name();
+    } else {
+      watch.restart();  // the silence before a time base ahead is not the sensors'
     }
     out.event(EventKind::TimeJump, first.utime, std::move(e));
   }
@@ -228,7 +257,13 @@ FusionEngine& FusionEngine::operator=(FusionEngine&&) noexcept = default;
 bool FusionEngine::push(EngineInput&& in) {
   const bool motion = impl_->out.on_control && (std::holds_alternative<OdometryInput>(in.payload) ||
                                                 std::holds_alternative<ImuInput>(in.payload));
+  // (what the sensor watch needs of it: the input is moved into the window)
+  const bool watched = impl_->watch.active() && !std::holds_alternative<ControlCommand>(in.payload);
+  const int64_t utime = in.utime;
+  std::string channel;
+  if (watched) channel = in.channel;
   const bool taken = impl_->order.push(std::move(in));
+  if (taken) impl_->taken(watched, channel, utime);
   if (taken && motion) impl_->emitControl();
   return taken;
 }
@@ -249,5 +284,7 @@ void FusionEngine::initialize(const FilterState& state) {
 std::string FusionEngine::activeFilter() const { return impl_->bank.active().name(); }
 FilterState FusionEngine::activeState() const { return impl_->bank.active().state(); }
 FusionEngine::Counters FusionEngine::counters() const { return impl_->counters; }
+const std::map<std::string, LateInputs>& FusionEngine::lateInputs() const { return impl_->late_inputs; }
+int64_t FusionEngine::horizonUs() const { return impl_->order.window(); }
 
 }  // namespace lcmloc::core

@@ -18,8 +18,36 @@ std::string at(const InputRef& in) { return in.channel + " seq " + to_string(in.
 std::string atTime(const InputRef& in) { return at(in) + " utime " + to_string(in.utime); }
 
 std::string text(const events::Late& e) {
-  return atTime(e.input) +
-         (e.duplicate ? std::string(": duplicate") : ": older than already processed utime " + to_string(e.processed_utime));
+  if (e.duplicate) return atTime(e.input) + ": duplicate";
+  std::string s = atTime(e.input) + ": older than already processed utime " + to_string(e.processed_utime);
+  if (e.newest == INT64_MIN || e.newest < e.input.utime) return s;
+  char t[200];
+  std::snprintf(t, sizeof t, " (%.3f s behind it); it came %.3f s after its time (the newest input: utime %lld), "
+                "the horizon is %.3f s", static_cast<double>(e.processed_utime - e.input.utime) * 1e-6,
+                static_cast<double>(e.newest - e.input.utime) * 1e-6, static_cast<long long>(e.newest),
+                static_cast<double>(e.horizon_us) * 1e-6);
+  return s + t;
+}
+
+std::string text(const events::ReleasedEarly& e) {
+  char t[300];
+  std::snprintf(t, sizeof t, ": released before its time: the horizon (%.3f s) holds at most %zu inputs "
+                "(fusion.max_queued); %lld released early so far", static_cast<double>(e.horizon_us) * 1e-6,
+                e.max_queued, static_cast<long long>(e.early));
+  return atTime(e.input) + t;
+}
+
+std::string text(const events::SensorSilence& e) {
+  char t[300];
+  if (e.stopped)
+    std::snprintf(t, sizeof t, ": no input since utime %lld, %.3f s of message time before the newest input (utime "
+                  "%lld), more than %.3f s (its period %.3f s)", static_cast<long long>(e.last_utime),
+                  static_cast<double>(e.newest - e.last_utime) * 1e-6, static_cast<long long>(e.newest),
+                  static_cast<double>(e.limit_us) * 1e-6, static_cast<double>(e.period_us) * 1e-6);
+  else
+    std::snprintf(t, sizeof t, ": input again at utime %lld after none since utime %lld",
+                  static_cast<long long>(e.newest), static_cast<long long>(e.last_utime));
+  return e.channel + t;
 }
 
 std::string text(const events::Outlier& e) {
@@ -188,6 +216,9 @@ const char* eventName(EventKind kind) {
     case EventKind::FixRefused: return "fix_refused";
     case EventKind::FixLockout: return "fix_lockout";
     case EventKind::Relocalized: return "relocalized";
+    case EventKind::HorizonFull: return "horizon_full";
+    case EventKind::SensorStopped: return "sensor_stopped";
+    case EventKind::SensorResumed: return "sensor_resumed";
   }
   return "event";
 }

@@ -51,9 +51,15 @@ bool InputOrder::take(EngineInput&& in, bool advance) {
     client_.late(in, duplicate, window_.lastReleased().utime);
     return false;
   }
-  if (!advance) return true;
-  guard_.took(key.utime);
-  window_.releaseReady([this](const OrderKey&, const EngineInput& e) { client_.process(e); });
+  if (advance) {
+    guard_.took(key.utime);
+    window_.releaseReady([this](const OrderKey&, const EngineInput& e) { client_.process(e); });
+  }
+  while (window_.size() > max_queued_)  // the memory bound: the oldest goes now, said
+    window_.releaseOldest([this](const OrderKey&, const EngineInput& e) {
+      client_.releasedEarly(e);
+      client_.process(e);
+    });
   return true;
 }
 

@@ -64,7 +64,7 @@ void visit(const fusion_status_t& m, Visitor& v) {
 }
 void visit(const fusion_timing_t& m, Visitor& v) {
   F(utime); F(seq); F(window); F(num_channels); F(channel); F(delay_p50); F(delay_max); F(age); F(rate); F(count);
-  F(steps); F(step_p50); F(step_p99); F(step_max);
+  F(late); F(late_max); F(steps); F(step_p50); F(step_p99); F(step_max); F(horizon); F(released_early);
 }
 void visit(const gate_decision_t& m, Visitor& v) {
   F(utime); F(seq); F(filter); F(sensor); F(measurement_seq); F(dim); F(innovation); F(mahalanobis); F(gate);

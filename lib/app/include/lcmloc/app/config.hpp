@@ -60,6 +60,25 @@ struct FusionConfig {
   core::FilterConfig filter;          ///< the active filter (type + parameters)
   std::vector<std::string> shadow;    ///< extra filter types run side by side (POSE_<TYPE>)
   double reorder_window = 0.05;       ///< canonical-order window of message time [s]
+  /// What is expected of one sensor (`fusion.sensors.<key>`, key: its `channels` key, for every
+  /// channel of it; core::SensorExpectation): how late its messages arrive at most, and its
+  /// period (0 = not watched for silence) [s].
+  struct Sensor {
+    double delay = 0.0;
+    double period = 0.0;
+  };
+  std::map<std::string, Sensor> sensors;
+  /// The memory bound of the fusion horizon (docs/horizon.md): the horizon (the reorder window
+  /// or the largest expected delay) at most max_horizon [s], and at most max_queued inputs held
+  /// (core::EngineConfig::max_queued; more: the oldest processed early, event "horizon_full").
+  double max_horizon = 2.0;
+  int max_queued = 20000;
+  /// [s] The fusion horizon: reorder_window, or the largest sensors' delay when larger.
+  double horizon() const {
+    double h = reorder_window;
+    for (const auto& [key, s] : sensors) h = s.delay > h ? s.delay : h;
+    return h;
+  }
   double status_period = 1.0;         ///< FUSION_STATUS period of message time [s]
   /// Time-jump guard [s] of message time (0 = off): core::EngineConfig::max_time_jump_us.
   double max_time_jump = 1.0;
@@ -146,6 +165,8 @@ YAML::Node parseYamlText(const std::string& yaml_text, const std::string& file);
 /// The fusion engine's configuration from a system config (fusion.*): one conversion for the
 /// daemon (and so the replay and lcmloc-evaluate).
 core::EngineConfig engineConfig(const SystemConfig& cfg);
+/// The keys of `fusion.sensors`: the `channels` key of each sensor input the daemon takes.
+const std::vector<std::string>& sensorKeys();
 
 core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterConfig& base,
                                      const std::string& file, const std::string& key_prefix);

@@ -10,6 +10,7 @@
 //   Commands          switch, reset, set_pose, and their answers
 //   ControlPredictor  the control pose: the active state and the motion still in the window
 // A new time base (time went back) starts every part afresh.
+#include <map>
 #include <memory>
 #include <string>
 
@@ -48,6 +49,10 @@ class FusionEngine {
   FilterState activeState() const;
   using Counters = EngineCounters;
   Counters counters() const;
+  /// The inputs refused as later than the horizon, by channel (duplicates not counted).
+  const std::map<std::string, LateInputs>& lateInputs() const;
+  /// [us] The horizon (EngineConfig::horizonUs()).
+  int64_t horizonUs() const;
 
  private:
   struct Impl;

@@ -1,5 +1,6 @@
 #pragma once
 // The fusion engine's settings (config/*.yaml, fusion.*) and its counters.
+#include <cstddef>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -39,10 +40,39 @@ struct OdometryGapConfig {
   int64_t resume_period_us = 0;
 };
 
+/// What is expected of one sensor channel (fusion.sensors; docs/horizon.md).
+struct SensorExpectation {
+  /// [us] How long after its utime a message of the channel arrives at most (a GNSS receiver:
+  /// 50-200 ms): the horizon covers the largest (EngineConfig::horizonUs), so that such a message
+  /// is fused in canonical order rather than refused as "too_old". >= 0.
+  int64_t delay_us = 0;
+  /// [us] Its period; > 0: watched: when kStopPeriods periods (and its delay) of message time of
+  /// the other inputs pass without one of its inputs, event "sensor_stopped", and
+  /// "sensor_resumed" at its next input. 0 = not watched.
+  int64_t period_us = 0;
+};
+
+/// Periods of silence after which a watched sensor is said to have stopped.
+inline constexpr int kStopPeriods = 5;
+
 struct EngineConfig {
   FilterConfig filter;                 ///< initial active filter
   std::vector<std::string> shadow;     ///< shadow filter types (same parameters otherwise)
+  /// The reorder window [us]: the horizon is at least this (horizonUs()).
   int64_t reorder_window_us = 50000;
+  /// By channel name: each sensor's expected delay and period (none: delay 0, not watched).
+  std::map<std::string, SensorExpectation> sensors;
+  /// The memory bound of the horizon: inputs held at most. One more and the oldest is processed
+  /// before its time (event "horizon_full", EngineCounters::released_early). >= 1.
+  std::size_t max_queued = 20000;
+  /// [us] The fusion horizon: the reorder window, or the largest expected delay of a sensor when
+  /// larger. The canonical estimate is fused this far behind the newest input; an input older
+  /// than what was released is refused ("too_old", with its lateness).
+  int64_t horizonUs() const {
+    int64_t h = reorder_window_us;
+    for (const auto& [channel, s] : sensors) h = s.delay_us > h ? s.delay_us : h;
+    return h;
+  }
   /// Canonical order: by utime, then by the rank of the input's kind (kCanonicalRank: control <
   /// odometry < ruler < imu < gps < landmark < beacon < bearings); inputs of one kind on
   /// different channels are ordered by a stable hash of the channel name, then by seq.
@@ -77,7 +107,15 @@ struct EngineConfig {
 };
 
 /// What the engine did with its inputs. too_new: inputs dropped by the time-jump guard
-/// (EngineConfig::max_time_jump_us); accepted and rejected: the active filter's decisions.
-struct EngineCounters { int64_t processed = 0, too_old = 0, too_new = 0, accepted = 0, rejected = 0; };
+/// (EngineConfig::max_time_jump_us); accepted and rejected: the active filter's decisions;
+/// released_early: inputs processed before their time at the horizon's memory bound.
+struct EngineCounters {
+  int64_t processed = 0, too_old = 0, too_new = 0, accepted = 0, rejected = 0, released_early = 0;
+};
+
+/// The inputs of one channel refused as later than the horizon (not duplicates): how many, and
+/// the largest lateness [us]: how long after its time it came (the newest input's time then minus
+/// its utime), the expected delay (fusion.sensors.<key>.delay) that would have fused it.
+struct LateInputs { int64_t count = 0, max_lateness_us = 0; };
 
 }  // namespace lcmloc::core

@@ -3,6 +3,7 @@
 // the fields of what happened; eventText() gives its words (the detail of a FUSION_STATUS
 // message) where it leaves the program.
 #include <climits>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -31,10 +32,13 @@ enum class EventKind {
   FixRefused,    ///< a landmark fix refused (geometry, or a filter's gate)
   FixLockout,    ///< a filter took a landmark fix after refusing several in a row
   Relocalized,   ///< the active filter re-localized from measurements its gate had refused
+  HorizonFull,   ///< the horizon held EngineConfig::max_queued inputs: the oldest released early
+  SensorStopped, ///< a watched sensor channel fell silent (SensorExpectation::period_us)
+  SensorResumed, ///< a silent sensor channel delivered again
 };
 /// "ack", "refused", "lockout", "recovered", "ambiguous", "restarted", "too_old", "too_new",
 /// "time_jump", "bad_input", "odometry_gap", "imu_saturated", "fix", "fix_refused", "fix_lockout",
-/// "relocalized".
+/// "relocalized", "horizon_full", "sensor_stopped", "sensor_resumed".
 const char* eventName(EventKind kind);
 
 /// The input an event is about.
@@ -46,8 +50,26 @@ struct InputRef {
 
 /// The fields of each event (EngineEvent::fields).
 namespace events {
-/// too_old: the reorder window refused the input: a duplicate, or older than what was processed.
-struct Late { InputRef input; bool duplicate = false; int64_t processed_utime = 0; };
+/// too_old: the horizon (reorder window) refused the input: a duplicate, or older than what was
+/// processed. newest: the newest input's time when it came (its lateness: newest - its utime);
+/// horizon_us: EngineConfig::horizonUs().
+struct Late {
+  InputRef input;
+  bool duplicate = false;
+  int64_t processed_utime = 0;
+  int64_t newest = INT64_MIN;
+  int64_t horizon_us = 0;
+};
+/// horizon_full: the horizon held max_queued inputs, the oldest (input) was released before its
+/// time; early: inputs released early so far. One event per stretch of a full horizon.
+struct ReleasedEarly { InputRef input; std::size_t max_queued = 0; int64_t horizon_us = 0; int64_t early = 0; };
+/// sensor_stopped (stopped) or sensor_resumed: the channel's last input was at last_utime; newest
+/// is the newest input's time (stopped) or the resuming input's (resumed).
+struct SensorSilence {
+  std::string channel;
+  bool stopped = true;
+  int64_t last_utime = 0, newest = 0, period_us = 0, limit_us = 0;
+};
 /// too_old (behind) or too_new (ahead): an input the time-jump guard held, and the old time base
 /// went on. odometry_utime: ahead, the last odometry input when the odometry stopped more than
 /// the guard before it (the odometry is missing, not this input); INT64_MIN otherwise.
@@ -112,7 +134,7 @@ using EventFields =
     std::variant<events::Late, events::Outlier, events::CommandAhead, events::TimeJump, events::Lockout,
                  events::Recovered, events::Ambiguous, events::Restarted, events::NonFinite, events::FixNotMade,
                  events::FixGated, events::FixLockout, events::Fix, events::ImuSaturated, events::GapBridged,
-                 events::Answer, events::Relocalized>;
+                 events::Answer, events::Relocalized, events::ReleasedEarly, events::SensorSilence>;
 
 /// An event worth a human's attention at message time utime.
 struct EngineEvent {

@@ -3,6 +3,7 @@
 // between the inputs as they come and the canonical order the engine processes them in: by
 // utime, then by the rank of the input's kind (kCanonicalRank), then by a stable hash of its
 // channel, then by seq.
+#include <cstddef>
 #include <cstdint>
 #include <utility>
 
@@ -25,6 +26,8 @@ class InputOrder {
     virtual void process(const EngineInput& in) = 0;
     /// The reorder window refused in: a duplicate, or older than processed_utime, processed already.
     virtual void late(const EngineInput& in, bool duplicate, int64_t processed_utime) = 0;
+    /// The window held max_queued inputs: in, the oldest, goes to process() next, before its time.
+    virtual void releasedEarly(const EngineInput& in) = 0;
     /// The time-jump guard held in (ahead of, or behind, newest) and the old time base went on.
     virtual void outlier(const EngineInput& in, bool ahead, int64_t newest) = 0;
     /// A command more than the guard ahead of newest.
@@ -34,9 +37,14 @@ class InputOrder {
     virtual void timeJumped(const EngineInput& first, int64_t newest, bool back) = 0;
   };
 
-  /// window_us: EngineConfig::reorder_window_us; max_jump_us: EngineConfig::max_time_jump_us.
+  /// window_us: the horizon (EngineConfig::horizonUs()); max_jump_us: EngineConfig::max_time_jump_us;
+  /// max_queued: EngineConfig::max_queued (at least 1).
+  InputOrder(int64_t window_us, int64_t max_jump_us, std::size_t max_queued, Client& client)
+      : window_us_(window_us), max_jump_us_(max_jump_us), max_queued_(max_queued < 1 ? 1 : max_queued),
+        window_(window_us), guard_(max_jump_us), client_(client) {}
+  /// No memory bound (every input held for the window).
   InputOrder(int64_t window_us, int64_t max_jump_us, Client& client)
-      : window_us_(window_us), max_jump_us_(max_jump_us), window_(window_us), guard_(max_jump_us), client_(client) {}
+      : InputOrder(window_us, max_jump_us, SIZE_MAX, client) {}
 
   /// An input as it comes (FusionEngine::push). Returns false when it was refused.
   bool push(EngineInput&& in);
@@ -53,6 +61,9 @@ class InputOrder {
   void forEachQueued(F&& f) const { window_.forEachQueued(std::forward<F>(f)); }
   /// Inputs waiting in the window.
   std::size_t queued() const { return window_.size(); }
+  /// [us] The window (the horizon).
+  int64_t window() const { return window_us_; }
+  std::size_t maxQueued() const { return max_queued_; }
   /// Nothing queued, held or released: time starts over.
   void reset();
 
@@ -63,6 +74,7 @@ class InputOrder {
   bool take(EngineInput&& in, bool advance);
 
   int64_t window_us_, max_jump_us_;
+  std::size_t max_queued_;
   ReorderBuffer<EngineInput> window_;
   TimeBaseGuard<EngineInput> guard_;
   Client& client_;

@@ -73,6 +73,12 @@ class ReorderBuffer {
     while (!empty() && keys_[head_].key.utime < newest_utime_ - window_us_) pop(sink);
   }
 
+  /// Releases the oldest item, if any (the memory bound of the caller's horizon).
+  template <typename F>
+  void releaseOldest(F&& sink) {
+    if (!empty()) pop(sink);
+  }
+
   /// Releases everything (end of input / shutdown).
   template <typename F>
   void flush(F&& sink) {
