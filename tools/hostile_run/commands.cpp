@@ -12,7 +12,8 @@ namespace lcmloc::hostile {
 namespace {
 
 nlohmann::json runJson(const LiveRunResult& r) {
-  nlohmann::json j{{"poses", r.poses},
+  nlohmann::json j{{"figures_from", r.from_log ? "the logger's log" : "the watcher"},
+                   {"poses", r.poses},
                    {"non_finite_poses", r.non_finite},
                    {"scored", r.scored},
                    {"rmse_m", r.rmse},
@@ -100,7 +101,7 @@ int hostileCommand(const CommandOptions& c) {
   for (const auto& ch : b.live_channels) {
     const auto it = b.second_publisher.find(ch);
     named[ch] = it == b.second_publisher.end() ? nlohmann::json(nullptr) : nlohmann::json(it->second);
-    v.check("the status names the second publisher on " + ch, it != b.second_publisher.end(),
+    v.check("the status names the other publisher on " + ch, it != b.second_publisher.end(),
             it == b.second_publisher.end() ? "not named" : it->second);
   }
   std::cout << fmt::format("wall time: longest POSE silence {:.3f} s hostile, {:.3f} s clean (period {:.3f} s at "

@@ -27,6 +27,7 @@
 #include "lcmloc/fusion_status_t.hpp"
 #include "lcmloc/ground_truth_t.hpp"
 #include "lcmloc/hostile/messages.hpp"
+#include "lcmloc/logio/log_reader.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
 #include "lcmloc/wire.hpp"
@@ -135,17 +136,77 @@ double writeScenario(const LiveRunOptions& o, const std::string& path, const std
   return every / rate;
 }
 
+/// The system's outputs as seen: by the watcher (with the wall time each arrived) or in the
+/// logger's log.
+struct Track {
+  struct Pose { int64_t utime; double x, y; bool finite; Clock::time_point at; };
+  std::vector<Pose> poses;
+  std::vector<eval::TruthPose> truth;
+  std::map<std::string, std::string> second;  ///< channel -> the status's second_publisher (or source_replaced) words
+  std::string last_status;
+};
+
+/// Takes one message of the pose, truth or status channel into t; false for any other channel.
+bool take(const app::ChannelConfig& ch, const std::string& channel, const uint8_t* data, std::size_t n,
+          Clock::time_point at, Track& t) {
+  const int len = static_cast<int>(n);
+  if (channel == ch.pose) {
+    pose_t p{};
+    if (p.decode(data, 0, len) < 0 || p.state.size() < 2) return true;
+    bool finite = true;
+    for (double v : p.state) finite = finite && std::isfinite(v);
+    t.poses.push_back({p.utime, p.state[0], p.state[1], finite, at});
+  } else if (channel == ch.ground_truth) {
+    ground_truth_t g{};
+    if (g.decode(data, 0, len) >= 0) t.truth.push_back({g.utime, g.x, g.y, g.heading, true});
+  } else if (channel == ch.status) {
+    fusion_status_t s{};
+    if (s.decode(data, 0, len) < 0) return true;
+    const std::string on = s.detail.substr(0, s.detail.find(':'));
+    if (s.event == "second_publisher" && t.second[on].rfind("second_publisher", 0) != 0)
+      t.second[on] = "second_publisher: " + s.detail;
+    if (s.event == "source_replaced" && t.second[on].empty()) t.second[on] = "source_replaced: " + s.detail;
+    if (s.event == "periodic" || s.event == "stopped") t.last_status = s.detail;
+  } else {
+    return false;
+  }
+  return true;
+}
+
 /// What the watcher saw, filled by the receive thread.
 struct Seen {
   std::mutex mu;
-  std::vector<eval::TruthPose> truth;
-  struct Pose { int64_t utime; double x, y; bool finite; Clock::time_point at; };
-  std::vector<Pose> poses;
+  Track track;
   int64_t live_utime = 0;  ///< the last odometry message's time (the live time)
   std::set<std::string> live_channels;
-  std::map<std::string, std::string> second;
-  std::string last_status;
 };
+
+/// POSE's count, NaN, message-time steps, and its error against the truth into r.
+void score(Track& t, double period, LiveRunResult& r) {
+  std::sort(t.truth.begin(), t.truth.end(), [](const auto& a, const auto& b) { return a.utime < b.utime; });
+  t.second.erase("");
+  double sq = 0;
+  for (std::size_t i = 0; i < t.poses.size(); ++i) {
+    const auto& p = t.poses[i];
+    ++r.poses;
+    if (!p.finite) ++r.non_finite;
+    if (i > 0) {
+      const double step = (p.utime - t.poses[i - 1].utime) * 1e-6;
+      r.max_gap_msg_s = std::max(r.max_gap_msg_s, step);
+      r.gaps_over += step > 2 * period;
+    }
+    const auto truth = p.finite ? eval::interpolateTruth(t.truth, p.utime, 100'000) : std::nullopt;
+    if (!truth) continue;
+    const double e = std::hypot(p.x - truth->x, p.y - truth->y);
+    sq += e * e;
+    r.max_error = std::max(r.max_error, e);
+    ++r.scored;
+  }
+  r.rmse = r.scored ? std::sqrt(sq / static_cast<double>(r.scored)) : NAN;
+  for (const auto& [ch, words] : t.second)
+    if (!words.empty()) r.second_publisher[ch] = words;
+  r.last_status = t.last_status;
+}
 
 /// The second publisher: each kind of bad message on every input channel, round robin, its own
 /// seq streams far from the system's, times near the live time (the time kinds: their own).
@@ -155,12 +216,17 @@ class Hostile {
     for (const auto& fault : ch.magruler)  // (kinds() has the first ruler channel only)
       if (fault != kinds_[1].channel) kinds_.push_back({fault, kinds_[1].make});
   }
-  /// Publishes the next message(s); returns how many.
-  int sendNext(lcm::LCM& lcm, int64_t live, std::map<std::string, int64_t>& per_channel) {
+  /// Publishes the next message(s); returns how many. With second_only, nothing on a channel that
+  /// the system's own drivers publish on (odometry, ruler) before its own stream was seen there.
+  int sendNext(lcm::LCM& lcm, int64_t live, const std::set<std::string>& seen, bool second_only,
+               std::map<std::string, int64_t>& per_channel) {
     const std::size_t n_bad = badKinds().size() + 2;  // + a wrong but decodable one, + a control command
     const std::size_t slot = next_++ % ((kinds_.size()) * n_bad);
     const Kind& kind = kinds_[slot % kinds_.size()];
     const std::size_t what = slot / kinds_.size();
+    const bool driven = kind.channel == ch_.odometry ||
+                        std::find(ch_.magruler.begin(), ch_.magruler.end(), kind.channel) != ch_.magruler.end();
+    if (what != n_bad - 1 && second_only && driven && !seen.count(kind.channel)) return 0;
     std::uniform_int_distribution<int64_t> jitter(-20'000, 20'000);
     const int64_t t = live + jitter(rng_), s = kSeqBase + seq_[kind.channel]++;
     if (what == n_bad - 1) {
@@ -213,7 +279,12 @@ LiveRunResult runLive(const LiveRunOptions& o) {
   if (waitUntil(sim, Clock::now() + std::chrono::seconds(60)) != 0)
     throw std::runtime_error("lcmloc-sim --write-map failed (" + o.out_dir + "/write_map.out)");
 
-  lcm::LCM lcm(o.lcm_url), out(o.lcm_url);
+  // The watcher's socket gets a receive buffer as the system's (a POSE lost by a slow watcher would
+  // read as a gap).
+  const bool udpm = o.lcm_url.rfind("udpm://", 0) == 0 && o.lcm_url.find("recv_buf_size") == std::string::npos;
+  const std::string watch_url =
+      udpm ? o.lcm_url + (o.lcm_url.find('?') == std::string::npos ? "?" : "&") + "recv_buf_size=8388608" : o.lcm_url;
+  lcm::LCM lcm(watch_url), out(o.lcm_url);
   if (!lcm.good() || !out.good()) throw std::runtime_error("cannot open LCM on " + o.lcm_url);
   Seen seen;
   std::vector<std::string> inputs{cfg.channels.odometry, cfg.channels.imu, cfg.channels.gps, cfg.channels.landmarks,
@@ -228,25 +299,11 @@ LiveRunResult runLive(const LiveRunOptions& o) {
   auto onRaw = [&](const lcm::ReceiveBuffer* rb, const std::string& channel) {
     const auto* data = static_cast<const uint8_t*>(rb->data);
     const std::size_t n = rb->data_size;
-    if (channel == cfg.channels.pose) {
-      pose_t p{};
-      if (p.decode(data, 0, static_cast<int>(n)) < 0 || p.state.size() < 2) return;
-      bool finite = true;
-      for (double v : p.state) finite = finite && std::isfinite(v);
+    {
       std::lock_guard<std::mutex> l(seen.mu);
-      seen.poses.push_back({p.utime, p.state[0], p.state[1], finite, Clock::now()});
-    } else if (channel == cfg.channels.ground_truth) {
-      ground_truth_t g{};
-      if (g.decode(data, 0, static_cast<int>(n)) < 0) return;
-      std::lock_guard<std::mutex> l(seen.mu);
-      seen.truth.push_back({g.utime, g.x, g.y, g.heading, true});
-    } else if (channel == cfg.channels.status) {
-      fusion_status_t s{};
-      if (s.decode(data, 0, static_cast<int>(n)) < 0) return;
-      std::lock_guard<std::mutex> l(seen.mu);
-      if (s.event == "second_publisher") seen.second[s.detail.substr(0, s.detail.find(':'))] = s.detail;
-      if (s.event == "periodic" || s.event == "stopped") seen.last_status = s.detail;
-    } else {  // an input channel
+      if (take(cfg.channels, channel, data, n, Clock::now(), seen.track)) return;
+    }
+    {  // an input channel
       const std::string bytes(reinterpret_cast<const char*>(data), n);
       if (ours.erase(bytes)) return;
       // Every input type starts with utime and seq after its fingerprint: the system's own seqs
@@ -307,16 +364,18 @@ LiveRunResult runLive(const LiveRunOptions& o) {
       }
     }
     int64_t live = 0;
+    std::set<std::string> live_channels;
     {
       std::lock_guard<std::mutex> l(seen.mu);
       live = seen.live_utime;
+      live_channels = seen.live_channels;
     }
     if (o.disturbance == Disturbance::kHostile && live > 0) {
       while (next_send <= now) {
         std::lock_guard<std::mutex> l(sent_mu);
-        const int n = hostile.sendNext(out, live, sent_per_channel);  // (a flood: its copies count)
+        const int n = hostile.sendNext(out, live, live_channels, !o.hostile_first, sent_per_channel);
         sent += n;
-        next_send += std::chrono::duration_cast<Clock::duration>(gap * n);
+        next_send += std::chrono::duration_cast<Clock::duration>(gap * n);  // (a flood: its copies count)
       }
     } else {
       next_send = now;
@@ -339,33 +398,25 @@ LiveRunResult runLive(const LiveRunOptions& o) {
   rx.join();
 
   std::lock_guard<std::mutex> l(seen.mu);
-  if (seen.poses.empty()) throw std::runtime_error("no POSE from the system (" + o.out_dir + "/launcher.out)");
-  std::sort(seen.truth.begin(), seen.truth.end(), [](const auto& a, const auto& b) { return a.utime < b.utime; });
-  double sq = 0;
-  for (std::size_t i = 0; i < seen.poses.size(); ++i) {
-    const auto& p = seen.poses[i];
-    ++r.poses;
-    if (!p.finite) ++r.non_finite;
-    if (i > 0) {
-      const double step = (p.utime - seen.poses[i - 1].utime) * 1e-6, silence = seconds(p.at - seen.poses[i - 1].at);
-      r.max_gap_msg_s = std::max(r.max_gap_msg_s, step);
-      r.max_silence_wall_s = std::max(r.max_silence_wall_s, silence);
-      r.gaps_over += step > 2 * r.pose_period_s;
-      r.silences_over += silence > 2 * r.pose_period_s / std::max(o.factor, 1e-9);
-    }
-    const auto t = p.finite ? eval::interpolateTruth(seen.truth, p.utime, 100'000) : std::nullopt;
-    if (!t) continue;
-    const double e = std::hypot(p.x - t->x, p.y - t->y);
-    sq += e * e;
-    r.max_error = std::max(r.max_error, e);
-    ++r.scored;
+  if (seen.track.poses.empty()) throw std::runtime_error("no POSE from the system (" + o.out_dir + "/launcher.out)");
+  for (std::size_t i = 1; i < seen.track.poses.size(); ++i) {  // wall time: the watcher's
+    const double silence = seconds(seen.track.poses[i].at - seen.track.poses[i - 1].at);
+    r.max_silence_wall_s = std::max(r.max_silence_wall_s, silence);
+    r.silences_over += silence > 2 * r.pose_period_s / std::max(o.factor, 1e-9);
   }
-  r.rmse = r.scored ? std::sqrt(sq / static_cast<double>(r.scored)) : NAN;
+  // Message time, errors and the status: from the logger's log (a recorder with a large receive
+  // buffer), or the watcher's when there is none.
+  Track recorded;
+  if (fs::exists(log)) {
+    logio::scanLog(log, [&](const logio::RawEvent& e) {
+      take(cfg.channels, *e.channel, e.data, static_cast<std::size_t>(e.size), Clock::time_point{}, recorded);
+    });
+  }
+  r.from_log = !recorded.poses.empty();
+  score(r.from_log ? recorded : seen.track, r.pose_period_s, r);
   r.sent = sent;
   r.sent_per_channel = sent_per_channel;
   r.live_channels = seen.live_channels;
-  r.second_publisher = seen.second;
-  r.last_status = seen.last_status;
   r.daemon_pids = static_cast<int>(daemons.size());
   return r;
 }

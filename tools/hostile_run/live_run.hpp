@@ -5,7 +5,9 @@
 // Beside the system, on the same URL, one of:
 //  - nothing (the clean run);
 //  - a second publisher that sends each kind of bad message (lcmloc/hostile/messages.hpp) on
-//    every input channel, round robin, with its own seq stream and times near the live time;
+//    every input channel, round robin, with its own seq stream and times near the live time (on
+//    the odometry's and the ruler's channels once the system's own stream is there, unless
+//    hostile_first);
 //  - a corrupter that republishes a corrupted copy of a random fraction of the messages on the
 //    daemon's input channels (one byte flipped, the body cut, or random bytes of the same size).
 #include <cstdint>
@@ -29,11 +31,16 @@ struct LiveRunOptions {
   double duration_s = 0;     ///< [s, wall] stop the system after this long; 0: when the simulation ends
   Disturbance disturbance = Disturbance::kNone;
   double hostile_rate = 1000;  ///< hostile messages per second [1/s, wall]
+  /// false: on a channel the system's drivers publish on (odometry, ruler) the hostile publisher
+  /// starts after the system's own stream (a second publisher); true: from the start (it may be
+  /// the first there).
+  bool hostile_first = false;
   double corrupt_fraction = 0.01;
   uint64_t seed = 1;
 };
 
 struct LiveRunResult {
+  bool from_log = false;                   ///< the POSE figures are the logger's log's (else the watcher's)
   int64_t poses = 0, non_finite = 0;       ///< POSE messages, of which with a NaN or Inf
   double rmse = 0, max_error = 0;          ///< [m] POSE against the interpolated ground truth
   int64_t scored = 0;                      ///< poses scored (within the truth)
@@ -45,7 +52,9 @@ struct LiveRunResult {
   int64_t sent = 0;                        ///< disturbing messages sent
   std::map<std::string, int64_t> sent_per_channel;
   std::set<std::string> live_channels;     ///< input channels the system itself published on
-  std::map<std::string, std::string> second_publisher;  ///< channel -> the status's words on it
+  /// channel -> the status's words on its other stream ("second_publisher: ..." or, when the
+  /// system's own publisher was silent long enough to be taken for restarted, "source_replaced: ...")
+  std::map<std::string, std::string> second_publisher;
   std::string last_status;                 ///< detail of the daemon's last periodic status
   std::vector<std::pair<double, int64_t>> rss_kb;  ///< (wall s since start, daemon VmRSS kB)
   int daemon_pids = 0;                     ///< lcmloc-fusion processes seen (1: never restarted)

@@ -34,6 +34,8 @@ int main(int argc, char** argv) {
   hostile->add_option("-o,--output", c.run.out_dir, "output directory")->capture_default_str();
   hostile->add_option("--rate", c.run.hostile_rate, "hostile messages per second (each copy of a flood counts)")
       ->capture_default_str()->check(app::positive());
+  hostile->add_flag("--first", c.run.hostile_first, "on the odometry's and the ruler's channels, send from the "
+                    "start, not once the system's own stream is there (the hostile publisher may come first)");
   auto* soak = app.add_subcommand("soak", "a long run with corrupted input messages (default scenario: oval.yaml, "
                                           "laps enough for --duration)");
   double duration = 600, fraction = 0.01;

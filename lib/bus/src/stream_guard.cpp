@@ -9,9 +9,14 @@ namespace {
 
 bool goesOn(int64_t last, int64_t seq) { return seq == last || (seq > last && seq - last <= StreamGuard::kMaxAhead); }
 
+/// A message more than kMaxStepUs after its stream's last time does not move the stream's time:
+/// one message with a huge time would otherwise make the stream span kSilenceUs at once (and
+/// replace the established stream with its next kReplaceAfter messages).
+constexpr int64_t kMaxStepUs = 5 * StreamGuard::kSilenceUs;
+
 void add(int64_t seq, int64_t utime, int64_t& last_seq, int64_t& last_utime) {
   last_seq = std::max(last_seq, seq);
-  last_utime = std::max(last_utime, utime);
+  if (utime <= last_utime || utime - last_utime <= kMaxStepUs) last_utime = std::max(last_utime, utime);
 }
 
 }  // namespace
