@@ -30,12 +30,10 @@ int run(const std::string& args, const std::string& out) {
 
 class HostileRun : public ProcessFixture {};
 
-// Disabled: it fails today, and says why (docs/hostile_run.md, "Findings"). A second publisher
-// that starts before the system's own on a channel whose genuine publisher is quiet at first
-// (MAGRULER publishes at the markers only) becomes that channel's established stream: the
-// genuine ruler is then held apart as the second publisher, the hostile detections lock the gate
-// out and are taken after it: RMSE 22 m against 0.023 m clean. Run it with
-// --gtest_also_run_disabled_tests.
+// Disabled: the RMSE bound fails today (docs/hostile_run.md, "Findings": 0.115 m against 0.023 m).
+// The fault injector publishes on MAGRULER_FAULT twice in the whole run; the second publisher's
+// stream there is taken as a restart would be, and some of its detections pass the gate. Run it
+// with --gtest_also_run_disabled_tests.
 TEST_F(HostileRun, DISABLED_ASecondPublisherOnEveryInputChannelOfTheRunningSystem) {
   const int rc = run("--lcm-url '" + url_ + "' --factor 2 hostile -o " + path("out"), path("run.txt"));
   const auto j = readJson(path("out/report.json"));
