@@ -28,35 +28,36 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(app::positive());
   app.add_option("--seed", c.run.seed, "seed of the disturber's choices")->capture_default_str()->check(app::seed());
   app.add_option("--report", c.report, "report file (JSON; default OUTPUT/report.json)");
+  std::string out_dir;
+  double duration = 600, fraction = 0.01;
+  app.add_option("-o,--output", out_dir, "output directory (default out/hostile, out/soak)");
+  app.add_option("--rate", c.run.hostile_rate, "hostile: messages per second (each copy of a flood counts)")
+      ->capture_default_str()->check(app::positive());
+  app.add_flag("--first", c.run.hostile_first, "hostile: on the odometry's and the ruler's channels, send from the "
+               "start, not once the system's own stream is there (the hostile publisher may come first)");
+  app.add_option("--duration", duration, "soak: [s, wall] run length")->capture_default_str()
+      ->check(app::positive() & app::wallSeconds());
+  app.add_option("--corrupt", fraction, "soak: fraction of the input messages corrupted")->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   app.require_subcommand(1);
   auto* hostile = app.add_subcommand("hostile", "clean run, then hostile run (default scenario: --config)");
-  c.run.out_dir = "out/hostile";
-  hostile->add_option("-o,--output", c.run.out_dir, "output directory")->capture_default_str();
-  hostile->add_option("--rate", c.run.hostile_rate, "hostile messages per second (each copy of a flood counts)")
-      ->capture_default_str()->check(app::positive());
-  hostile->add_flag("--first", c.run.hostile_first, "on the odometry's and the ruler's channels, send from the "
-                    "start, not once the system's own stream is there (the hostile publisher may come first)");
   auto* soak = app.add_subcommand("soak", "a long run with corrupted input messages (default scenario: oval.yaml, "
                                           "laps enough for --duration)");
-  double duration = 600, fraction = 0.01;
-  std::string soak_out = "out/soak";
-  soak->add_option("-o,--output", soak_out, "output directory")->capture_default_str();
-  soak->add_option("--duration", duration, "[s, wall] run length")->capture_default_str()
-      ->check(app::positive() & app::wallSeconds());
-  soak->add_option("--corrupt", fraction, "fraction of the input messages corrupted")->capture_default_str()
-      ->check(CLI::Range(0.0, 1.0));
+  hostile->fallthrough();
+  soak->fallthrough();
 
   return app::runProcess(app, argc, argv, opts, "lcmloc-hostile-run", [&] {
     c.run.lcm_url = opts.lcm_url;
     c.run.scenario = opts.config;
     if (*soak) {
       if (app.get_option("--config")->count() == 0) c.run.scenario = app::configDir() + "/oval.yaml";
-      c.run.out_dir = soak_out;
+      c.run.out_dir = out_dir.empty() ? "out/soak" : out_dir;
       c.run.duration_s = duration;
       c.run.corrupt_fraction = fraction;
       c.run.laps = 0;
       return hostile::soakCommand(c);
     }
+    c.run.out_dir = out_dir.empty() ? "out/hostile" : out_dir;
     return hostile::hostileCommand(c);
   });
 }
