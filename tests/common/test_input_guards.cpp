@@ -120,6 +120,29 @@ TEST(StreamGuard, ASlowEstablishedStreamIsNotReplacedByAFastIntruderWhichIsHeldA
   EXPECT_EQ(held, 90);
 }
 
+// A sparse established stream (a ruler publishing at markers, one message every 1.3 s) and a
+// second publisher at 20 Hz near the live time with one message far in the future among them:
+// that one message does not make the intruder span the established stream's silence at once
+// (it replaced the ruler 0.66 s after the ruler's last message, in the live hostile run).
+TEST(StreamGuard, OneFarFutureTimeAmongAnIntrudersMessagesDoesNotReplaceASparseStream) {
+  bus::StreamGuard g;
+  g.observe("MAGRULER", 0, kT0);
+  int64_t held = 0;
+  for (int k = 0; k < 60; ++k) {  // 3 s at 20 Hz from 50 ms after the ruler's first message
+    const int64_t t = kT0 + 50'000 + k * 50'000;
+    if (k == 26) {
+      EXPECT_EQ(g.observe("MAGRULER", 1, kT0 + 1'330'000).kind, Kind::Taken);  // the ruler's next
+    }
+    if (k == 52) {
+      EXPECT_EQ(g.observe("MAGRULER", 2, kT0 + 2'660'000).kind, Kind::Taken);
+    }
+    const auto v = g.observe("MAGRULER", 1'000'000'000 + k, k == 3 ? int64_t{1} << 61 : t);
+    EXPECT_NE(v.kind, Kind::Replaced) << k;
+    held += v.held();
+  }
+  EXPECT_EQ(held, 60 - 26);  // held from the ruler's next message on
+}
+
 namespace {
 core::EngineInput odo(const std::string& ch, int64_t utime, double ds, double dth, double steering = 0, bool car = false) {
   core::OdometryInput o;

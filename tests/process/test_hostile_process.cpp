@@ -3,6 +3,7 @@
 // pose finite, and POSE at the odometry's rate in message time.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -44,12 +45,20 @@ TEST_F(HostileProcess, EveryKindOfBadMessageOnEveryInputChannelOfARunningDaemon)
   } sink{&mu, &poses, &status};
   lcm.subscribe(cfg.channels.pose, &Sink::pose, &sink);
   lcm.subscribe(cfg.channels.status, &Sink::st, &sink);
-  bool stop = false;
+  std::atomic<bool> stop{false};
   std::thread rx([&] {
     while (!stop) lcm.handleTimeout(20);
   });
-  // Wait for the daemon to listen (its "started" status).
-  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  struct Join {  // (a failed ASSERT returns early: the thread is joined, not left to terminate())
+    std::atomic<bool>& stop;
+    std::thread& t;
+    ~Join() {
+      stop = true;
+      if (t.joinable()) t.join();
+    }
+  } join{stop, rx};
+  // Wait for the daemon to listen (its "started" status; slow on a loaded machine).
+  const auto deadline = std::chrono::steady_clock::now() + 30s;
   auto started = [&] {
     std::lock_guard<std::mutex> l(mu);
     for (const auto& s : status)

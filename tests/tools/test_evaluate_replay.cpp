@@ -577,7 +577,7 @@ TEST_F(EvaluateReplayTest, CommandLineFailsWhenNothingIsUsable) {
   EXPECT_EQ(evaluate(file("adir"), opts), 2);
   EXPECT_NE(slurp(file("stdout.txt")).find("is a directory"), std::string::npos) << slurp(file("stdout.txt"));
   { std::ofstream empty(file("empty.lcmlog")); }
-  EXPECT_EQ(evaluate(file("empty.lcmlog"), opts), 1);
+  EXPECT_EQ(evaluate(file("empty.lcmlog"), opts), 3);  // nothing to evaluate: an empty file is damaged input
   writeRun(file("run.lcmlog"), false);
   EXPECT_EQ(evaluate(file("run.lcmlog"), "--filters nope --no-plots --overwrite -o " + file("out")), 2);
   EXPECT_EQ(evaluate(file("run.lcmlog"), "--filters ukf,ukf --no-plots --overwrite -o " + file("out")), 2);

@@ -13,7 +13,7 @@ int main(int argc, char** argv) {
                "recorded with them: position, heading and drift errors, NEES against its chi-square bounds, gate "
                "statistics; writes report.json, PNG figures and TUM files (docs/evaluate.md). Exit: 0 done, 1 nothing "
                "to evaluate, 2 bad options or config, 3 done from a damaged log (its intact events; each damaged "
-               "place reported)."};
+               "place reported), or nothing to evaluate in a damaged, empty or not-a-log file."};
   eval::EvaluateCommand command;
   app::CommonOptions opts;
   eval::addEvaluateOptions(app, command);

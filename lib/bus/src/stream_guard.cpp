@@ -15,9 +15,14 @@ bool goesOn(int64_t last, int64_t seq) {
   return seq == last || (seq > last && !core::apartBy(seq, last, StreamGuard::kMaxAhead));
 }
 
+/// A message more than kMaxStepUs after its stream's last time does not move the stream's time:
+/// one message with a huge time would otherwise make the stream span kSilenceUs at once (and
+/// replace the established stream with its next kReplaceAfter messages).
+constexpr int64_t kMaxStepUs = 5 * StreamGuard::kSilenceUs;
+
 void add(int64_t seq, int64_t utime, int64_t& last_seq, int64_t& last_utime) {
   last_seq = std::max(last_seq, seq);
-  last_utime = std::max(last_utime, utime);
+  if (!core::apartBy(utime, last_utime, kMaxStepUs)) last_utime = std::max(last_utime, utime);
 }
 
 }  // namespace

@@ -9,6 +9,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <sys/stat.h>
+
 #include <lcm/lcm-cpp.hpp>
 
 #include "lcmloc/wire.hpp"
@@ -73,6 +75,14 @@ LogScanner::LogScanner(const std::string& path, std::vector<LogIssue>* issues)
   impl_->file.reset(std::fopen(path.c_str(), "rb"));
   if (!impl_->file) throw std::runtime_error("cannot open log '" + path + "' for reading");
   std::setvbuf(impl_->file.get(), impl_->iobuf.data(), _IOFBF, impl_->iobuf.size());
+  if (file_size_ == 0 && issues_)
+    issues_->push_back({0, 0, "empty file (0 bytes): no LCM event; not a log, or one whose writer had not written "
+                              "an event yet"});
+}
+
+int64_t LogScanner::currentFileSize() const {
+  struct stat st {};
+  return ::fstat(fileno(impl_->file.get()), &st) == 0 ? static_cast<int64_t>(st.st_size) : file_size_;
 }
 
 LogScanner::~LogScanner() = default;
@@ -88,6 +98,12 @@ void LogScanner::closeDamage(int64_t resume_at) {
   else if (resume_at >= file_size_)
     s << "log ends in a damaged or truncated event: the last " << skipped << " bytes from byte "
       << dmg_start_ << " could not be read (" << events_read_ << " events read before)";
+  if (resume_at >= file_size_) {
+    const int64_t now = currentFileSize();
+    if (now > file_size_)
+      s << "; the file has grown to " << now << " bytes since it was opened with " << file_size_
+        << " (still being written?): what was added was not read";
+  }
   else
     s << "damaged event at byte " << dmg_start_ << ": skipped " << skipped
       << " bytes, resumed at byte " << resume_at;
@@ -135,9 +151,10 @@ const lcm::LogEvent* LogScanner::next() {
       dmg_event_index_ = events_read_;
       dmg_start_ = pos_;
     }
-    const int64_t next = findSync(impl_->file.get(), pos_ + 1);  // resynchronise
+    // Resynchronise; a sync word past the size at opening (a file still being written) is not read.
+    const int64_t next = findSync(impl_->file.get(), pos_ + 1);
     impl_->file_pos = -1;
-    if (next < 0) {
+    if (next < 0 || next >= file_size_) {
       closeDamage(file_size_);
       pos_ = file_size_;
       return nullptr;

@@ -205,7 +205,8 @@ int runEvaluate(EvaluateCommand c) {
                   lo.pose_channel, lo.all_pose_channels ? " or POSE_*" : "", log.events_read,
                   channelList(log.channel_counts),
                   c.filters.empty() ? ". A log of sensor channels is replayed and scored with --filters TYPE,..." : "");
-    return kExitNothingUsable;
+    // (nothing to evaluate in a damaged log: an empty one, one that is no log: the damage is why)
+    return log.damaged ? static_cast<int>(app::kExitInputDamaged) : kExitNothingUsable;
   }
   if (log.tracks.front().poses.empty() && c.filters.empty())  // (a sensor log to replay has none)
     spdlog::warn("{}: no estimates on {}; scoring {}", log_path, lo.pose_channel, withoutControlCharacters(tracks.front().channel));

@@ -259,7 +259,7 @@ int toCsv(const std::string& path, const std::vector<std::string>& channel_regex
       spdlog::error("no decodable events of lcmloc's types in {}", path);
     else
       spdlog::error("no decodable events on channels matching '{}' in {}", fmt::join(channel_regexes, "|"), path);
-    return app::kExitRuntimeError;
+    return s.damaged ? app::kExitInputDamaged : app::kExitRuntimeError;  // (an empty file, no log: the damage is why)
   }
   for (auto& [ch, cols] : columns) {
     if (cols.size() > kMaxColumns)

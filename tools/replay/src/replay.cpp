@@ -402,7 +402,7 @@ ReplayResult replayLog(const app::SystemConfig& cfg, const ReplayOptions& opts) 
     replayInline(reader, applier, r);
   daemon.shutdown();
   bus.close();
-  r.damaged = r.bytes_unreadable > 0;
+  r.damaged = r.bytes_unreadable > 0 || r.file_size == 0;  // (an empty file: LogScanner::damaged)
   r.messages_in = daemon.messagesIn();
   r.used = daemon.processed();
   r.rejected = daemon.rejected();

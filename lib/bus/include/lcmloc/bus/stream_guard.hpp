@@ -34,7 +34,8 @@ struct StreamVerdict {
 ///    since the other began (a restarted publisher, a lone corrupt seq), held once it has (two
 ///    publishers); when the established stream stays silent for kReplaceAfter of the other's
 ///    messages in a row spanning at least kSilenceUs of their message time, the other replaces
-///    it (one message with a wrong time cannot);
+///    it (one message with a wrong time cannot: a message more than 5 kSilenceUs after its
+///    stream's last time does not move that stream's time);
 ///  - neither: it starts the other stream, and is taken (a corrupt seq costs nothing; what a
 ///    lone wrong message can do is bounded by the fusion's input checks).
 /// Two publishers whose seqs interleave within kMaxAhead of each other are not told apart.

@@ -61,7 +61,10 @@ std::vector<std::string> uniqueStems(const std::vector<std::string>& names);
 /// reader also rejects an intact event when the sync word after it is damaged, and cannot say
 /// where an event starts. Damage (a truncated tail, a corrupt event) is skipped by
 /// resynchronising on the next sync word; each damaged stretch is appended to issues with the
-/// index of the event it precedes and its byte offset. scanLog, readTrajectoryLog and the offline
+/// index of the event it precedes and its byte offset. The file is read up to its size when it was
+/// opened: a file that grows while it is read (a logger still writing) is read to that size, a
+/// partial last event there is reported as a truncated tail (saying that the file has grown), and
+/// what was added after the opening is not read. An empty file is reported as damaged. scanLog, readTrajectoryLog and the offline
 /// replay (lcmloc-replay) all read through it.
 class LogScanner {
  public:
@@ -78,10 +81,12 @@ class LogScanner {
   int64_t fileSize() const { return file_size_; }
   int64_t eventsRead() const { return events_read_; }     ///< intact events returned
   int64_t bytesUnreadable() const { return bytes_unreadable_; }
-  bool damaged() const { return bytes_unreadable_ > 0; }
+  /// Damaged: bytes that could not be read, or an empty file (no event at all; recorded as an issue).
+  bool damaged() const { return bytes_unreadable_ > 0 || file_size_ == 0; }
 
  private:
   bool readEventAt(int64_t pos);
+  int64_t currentFileSize() const;  ///< the file's size now (it may grow while it is read)
   void closeDamage(int64_t resume_at);
   struct Impl;
   std::unique_ptr<Impl> impl_;
