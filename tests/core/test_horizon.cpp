@@ -95,6 +95,20 @@ TEST(Horizon, AnInputLaterThanTheHorizonIsCountedPerChannelWithItsLateness) {
   EXPECT_EQ(late[2].detail, "ODOMETRY seq 30 utime 1300000: duplicate");
 }
 
+TEST(Horizon, TheLatenessOfACorruptTimeFarInThePastIsSaturatedNotOverflowed) {
+  EngineConfig c;
+  c.reorder_window_us = 100000;
+  c.max_time_jump_us = 0;  // no time-jump guard: the corrupt time reaches the reorder window
+  Recorder r;
+  FusionEngine e(c, {}, r.outputs());
+  for (int k = 0; k <= 30; ++k) ASSERT_TRUE(e.push(odo((int64_t{1} << 62) + k * 10000, k)));
+  EXPECT_FALSE(e.push(gps(INT64_MIN + 5, 0)));  // newest - its time does not fit in int64
+  EXPECT_EQ(e.lateInputs().at("GPS").max_lateness_us, INT64_MAX);
+  const auto late = r.named("too_old");
+  ASSERT_EQ(late.size(), 1u);
+  EXPECT_NE(late[0].detail.find("it came 13835058055282."), std::string::npos) << late[0].detail;
+}
+
 TEST(Horizon, AtItsMemoryBoundTheOldestIsReleasedEarlyCountedAndSaidOncePerStretch) {
   EngineConfig c;
   c.reorder_window_us = 1000000;  // 1 s: 100 odometry inputs at 100 Hz
@@ -131,7 +145,9 @@ TEST(Horizon, AWatchedSensorThatStopsIsSaidOnceAndOnceWhenItResumesAndNothingSta
   auto drive = [&](int64_t from, int64_t to, bool with_gps) {
     for (int64_t t = from; t < to; t += 10000) {
       ASSERT_TRUE(e.push(odo(t, seq++)));
-      if (with_gps && t % 100000 == 0) ASSERT_TRUE(e.push(gps(t, gps_seq++)));
+      if (with_gps && t % 100000 == 0) {
+        ASSERT_TRUE(e.push(gps(t, gps_seq++)));
+      }
     }
   };
   drive(1000000, 3000000, true);

@@ -177,7 +177,9 @@ lcmloc::pose_t lastPose(const std::string& log) {
   lcmloc::pose_t p;
   const auto all = payloads(log, "POSE");
   EXPECT_FALSE(all.empty());
-  if (!all.empty()) EXPECT_GE(p.decode(all.back().data(), 0, static_cast<int>(all.back().size())), 0);
+  if (!all.empty()) {
+    EXPECT_GE(p.decode(all.back().data(), 0, static_cast<int>(all.back().size())), 0);
+  }
   return p;
 }
 

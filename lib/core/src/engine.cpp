@@ -118,7 +118,7 @@ struct FusionEngine::Impl final : InputOrder::Client {
     if (!duplicate && newest != INT64_MIN && newest >= in.utime) {
       LateInputs& l = late_inputs[in.channel];
       ++l.count;
-      l.max_lateness_us = std::max(l.max_lateness_us, newest - in.utime);
+      l.max_lateness_us = std::max(l.max_lateness_us, timeApart(newest, in.utime));
     }
     out.event(EventKind::TooOld, in.utime, events::Late{refOf(in), duplicate, processed_utime, newest, order.window()});
   }

@@ -23,8 +23,8 @@ std::string text(const events::Late& e) {
   if (e.newest == INT64_MIN || e.newest < e.input.utime) return s;
   char t[200];
   std::snprintf(t, sizeof t, " (%.3f s behind it); it came %.3f s after its time (the newest input: utime %lld), "
-                "the horizon is %.3f s", static_cast<double>(e.processed_utime - e.input.utime) * 1e-6,
-                static_cast<double>(e.newest - e.input.utime) * 1e-6, static_cast<long long>(e.newest),
+                "the horizon is %.3f s", secondsBetween(e.processed_utime, e.input.utime),
+                secondsBetween(e.newest, e.input.utime), static_cast<long long>(e.newest),
                 static_cast<double>(e.horizon_us) * 1e-6);
   return s + t;
 }
@@ -42,7 +42,7 @@ std::string text(const events::SensorSilence& e) {
   if (e.stopped)
     std::snprintf(t, sizeof t, ": no input since utime %lld, %.3f s of message time before the newest input (utime "
                   "%lld), more than %.3f s (its period %.3f s)", static_cast<long long>(e.last_utime),
-                  static_cast<double>(e.newest - e.last_utime) * 1e-6, static_cast<long long>(e.newest),
+                  secondsBetween(e.newest, e.last_utime), static_cast<long long>(e.newest),
                   static_cast<double>(e.limit_us) * 1e-6, static_cast<double>(e.period_us) * 1e-6);
   else
     std::snprintf(t, sizeof t, ": input again at utime %lld after none since utime %lld",

@@ -10,6 +10,7 @@
 
 #include "lcmloc/core/engine_config.hpp"
 #include "lcmloc/core/engine_events.hpp"
+#include "lcmloc/core/time_guard.hpp"
 
 namespace lcmloc::core {
 
@@ -36,7 +37,7 @@ class SensorWatch {
       if (!w.seen) {  // its clock starts with the first input of any channel
         w.last = newest;
         w.seen = true;
-      } else if (!w.stopped && newest - w.last > w.limit_us) {
+      } else if (!w.stopped && apartBy(newest, w.last, w.limit_us)) {
         w.stopped = true;
         said(EventKind::SensorStopped, newest, events::SensorSilence{name, true, w.last, newest, w.period_us, w.limit_us});
       }

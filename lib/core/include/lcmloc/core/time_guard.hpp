@@ -27,6 +27,16 @@ inline bool apartBy(int64_t a, int64_t b, int64_t limit) {
   return d > limit;
 }
 
+/// a - b [us], saturated to the int64 range where it does not fit (corrupt utimes).
+inline int64_t timeApart(int64_t a, int64_t b) {
+  int64_t d;
+  if (__builtin_sub_overflow(a, b, &d)) return a > b ? INT64_MAX : INT64_MIN;
+  return d;
+}
+
+/// a - b [s] (any two utimes: in doubles, never overflowing).
+inline double secondsBetween(int64_t a, int64_t b) { return (static_cast<double>(a) - static_cast<double>(b)) * 1e-6; }
+
 /// Whole seconds from b to a (a >= b), saturated where the difference does not fit.
 inline int64_t secondsApart(int64_t a, int64_t b) {
   int64_t d;
