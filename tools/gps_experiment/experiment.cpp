@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "lcmloc/core/angles.hpp"
 #include "lcmloc/core/scoring.hpp"
 #include "lcmloc/eval/gnuplot.hpp"
 #include "lcmloc/eval/report.hpp"
@@ -121,10 +122,17 @@ bool writeReport(const Result& r, const Options& opt, const std::string& dir) {
   std::string plot_a, plot_b;
   for (const auto& f : r.scenario.filters) {
     std::ofstream d(dir + "/" + f.filter + ".dat");
-    d << "# t[s] x y err\n";
-    for (const auto& p : f.track)
+    d << "# t[s] x y err heading_err[rad]";
+    for (const auto& c : f.track.empty() ? std::vector<core::CalibrationValue>{} : core::calibrationValues(f.track.front().estimate))
+      d << ' ' << c.name << ' ' << c.name << "_sigma";
+    d << '\n';
+    for (const auto& p : f.track) {
       d << (p.utime - t0) * 1e-6 << ' ' << p.estimate.x[0] << ' ' << p.estimate.x[1] << ' '
-        << std::hypot(p.estimate.x[0] - p.truth.x(), p.estimate.x[1] - p.truth.y()) << '\n';
+        << std::hypot(p.estimate.x[0] - p.truth.x(), p.estimate.x[1] - p.truth.y()) << ' '
+        << core::wrapAngle(p.estimate.x[2] - p.truth.z());
+      for (const auto& c : core::calibrationValues(p.estimate)) d << ' ' << c.value << ' ' << c.sigma;
+      d << '\n';
+    }
     plot_a += ", '" + f.filter + ".dat' using 2:3 with lines lw 2 title '" + f.filter + "'";
     plot_b += ", '" + f.filter + ".dat' using 1:4 with lines lw 2 title '" + f.filter + "'";
   }

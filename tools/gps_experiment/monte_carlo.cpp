@@ -1,5 +1,6 @@
 #include "lcmloc/gps_experiment/monte_carlo.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numeric>
 
@@ -12,9 +13,23 @@
 namespace lcmloc::gps_experiment {
 namespace {
 
-RunScore score(const scenario::ScenarioFilterResult& f, int64_t t0, const Options& opt) {
+/// Time of the second GPS fix (-1: fewer fixes).
+int64_t secondFixUtime(const std::vector<sim::GpsFixSample>& gps) {
+  int n = 0;
+  for (const auto& g : gps)
+    if (g.has_fix && ++n == 2) return g.utime;
+  return -1;
+}
+
+RunScore score(const scenario::ScenarioFilterResult& f, int64_t t0, int64_t second_fix, const Options& opt) {
   RunScore s;
   s.lockouts = f.lockout_events;
+  if (!f.track.empty()) s.calibration = core::calibrationValues(f.track.back().estimate);
+  for (const auto& p : f.track)  // the first pose at or after the second fix (the fix is applied then)
+    if (second_fix >= 0 && p.utime >= second_fix) {
+      s.second_fix_error_m = std::hypot(p.estimate.x[0] - p.truth.x(), p.estimate.x[1] - p.truth.y());
+      break;
+    }
   const int64_t start = settledFrom(f.track, opt);
   if (start < 0) return s;
   s.converged = true;
@@ -39,6 +54,7 @@ void summarize(McGroup& g) {
   std::vector<double> rmse, conv, nees;
   for (const auto& r : g.runs) {
     g.with_lockout += r.lockouts > 0;
+    g.second_fix_error_max = std::max(g.second_fix_error_max, r.second_fix_error_m);
     if (!r.converged) continue;
     ++g.converged;
     rmse.push_back(r.rmse_m);
@@ -86,7 +102,7 @@ McResult monteCarlo(const sim::ScenarioConfig& base, const std::vector<core::Fil
       const int64_t t0 = run.truth.front().utime;
       if (r.drive_s == 0) r.drive_s = static_cast<double>(run.truth.back().utime - t0) * 1e-6;
       for (std::size_t j = 0; j < run.filters.size(); ++j) {
-        RunScore s = score(run.filters[j], t0, opt.score);
+        RunScore s = score(run.filters[j], t0, secondFixUtime(run.gps), opt.score);
         s.seed = sc.seed;
         r.groups[k * filters.size() + j].runs.push_back(s);
       }
@@ -107,10 +123,14 @@ void writeMonteCarlo(const McResult& r, const MonteCarloOptions& opt, const std:
   auto orNull = [](bool ok, double v) { return ok ? nlohmann::json(v) : nlohmann::json(nullptr); };
   for (const auto& g : r.groups) {
     nlohmann::json runs = nlohmann::json::array();
-    for (const auto& s : g.runs)
+    for (const auto& s : g.runs) {
       runs.push_back({{"seed", s.seed}, {"converged", s.converged}, {"convergence_s", orNull(s.converged, s.convergence_s)},
                       {"rmse_m", orNull(s.converged, s.rmse_m)}, {"max_m", orNull(s.converged, s.max_m)},
-                      {"nees_mean", orNull(s.converged, s.nees_mean)}, {"lockouts", s.lockouts}});
+                      {"nees_mean", orNull(s.converged, s.nees_mean)}, {"lockouts", s.lockouts},
+                      {"second_fix_error_m", orNull(s.second_fix_error_m >= 0, s.second_fix_error_m)}});
+      for (const auto& c : s.calibration)
+        runs.back()["calibration"][c.name] = {{"value", c.value}, {"sigma", c.sigma}};
+    }
     const bool any = g.converged > 0;
     j["groups"].push_back({{"gps_rate_hz", g.rate_hz}, {"filter", g.filter}, {"converged", g.converged},
                            {"with_lockout", g.with_lockout}, {"rmse_median_m", orNull(any, g.rmse_median)},
@@ -118,7 +138,9 @@ void writeMonteCarlo(const McResult& r, const MonteCarloOptions& opt, const std:
                            {"convergence_median_s", orNull(any, g.convergence_median)},
                            {"convergence_p95_s", orNull(any, g.convergence_p95)},
                            {"convergence_max_s", orNull(any, g.convergence_max)},
-                           {"nees_mean", orNull(any, g.nees_mean)}, {"runs", runs}});
+                           {"nees_mean", orNull(any, g.nees_mean)},
+                           {"second_fix_error_max_m", orNull(g.second_fix_error_max >= 0, g.second_fix_error_max)},
+                           {"runs", runs}});
   }
   eval::writeJson(j, dir + "/montecarlo.json");
 }

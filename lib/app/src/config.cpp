@@ -214,7 +214,7 @@ ConfigError::ConfigError(const std::string& file, const std::string& key, const 
     : std::runtime_error(describe(file, key, reason)) {}
 
 
-/// fusion.filter.calibration (ukf_landmarks' self-calibration states; docs/config.md).
+/// fusion.filter.calibration (the self-calibration states of ukf_landmarks and the GNSS filters; docs/config.md).
 static void parseCalibration(KeyReader& r, core::FilterConfig::Calibration& k) {
   using BB = core::FilterConfig::Calibration::BeaconBias;
   KeyReader n(r.child("calibration"), r.file(), r.keyPath("calibration"));
@@ -240,6 +240,13 @@ static void parseCalibration(KeyReader& r, core::FilterConfig::Calibration& k) {
   n.get("yaw_rate_bias_mean", k.yaw_rate_bias_mean, -1.0, 1.0);
   n.get("yaw_rate_bias_std", k.yaw_rate_bias_std, 1e-9, 1.0);
   n.get("yaw_rate_bias_rw", k.yaw_rate_bias_rw, 0.0, 1.0);
+  n.get("steering_bias", k.steering_bias);
+  n.get("steering_bias_mean", k.steering_bias_mean, -1.0, 1.0);
+  n.get("steering_bias_std", k.steering_bias_std, 1e-9, 1.0);
+  n.get("steering_bias_rw", k.steering_bias_rw, 0.0, 1.0);
+  n.get("mag_bias", k.mag_bias);
+  n.get("mag_bias_std", k.mag_bias_std, 1e-9, 3.2);
+  n.get("mag_bias_tau", k.mag_bias_tau, 1e-3, 1e6);
   n.finish();
 }
 

@@ -68,13 +68,17 @@ void validate(const FilterConfig& c) {
   require(std::isfinite(c.landmarks.beacon_std) && c.landmarks.beacon_std > 0, "landmarks.beacon_std must be > 0");
   const auto& k = c.calibration;
   for (const auto& [std0, name] : {std::pair{k.beacon_bias_std, "beacon_bias_std"}, {k.odo_scale_std, "odo_scale_std"},
-                                   {k.yaw_rate_scale_std, "yaw_rate_scale_std"}, {k.yaw_rate_bias_std, "yaw_rate_bias_std"}})
+                                   {k.yaw_rate_scale_std, "yaw_rate_scale_std"}, {k.yaw_rate_bias_std, "yaw_rate_bias_std"},
+                                   {k.steering_bias_std, "steering_bias_std"}, {k.mag_bias_std, "mag_bias_std"},
+                                   {k.mag_bias_tau, "mag_bias_tau"}})
     require(std::isfinite(std0) && std0 > 0, std::string("calibration.") + name + " must be > 0");
   for (const auto& [rw, name] : {std::pair{k.beacon_bias_rw, "beacon_bias_rw"}, {k.odo_scale_rw, "odo_scale_rw"},
-                                 {k.yaw_rate_scale_rw, "yaw_rate_scale_rw"}, {k.yaw_rate_bias_rw, "yaw_rate_bias_rw"}})
+                                 {k.yaw_rate_scale_rw, "yaw_rate_scale_rw"}, {k.yaw_rate_bias_rw, "yaw_rate_bias_rw"},
+                                 {k.steering_bias_rw, "steering_bias_rw"}})
     require(std::isfinite(rw) && rw >= 0, std::string("calibration.") + name + " must be >= 0");
   for (const auto& [mean, name] : {std::pair{k.beacon_bias_mean, "beacon_bias_mean"}, {k.odo_scale_mean, "odo_scale_mean"},
-                                   {k.yaw_rate_scale_mean, "yaw_rate_scale_mean"}, {k.yaw_rate_bias_mean, "yaw_rate_bias_mean"}})
+                                   {k.yaw_rate_scale_mean, "yaw_rate_scale_mean"}, {k.yaw_rate_bias_mean, "yaw_rate_bias_mean"},
+                                   {k.steering_bias_mean, "steering_bias_mean"}})
     require(std::isfinite(mean), std::string("calibration.") + name + " must be finite");
 }
 

@@ -4,6 +4,7 @@
 // acceleration, the magnetometer and GPS measurements behind their gates, the lock-out
 // detectors, the GPS-course heading aid (gnss_filters.cpp) and the re-localization from refused
 // fixes (gnss_relocalization.cpp). Not installed; src/ only.
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <deque>
@@ -20,6 +21,40 @@
 namespace lcmloc::core::gnss_filter {
 
 enum : int { kX = 0, kY = 1, kTheta = 2, kSpeed = 3, kDistance = 4, kN = 5 };
+
+/// The self-calibration states (FilterConfig::Calibration) a configuration switches on, appended
+/// after the five states in this order: odometer scale k (the encoder's distance and speed, in
+/// the encoder's units, times 1 + k are the true ones), steering bias s (the true steering is
+/// the measured one minus s) and magnetometer heading bias m (a first-order Markov process: the
+/// magnetometer heading is theta + m). -1: switched off.
+struct GnssCalibration {
+  int odo_scale = -1, steering_bias = -1, mag_bias = -1;
+  std::vector<std::string> names;  ///< x, y, theta, speed, distance, then "cal_..." of each on
+  Eigen::VectorXd x0, p0;          ///< prior means and variances of every state (the first five: 0)
+  FilterConfig::Calibration cfg;
+  int size() const { return static_cast<int>(names.size()); }
+  static GnssCalibration of(const FilterConfig& c);
+  /// 1 + k of state s (1 without the state).
+  template <class V>
+  double scale(const V& s) const { return odo_scale >= 0 ? 1.0 + s[odo_scale] : 1.0; }
+  template <class V>
+  double steeringBias(const V& s) const { return steering_bias >= 0 ? s[steering_bias] : 0.0; }
+  template <class V>
+  double magBias(const V& s) const { return mag_bias >= 0 ? s[mag_bias] : 0.0; }
+  /// Markov factor of m over T seconds.
+  double magDecay(double T) const { return std::exp(-T / cfg.mag_bias_tau); }
+  /// Process-noise variances of the calibration states over a step of T seconds and ds metres
+  /// (encoder), into the diagonal entries of q at their indices.
+  template <class D>
+  void addProcessNoise(double T, double ds, D& q) const {
+    if (odo_scale >= 0) q(odo_scale, odo_scale) += cfg.odo_scale_rw * cfg.odo_scale_rw * std::abs(ds);
+    if (steering_bias >= 0) q(steering_bias, steering_bias) += cfg.steering_bias_rw * cfg.steering_bias_rw * T;
+    if (mag_bias >= 0) {
+      const double phi = magDecay(T);
+      q(mag_bias, mag_bias) += cfg.mag_bias_std * cfg.mag_bias_std * (1.0 - phi * phi);
+    }
+  }
+};
 
 /// Consecutive gate rejections of one measurement kind. Every n-th rejection in a row is a
 /// lock-out (status LOCKOUT). For the magnetometer the caller then inflates the heading
@@ -110,7 +145,7 @@ struct Step {
 class GnssFilterBase : public Filter {
  public:
   explicit GnssFilterBase(const FilterConfig& c)
-      : cfg_(c), g_(c.gnss),
+      : cfg_(c), g_(c.gnss), cal_(GnssCalibration::of(c)),
         gate1_(c.gate.enabled ? c.gate.threshold(1) : std::numeric_limits<double>::infinity()),
         gate2_(c.gate.enabled ? c.gate.threshold(2) : std::numeric_limits<double>::infinity()),
         gps_lock_(c.gnss.gps_lockout_rejections), mag_lock_(c.gnss.mag_lockout_rejections) {}
@@ -146,10 +181,7 @@ class GnssFilterBase : public Filter {
   int64_t courseRejected() const { return course_rejected_; }
 
  protected:
-  static const std::vector<std::string>& names() {
-    static const std::vector<std::string> n{"x", "y", "theta", "speed", "distance"};
-    return n;
-  }
+  const std::vector<std::string>& names() const { return cal_.names; }
   void initialState(Eigen::VectorXd& x, Eigen::MatrixXd& P) const;
   FilterStatus status() const override;
   /// Heading variance added over a step by the steering noise, the speed uncertainty (through
@@ -160,8 +192,10 @@ class GnssFilterBase : public Filter {
   virtual void fillState(Eigen::VectorXd& x, Eigen::MatrixXd& P) const = 0;
   virtual void setState(const Eigen::VectorXd& x, const Eigen::MatrixXd& P) = 0;
   virtual void timeUpdate(const Step& st) = 0;
-  /// Fill d (innovation, mahalanobis, reason, accepted) and correct if it passes the gate.
-  virtual void headingUpdate(double z, double r, GateDecision& d) = 0;
+  /// Fill d (innovation, mahalanobis, reason, accepted) and correct if it passes the gate. A
+  /// magnetometer heading (magnetic) measures theta + m with the magnetometer bias state, a
+  /// GPS-course heading theta.
+  virtual void headingUpdate(double z, double r, GateDecision& d, bool magnetic) = 0;
   virtual double heading() const = 0;
   virtual void positionUpdate(const Vec2& z, double r, GateDecision& d) = 0;
   virtual void inflateHeading() = 0;
@@ -186,6 +220,7 @@ class GnssFilterBase : public Filter {
 
   FilterConfig cfg_;
   GnssConfig g_;
+  GnssCalibration cal_;
   bool use_course_ = false;  ///< the GPS-course heading aid applies (tvekf)
   double gate1_, gate2_;  ///< chi-square gates of 1-D (heading) and 2-D (position) innovations
   double enc_sum_ = 0;    ///< encoder distance accumulated since the start [m] (eq. 5's s(k))

@@ -19,6 +19,26 @@ namespace gnss_filter {
 
 using detail::decision;
 
+GnssCalibration GnssCalibration::of(const FilterConfig& c) {
+  GnssCalibration l;
+  l.cfg = c.calibration;
+  l.names = {"x", "y", "theta", "speed", "distance"};
+  std::vector<double> x0(kN, 0.0), p0(kN, 0.0);
+  auto add = [&](const char* name, double mean, double std0) {
+    l.names.push_back(name);
+    x0.push_back(mean);
+    p0.push_back(std0 * std0);
+    return l.size() - 1;
+  };
+  const auto& k = c.calibration;
+  if (k.odo_scale) l.odo_scale = add("cal_odo_scale", k.odo_scale_mean, k.odo_scale_std);
+  if (k.steering_bias) l.steering_bias = add("cal_steering_bias", k.steering_bias_mean, k.steering_bias_std);
+  if (k.mag_bias) l.mag_bias = add("cal_mag_bias", 0.0, k.mag_bias_std);
+  l.x0 = Eigen::Map<const Eigen::VectorXd>(x0.data(), static_cast<Eigen::Index>(x0.size()));
+  l.p0 = Eigen::Map<const Eigen::VectorXd>(p0.data(), static_cast<Eigen::Index>(p0.size()));
+  return l;
+}
+
 void GnssFilterBase::initialize(const FilterState& from) {
   Eigen::VectorXd x;
   Eigen::MatrixXd P;
@@ -116,7 +136,7 @@ std::optional<GateDecision> GnssFilterBase::update(const ImuInput& m) {
     d.reason = "bad_input";
     return d;
   }
-  headingUpdate(z, g_.mag_std * g_.mag_std, d);
+  headingUpdate(z, g_.mag_std * g_.mag_std, d, true);
   if (d.reason == "gate" && mag_lock_.reject()) inflateHeading();
   if (d.accepted) mag_lock_.accept();
   return d;
@@ -157,8 +177,8 @@ std::optional<GateDecision> GnssFilterBase::update(const GpsInput& gps) {
 }
 
 void GnssFilterBase::initialState(Eigen::VectorXd& x, Eigen::MatrixXd& P) const {
-  x = Eigen::VectorXd::Zero(kN);
-  P = Eigen::MatrixXd::Zero(kN, kN);
+  x = cal_.x0;
+  P = Eigen::MatrixXd(cal_.p0.asDiagonal());
   x.head<3>() = cfg_.initial_pose;
   x[kTheta] = wrapAngle(x[kTheta]);
   P.topLeftCorner<3, 3>() = cfg_.p0_diag.asDiagonal();
@@ -196,7 +216,7 @@ void GnssFilterBase::courseAid(const Vec2& z, double sd) {
         const double err = wrapAngle(std::atan2(c.y(), c.x()) - std::atan2(course_dr_.y(), course_dr_.x()));
         const double r = 2.0 * sd * sd / c.squaredNorm() + g_.course_std * g_.course_std;
         GateDecision d = decision(last_fix_utime_, "GPS_COURSE", 0, gate1_);
-        headingUpdate(wrapAngle(heading() + err), r, d);
+        headingUpdate(wrapAngle(heading() + err), r, d, false);
         if (d.accepted) {
           ++course_accepted_;
           mag_lock_.accept();

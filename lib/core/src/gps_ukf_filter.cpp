@@ -16,8 +16,11 @@ namespace {
 /// covariance: GPS fixes then also correct heading and speed through their correlations.
 /// The encoder distance is an ungated 1-D update (a gate on an accumulated distance would
 /// reject every later sample after one slip); magnetometer heading and GPS are gated.
+/// N = 5 + the self-calibration states switched on (GnssCalibration): odometer scale, steering
+/// bias and magnetometer bias in the process and magnetometer models.
+template <int N>
 class GpsUkf final : public GnssFilterBase {
-  using U = Ukf<kN>;
+  using U = Ukf<N>;
 
  public:
   explicit GpsUkf(const FilterConfig& c) : GnssFilterBase(c), ukf_(c.sigma, 1u << kTheta) {
@@ -43,18 +46,24 @@ class GpsUkf final : public GnssFilterBase {
 
   void timeUpdate(const Step& st) override {
     const double L = cfg_.wheelbase;
-    auto f = [&st, L](const U::Vector& s) {
-      U::Vector o;
-      const double v = s[kSpeed];
-      o.head<2>() = gnss::positionStep(s.head<2>(), v, s[kTheta], st.T);
-      o[kTheta] = wrapAngle(s[kTheta] + (st.has_steering ? st.T * gnss::headingRate(v, st.psi, L)
+    const GnssCalibration& cal = cal_;
+    const double decay = cal.mag_bias >= 0 ? cal.magDecay(st.T) : 1.0;
+    auto f = [&st, &cal, L, decay](const typename U::Vector& s) {
+      typename U::Vector o = s;  // the calibration states: constant over the step (m decays)
+      const double k = cal.scale(s);  // speed and distance states in the encoder's units
+      const double v = k * s[kSpeed];
+      o.template head<2>() = gnss::positionStep(s.template head<2>(), v, s[kTheta], st.T);
+      o[kTheta] = wrapAngle(s[kTheta] + (st.has_steering ? st.T * gnss::headingRate(v, st.psi - cal.steeringBias(s), L)
                                                          : st.delta_theta));
-      const Vec2 sv = gnss::kinematicStep(Vec2(s[kDistance], v), st.a, st.T);
+      // The forward acceleration drives the encoder-unit speed as it is: an accelerometer's bias
+      // (a fraction of a percent of g) is no reference for a percent of scale.
+      const Vec2 sv = gnss::kinematicStep(Vec2(s[kDistance], s[kSpeed]), st.a, st.T);
       o[kDistance] = sv[0];
       o[kSpeed] = sv[1];
+      if (cal.mag_bias >= 0) o[cal.mag_bias] = decay * s[cal.mag_bias];
       return o;
     };
-    U::Matrix Q = U::Matrix::Zero();
+    typename U::Matrix Q = U::Matrix::Zero();
     Q(kX, kX) = Q(kY, kY) = g_.position_rw * g_.position_rw * st.T;
     // Steering noise and heading random walk (the speed's share comes from the sigma points).
     Step no_speed = st;
@@ -64,22 +73,26 @@ class GpsUkf final : public GnssFilterBase {
     Q(kDistance, kDistance) = Qsv(0, 0);
     Q(kDistance, kSpeed) = Q(kSpeed, kDistance) = Qsv(0, 1);
     Q(kSpeed, kSpeed) = Qsv(1, 1);
+    cal_.addProcessNoise(st.T, ukf_.x()[kSpeed] * st.T, Q);
     if (!ukf_.predict(f, Q)) return;
-    Innovation<kN, 1> in;
+    Innovation<N, 1> in;
     const Eigen::Matrix<double, 1, 1> R = Eigen::Matrix<double, 1, 1>::Constant(
         g_.encoder_std * g_.encoder_std);
     const Eigen::Matrix<double, 1, 1> z = Eigen::Matrix<double, 1, 1>::Constant(enc_sum_);
-    if (ukf_.innovate<1>([](const U::Vector& s) { return Eigen::Matrix<double, 1, 1>(s[kDistance]); },
-                         R, z, 0u, in))
+    if (ukf_.template innovate<1>([](const typename U::Vector& s) { return Eigen::Matrix<double, 1, 1>(s[kDistance]); },
+                                  R, z, 0u, in))
       ukf_.correct(in);
   }
 
-  void headingUpdate(double zth, double r, GateDecision& d) override {
-    Innovation<kN, 1> in;
+  void headingUpdate(double zth, double r, GateDecision& d, bool magnetic) override {
+    Innovation<N, 1> in;
     const Eigen::Matrix<double, 1, 1> R = Eigen::Matrix<double, 1, 1>::Constant(r);
     const Eigen::Matrix<double, 1, 1> z = Eigen::Matrix<double, 1, 1>::Constant(zth);
-    if (!ukf_.innovate<1>([](const U::Vector& s) { return Eigen::Matrix<double, 1, 1>(s[kTheta]); },
-                          R, z, 1u, in)) {
+    const int m = magnetic ? cal_.mag_bias : -1;
+    auto h = [m](const typename U::Vector& s) {
+      return Eigen::Matrix<double, 1, 1>(m >= 0 ? wrapAngle(s[kTheta] + s[m]) : s[kTheta]);
+    };
+    if (!ukf_.template innovate<1>(h, R, z, 1u, in)) {
       d.reason = "bad_input";
       return;
     }
@@ -87,9 +100,10 @@ class GpsUkf final : public GnssFilterBase {
   }
 
   void positionUpdate(const Vec2& zp, double r, GateDecision& d) override {
-    Innovation<kN, 2> in;
+    Innovation<N, 2> in;
     const Mat2 R = r * Mat2::Identity();
-    if (!ukf_.innovate<2>([](const U::Vector& s) { return Vec2(s.head<2>()); }, R, zp, 0u, in)) {
+    if (!ukf_.template innovate<2>([](const typename U::Vector& s) { return Vec2(s.template head<2>()); }, R, zp, 0u,
+                                   in)) {
       d.reason = "bad_input";
       return;
     }
@@ -98,7 +112,7 @@ class GpsUkf final : public GnssFilterBase {
 
   void inflateHeading() override { inflateStates({{kTheta, kLockoutMaxHeadingStd}}); }
   void growPosition(double dt) override {
-    U::Matrix P = ukf_.P();
+    typename U::Matrix P = ukf_.P();
     P(kX, kX) += g_.position_rw * g_.position_rw * dt;
     P(kY, kY) += g_.position_rw * g_.position_rw * dt;
     ukf_.reset(ukf_.x(), P);
@@ -106,7 +120,7 @@ class GpsUkf final : public GnssFilterBase {
 
  private:
   template <int M>
-  void apply(const Innovation<kN, M>& in, double gate, GateDecision& d) {
+  void apply(const Innovation<N, M>& in, double gate, GateDecision& d) {
     d.innovation = in.v;
     d.mahalanobis = in.mahalanobis;
     if (!(in.mahalanobis <= gate)) {
@@ -118,7 +132,7 @@ class GpsUkf final : public GnssFilterBase {
     d.reason = std::isfinite(gate) ? "accepted" : "ungated";
   }
   void inflateStates(std::initializer_list<detail::InflateCap> states) {
-    U::Matrix P = ukf_.P();
+    typename U::Matrix P = ukf_.P();
     detail::inflateCapped(P, states, cfg_.lockout_inflation);
     ukf_.reset(ukf_.x(), P);
   }
@@ -128,6 +142,13 @@ class GpsUkf final : public GnssFilterBase {
 
 }  // namespace
 
-std::unique_ptr<Filter> makeGpsUkf(const FilterConfig& cfg) { return std::make_unique<GpsUkf>(cfg); }
+std::unique_ptr<Filter> makeGpsUkf(const FilterConfig& cfg) {
+  switch (GnssCalibration::of(cfg).size()) {
+    case kN + 1: return std::make_unique<GpsUkf<kN + 1>>(cfg);
+    case kN + 2: return std::make_unique<GpsUkf<kN + 2>>(cfg);
+    case kN + 3: return std::make_unique<GpsUkf<kN + 3>>(cfg);
+    default: return std::make_unique<GpsUkf<kN>>(cfg);
+  }
+}
 
 }  // namespace lcmloc::core::gnss_filter

@@ -142,12 +142,18 @@ struct FilterConfig {
     double bearing_std = 0.02;    ///< landmark bearing, 1 sigma [rad]
     double beacon_std = 0.1;      ///< beacon range, 1 sigma [m]
   } landmarks;
-  /// "ukf_landmarks" only: self-calibration states appended to (x, y, theta), each switched on
-  /// here (all off by default: the filter is then the 3-state one). Each starts at its prior
-  /// mean (0 unless given) with its prior 1-sigma and follows a random walk. See docs/config.md "Self-calibration".
+  /// Self-calibration states appended to a filter's state, each switched on here (all off by
+  /// default: the filter is then the one without them). Each starts at its prior mean (0 unless
+  /// given) with its prior 1-sigma and follows a random walk (the magnetometer bias: a
+  /// first-order Markov process). See docs/config.md "Self-calibration".
+  /// "ukf_landmarks":
   ///   odometer scale k:   delta_s_true = (1 + k) delta_s
   ///   yaw-rate scale g, bias b:  delta_theta_true = (1 + g) delta_theta - b dt
   ///   beacon range bias c: range = distance + c (one shared, or one per map entry)
+  /// "tvekf" and "ukf_gps" (docs/tvekf.md "Self-calibration"):
+  ///   odometer scale k:   the same (the encoder's distance and speed times 1 + k)
+  ///   steering bias s:    steering_true = steering - s
+  ///   magnetometer heading bias m:  heading_mag = theta + m
   struct Calibration {
     enum class BeaconBias { Off, Shared, PerBeacon };
     BeaconBias beacon_bias = BeaconBias::Off;
@@ -166,7 +172,16 @@ struct FilterConfig {
     double yaw_rate_bias_mean = 0.0;  ///< prior mean of b [rad/s]
     double yaw_rate_bias_std = 0.01;  ///< prior 1 sigma of b [rad/s]
     double yaw_rate_bias_rw = 1e-4;   ///< random walk of b [rad/s/sqrt(s)]
-    bool any() const { return beacon_bias != BeaconBias::Off || odo_scale || yaw_rate_scale || yaw_rate_bias; }
+    bool steering_bias = false;       ///< GNSS filters only
+    double steering_bias_mean = 0.0;  ///< prior mean of s [rad]
+    double steering_bias_std = 0.01;  ///< prior 1 sigma of s [rad]
+    double steering_bias_rw = 1e-5;   ///< random walk of s [rad/sqrt(s)]
+    bool mag_bias = false;            ///< GNSS filters only
+    double mag_bias_std = 0.025;      ///< steady 1 sigma of m (Markov) [rad]
+    double mag_bias_tau = 10.0;       ///< correlation time of m [s]
+    bool any() const {
+      return beacon_bias != BeaconBias::Off || odo_scale || yaw_rate_scale || yaw_rate_bias || steering_bias || mag_bias;
+    }
   } calibration;
   /// "odo_ins" and "odo_ins_uncal" only (they also use initial_pose for the start heading).
   InsFilterConfig ins;

@@ -28,6 +28,8 @@ struct RunScore {
   double max_m = 0;
   double nees_mean = 0;       ///< mean NEES of (x, y, theta) after that (3 when consistent)
   int lockouts = 0;
+  double second_fix_error_m = -1;  ///< position error just after the second GPS fix (-1: no second fix)
+  std::vector<core::CalibrationValue> calibration;  ///< the self-calibration states at the end (filters with them)
 };
 
 /// Every run of one filter at one GPS rate, and their distribution.
@@ -39,6 +41,7 @@ struct McGroup {
   double rmse_median = 0, rmse_p95 = 0;              ///< over the converged runs
   double convergence_median = 0, convergence_p95 = 0, convergence_max = 0;
   double nees_mean = 0;                              ///< mean of the runs' means
+  double second_fix_error_max = -1;                  ///< the largest error just after the second fix [m]
 };
 
 struct McResult {
