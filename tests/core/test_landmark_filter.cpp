@@ -282,7 +282,9 @@ TEST(UkfLandmarksRelocalization, LoneOutliersAndDistractorsNeverRelocalize) {
       ASSERT_TRUE(d);
       EXPECT_NE(d->reason, "relocalized") << step;
       EXPECT_FALSE(f->takeRelocalization()) << step;
-      if (!distractors) EXPECT_FALSE(d->accepted) << step;
+      if (!distractors) {
+        EXPECT_FALSE(d->accepted) << step;
+      }
     }
     if (distractors) continue;
     const auto a = f->state(), b = dr->state();

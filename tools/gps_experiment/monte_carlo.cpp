@@ -91,7 +91,7 @@ McResult monteCarlo(const sim::ScenarioConfig& base, const std::vector<core::Fil
   sc.path = extendedPath(base, opt.min_drive_s);
   for (const auto& s : sc.path.segments) r.path_m += s.length;
   for (double rate : opt.rates_hz)
-    for (const auto& f : filters) r.groups.push_back(McGroup{rate, f.type});
+    for (const auto& f : filters) r.groups.push_back(McGroup{rate, f.type, {}});
   const int total = opt.runs * static_cast<int>(opt.rates_hz.size());
   int done = 0;
   for (int i = 0; i < opt.runs; ++i) {

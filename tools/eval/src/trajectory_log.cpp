@@ -21,7 +21,7 @@ bool finite(double v) { return std::isfinite(v); }
 class TrajectoryDecoder {
  public:
   TrajectoryDecoder(const TrajectoryLogOptions& opt, TrajectoryLog& out) : opt_(opt), out_(out) {
-    out_.tracks.push_back({opt.pose_channel, {}, {}});
+    out_.tracks.push_back({opt.pose_channel, {}, {}, {}});
     out_.landmark_channel = opt.landmark_channel;
   }
 
@@ -85,7 +85,7 @@ class TrajectoryDecoder {
   std::size_t trackIndex(const std::string& channel) {
     for (std::size_t i = 1; i < out_.tracks.size(); ++i)
       if (out_.tracks[i].channel == channel) return i;
-    out_.tracks.push_back({channel, {}, {}});
+    out_.tracks.push_back({channel, {}, {}, {}});
     return out_.tracks.size() - 1;
   }
 
