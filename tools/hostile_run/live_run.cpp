@@ -1,8 +1,6 @@
 #include "live_run.hpp"
 
-#include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -16,12 +14,12 @@
 #include <stdexcept>
 #include <sstream>
 #include <thread>
-#include <cstring>
 #include <unordered_set>
 
 #include <lcm/lcm-cpp.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include "lcmloc/app/child_process.hpp"
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/eval/trajectory.hpp"
 #include "lcmloc/fusion_status_t.hpp"
@@ -31,8 +29,6 @@
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
 #include "lcmloc/wire.hpp"
-
-extern char** environ;
 
 namespace lcmloc::hostile {
 namespace {
@@ -44,22 +40,6 @@ using Clock = std::chrono::steady_clock;
 constexpr int64_t kSeqBase = 1'000'000'000;
 
 double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
-
-/// Starts argv[0] with stdout and stderr to output; throws when it cannot.
-pid_t spawn(const std::vector<std::string>& args, const std::string& output) {
-  std::vector<char*> argv;
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&fa, 1, 2);
-  pid_t pid = -1;
-  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0) throw std::runtime_error("cannot start " + args[0] + ": " + std::strerror(rc));
-  return pid;
-}
 
 /// Waits for pid until the deadline; its exit code, or -1 (still running or killed).
 int waitUntil(pid_t pid, Clock::time_point deadline) {
@@ -90,13 +70,6 @@ pid_t childNamed(pid_t parent, const std::string& comm) {
     if (ppid == parent && line.substr(open + 1, close - open - 1) == comm.substr(0, 15)) return std::stoi(name);
   }
   return -1;
-}
-
-int64_t rssKb(pid_t pid) {
-  std::ifstream f("/proc/" + std::to_string(pid) + "/status");
-  for (std::string line; std::getline(f, line);)
-    if (line.rfind("VmRSS:", 0) == 0) return std::stoll(line.substr(6));
-  return 0;
 }
 
 /// The run's scenario: the base with this run's factor, laps, map and log; returns the odometry's
@@ -274,7 +247,7 @@ LiveRunResult runLive(const LiveRunOptions& o) {
   LiveRunResult r;
   r.pose_period_s = writeScenario(o, scenario, map, log);
   const app::SystemConfig cfg = app::loadSystemConfig(scenario);
-  const pid_t sim = spawn({o.bin_dir + "/lcmloc-sim", "--config", scenario, "--write-map", map, "--log-level", "warn"},
+  const pid_t sim = app::spawnWithOutput({o.bin_dir + "/lcmloc-sim", "--config", scenario, "--write-map", map, "--log-level", "warn"},
                           o.out_dir + "/write_map.out");
   if (waitUntil(sim, Clock::now() + std::chrono::seconds(60)) != 0)
     throw std::runtime_error("lcmloc-sim --write-map failed (" + o.out_dir + "/write_map.out)");
@@ -340,7 +313,7 @@ LiveRunResult runLive(const LiveRunOptions& o) {
   });
 
   const auto start = Clock::now();
-  const pid_t launcher = spawn({o.bin_dir + "/lcmloc-launcher", "--system", o.system, "--config", scenario,
+  const pid_t launcher = app::spawnWithOutput({o.bin_dir + "/lcmloc-launcher", "--system", o.system, "--config", scenario,
                                 "--lcm-url", o.lcm_url, "--log-level", "warn"},
                                o.out_dir + "/launcher.out");
   Hostile hostile(cfg.channels, o.seed);
@@ -360,7 +333,7 @@ LiveRunResult runLive(const LiveRunOptions& o) {
       const pid_t d = childNamed(launcher, "lcmloc-fusion");
       if (d > 0) {
         daemons.insert(d);
-        if (const int64_t kb = rssKb(d)) r.rss_kb.emplace_back(seconds(now - start), kb);
+        if (const int64_t kb = app::procStatusKb(d, "VmRSS")) r.rss_kb.emplace_back(seconds(now - start), kb);
       }
     }
     int64_t live = 0;

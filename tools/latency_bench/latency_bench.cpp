@@ -1,8 +1,6 @@
 #include "latency_bench.hpp"
 
-#include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -10,7 +8,6 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <cstring>
 #include <fstream>
 #include <mutex>
 #include <sstream>
@@ -20,13 +17,12 @@
 #include <fmt/format.h>
 #include <lcm/lcm-cpp.hpp>
 
+#include "lcmloc/app/child_process.hpp"
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/imu_t.hpp"
 #include "lcmloc/magruler_t.hpp"
 #include "lcmloc/odometry_t.hpp"
-
-extern char** environ;
 
 namespace lcmloc::latency {
 namespace {
@@ -52,29 +48,6 @@ double cpuSeconds(pid_t pid) {
   for (std::string field; in >> field;) v.push_back(field);
   if (v.size() < 13) return 0;
   return (std::stod(v[11]) + std::stod(v[12])) / static_cast<double>(sysconf(_SC_CLK_TCK));
-}
-
-/// A "Key:  N kB" line of /proc/PID/status [kB]; 0 when absent.
-int64_t statusKb(pid_t pid, const std::string& key) {
-  std::ifstream f("/proc/" + std::to_string(pid) + "/status");
-  for (std::string line; std::getline(f, line);)
-    if (line.rfind(key + ":", 0) == 0) return std::stoll(line.substr(key.size() + 1));
-  return 0;
-}
-
-pid_t spawn(const std::vector<std::string>& args, const std::string& output) {
-  std::vector<char*> argv;
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&fa, 1, 2);
-  pid_t pid = -1;
-  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0) throw std::runtime_error("cannot start " + args[0] + ": " + std::strerror(rc));
-  return pid;
 }
 
 /// The bare subscriber: the daemon's input channels, each message decoded, nothing else.
@@ -147,7 +120,7 @@ BenchResult run(const BenchOptions& o) {
   std::vector<std::string> args{o.fusion, "--lcm-url", o.lcm_url, "--config", o.config};
   if (!o.filter.empty()) args.insert(args.end(), {"--filter", o.filter});
   const std::string daemon_log = o.report.empty() ? "/dev/null" : o.report + ".fusion.log";
-  const pid_t daemon = spawn(args, daemon_log);
+  const pid_t daemon = app::spawnWithOutput(args, daemon_log);
 
   std::atomic<bool> stop{false}, measuring{false};
   Receiver rx{ch.pose, ch.pose_control, &measuring, {}, {}, {}, {}};
@@ -176,7 +149,7 @@ BenchResult run(const BenchOptions& o) {
     if (!measuring && next >= warm_end) {
       cpu0_daemon = cpuSeconds(daemon);
       cpu0_bare = cpuSeconds(bare);
-      r.rss_first_kb = statusKb(daemon, "VmRSS");
+      r.rss_first_kb = app::procStatusKb(daemon, "VmRSS");
       measuring = true;
     }
     const int64_t now = wallUs();
@@ -221,14 +194,14 @@ BenchResult run(const BenchOptions& o) {
       out.publish(ch.magruler.front(), &m);
       r.sent += measuring ? 1 : 0;
     }
-    if (measuring && k % 100 == 0) r.rss_last_kb = statusKb(daemon, "VmRSS");
+    if (measuring && k % 100 == 0) r.rss_last_kb = app::procStatusKb(daemon, "VmRSS");
   }
   std::this_thread::sleep_for(std::chrono::duration<double>(cfg.fusion.horizon() + 0.05));  // the last poses
   measuring = false;
   r.daemon_cpu_s = cpuSeconds(daemon) - cpu0_daemon;
   r.bare_cpu_s = cpuSeconds(bare) - cpu0_bare;
-  r.rss_last_kb = statusKb(daemon, "VmRSS");
-  r.rss_peak_kb = statusKb(daemon, "VmHWM");
+  r.rss_last_kb = app::procStatusKb(daemon, "VmRSS");
+  r.rss_peak_kb = app::procStatusKb(daemon, "VmHWM");
   ::kill(daemon, SIGTERM);
   ::kill(bare, SIGKILL);
   const auto stop_deadline = Clock::now() + std::chrono::seconds(5);  // a hung daemon is killed
