@@ -116,7 +116,8 @@ TEST(GnssCalibration, SteeringBiasIsEstimatedFromTheMagnetometer) {
     c.calibration.steering_bias = true;
     auto f = makeFilter(c, {});
     Drive().run(*f, 60.0, 0.0, 0.01, 0.0);  // straight on, the potentiometer reads 0.01 rad
-    const auto* b = find(calibrationValues(f->state()), "steering_bias");
+    const auto values = calibrationValues(f->state());  // (find points into it)
+    const auto* b = find(values, "steering_bias");
     ASSERT_NE(b, nullptr) << type;
     EXPECT_NEAR(b->value, 0.01, std::max(3.0 * b->sigma, 5e-4)) << type;
     EXPECT_LT(b->sigma, 0.002) << type;
