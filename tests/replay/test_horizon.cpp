@@ -66,6 +66,19 @@ std::vector<Timed> goldenInputs() {
 
 /// The events as they arrive when each GPS fix is delivered delay_us after its time: after the
 /// last other input of message time at most its time + delay_us.
+/// The live daemon over bus: the events delivered one by one in the order given, then shut down;
+/// its inputs later than the horizon per channel.
+std::map<std::string, core::LateInputs> runDaemon(const app::SystemConfig& cfg, const std::vector<Timed>& events,
+                                                  bus::MemoryBus& bus) {
+  fusion::FusionDaemon d(cfg, bus);
+  for (const Timed& t : events) {
+    bus.inject(t.event.channel, t.event.data);
+    bus.deliverAll();
+  }
+  d.shutdown();
+  return d.lateInputs();
+}
+
 std::vector<Timed> gpsDelayed(const std::vector<Timed>& in, int64_t delay_us) {
   std::vector<Timed> out, waiting;
   for (const Timed& t : in) {
@@ -145,16 +158,10 @@ class HorizonTest : public ::testing::Test {
   };
   Live live(const app::SystemConfig& cfg, const std::vector<Timed>& events) {
     bus::MemoryBus bus;
-    fusion::FusionDaemon d(cfg, bus);
-    for (const Timed& t : events) {
-      bus.inject(t.event.channel, t.event.data);
-      bus.deliverAll();
-    }
-    d.shutdown();
     Live l;
+    l.late = runDaemon(cfg, events, bus);
     for (const auto& m : bus.published(cfg.channels.pose)) l.pose.push_back(m.data);
     for (const auto& m : bus.published(cfg.channels.gate)) l.gate.push_back(m.data);
-    l.late = d.lateInputs();
     return l;
   }
 
@@ -322,12 +329,7 @@ TEST_F(HorizonTest, ASensorThatStopsIsSaidOnceAndThePoseGoesOn) {
   ASSERT_LT(silent.size(), inputs_.size() - 5);
   auto run = [&](const app::SystemConfig& cfg, std::vector<lcmloc::fusion_status_t>& status) {
     bus::MemoryBus bus;
-    fusion::FusionDaemon d(cfg, bus);
-    for (const Timed& t : silent) {
-      bus.inject(t.event.channel, t.event.data);
-      bus.deliverAll();
-    }
-    d.shutdown();
+    runDaemon(cfg, silent, bus);
     status = bus.decoded<lcmloc::fusion_status_t>(cfg.channels.status);
     return bus.decoded<lcmloc::pose_t>(cfg.channels.pose);
   };
