@@ -103,11 +103,11 @@ TEST(StreamGuard, AStreamThatStartsOverWithinItsOwnSeqsIsOneStream) {
   EXPECT_EQ(g.held(), 0);
 }
 
-TEST(StreamGuard, ASlowEstablishedStreamIsNotReplacedByAFastIntruderWhichIsHeldAfterOnePeriod) {
+TEST(StreamGuard, ASlowEstablishedStreamIsNotReplacedByAFastIntruderWhichIsHeldFromItsSecondMessage) {
   bus::StreamGuard g;
   for (int i = 0; i < 10; ++i) g.observe("GPS", i, kT0 + i * 1'000'000);  // 1 Hz
   int64_t held = 0;
-  for (int k = 0; k < 100; ++k) {  // an intruder at 10 Hz for 10 s
+  for (int k = 0; k < 100; ++k) {  // an intruder at 10 Hz for 10 s, joined mid-way (seq 7000)
     const int64_t t = kT0 + 10'000'000 + k * 100'000;
     if (k % 10 == 0) {
       EXPECT_EQ(g.observe("GPS", 10 + k / 10, t).kind, Kind::Taken) << k;
@@ -116,7 +116,24 @@ TEST(StreamGuard, ASlowEstablishedStreamIsNotReplacedByAFastIntruderWhichIsHeldA
     EXPECT_NE(v.kind, Kind::Replaced) << k;
     held += v.held();
   }
-  // Taken until the established stream's next message (one of its periods), held from then on.
+  EXPECT_EQ(held, 99);  // its first message is taken (a lone corrupt seq looks the same)
+}
+
+// The same intruder from seq 0 looks like the GPS driver restarted: it is taken until the
+// established stream's next message (one of its periods), held from then on.
+TEST(StreamGuard, AnIntruderFromSeqZeroIsTakenAsARestartUntilTheEstablishedStreamGoesOn) {
+  bus::StreamGuard g;
+  for (int i = 0; i < 10; ++i) g.observe("GPS", 100 + i, kT0 + i * 1'000'000);
+  int64_t held = 0;
+  for (int k = 0; k < 100; ++k) {
+    const int64_t t = kT0 + 10'000'000 + k * 100'000;
+    if (k % 10 == 0) {
+      EXPECT_EQ(g.observe("GPS", 110 + k / 10, t).kind, Kind::Taken) << k;
+    }
+    const auto v = g.observe("GPS", k, t + 1);
+    EXPECT_NE(v.kind, Kind::Replaced) << k;
+    held += v.held();
+  }
   EXPECT_EQ(held, 90);
 }
 
@@ -140,7 +157,53 @@ TEST(StreamGuard, OneFarFutureTimeAmongAnIntrudersMessagesDoesNotReplaceASparseS
     EXPECT_NE(v.kind, Kind::Replaced) << k;
     held += v.held();
   }
-  EXPECT_EQ(held, 60 - 26);  // held from the ruler's next message on
+  EXPECT_EQ(held, 59);  // held from its second message on
+}
+
+// Fault markers: the injector publishes twice in a run, 7.7 s apart. A second publisher that
+// joins mid-way between them, at 20 Hz with times near the live one (one of them 1.5 s back),
+// never feeds the fusion beyond its first message and never replaces the silent injector.
+TEST(StreamGuard, AnIntruderThatJoinsASparseSilentChannelIsHeldAndNeverReplacesIt) {
+  bus::StreamGuard g;
+  EXPECT_EQ(g.observe("MAGRULER_FAULT", 0, kT0).kind, Kind::Taken);
+  int64_t held = 0, detected = 0;
+  for (int k = 0; k < 600; ++k) {  // 30 s
+    const int64_t t = kT0 + 400'000 + k * 50'000;
+    if (k == 146) {
+      EXPECT_EQ(g.observe("MAGRULER_FAULT", 1, kT0 + 7'700'000).kind, Kind::Taken);  // the injector's next
+    }
+    const auto v = g.observe("MAGRULER_FAULT", 1'000'000'000 + k, k == 1 ? t - 1'500'000 : t);
+    EXPECT_NE(v.kind, Kind::Replaced) << k;
+    held += v.held();
+    detected += v.detected;
+    if (v.detected) {
+      EXPECT_NE(v.describe("MAGRULER_FAULT").find("a second publisher (first seq 1000000000"), std::string::npos)
+          << v.describe("MAGRULER_FAULT");
+    }
+  }
+  EXPECT_EQ(held, 599);
+  EXPECT_EQ(detected, 1);
+  EXPECT_EQ(g.observe("MAGRULER_FAULT", 2, kT0 + 40'000'000).kind, Kind::Taken);
+}
+
+// The daemon started while the drivers run, and the first message it gets on a channel has a
+// corrupt seq: the genuine stream (mid-way, not from seq 0) replaces that lone message at its
+// second message instead of being held apart for good.
+TEST(StreamGuard, AGenuineStreamReplacesALoneCorruptSeqTheChannelBeganWith) {
+  bus::StreamGuard g;
+  EXPECT_EQ(g.observe("ODOMETRY", int64_t{1} << 40, kT0).kind, Kind::Taken);
+  EXPECT_EQ(g.observe("ODOMETRY", 52'000, kT0 + kPeriod).kind, Kind::Taken);  // another stream's first
+  const auto v = g.observe("ODOMETRY", 52'001, kT0 + 2 * kPeriod);
+  EXPECT_EQ(v.kind, Kind::Replaced);
+  EXPECT_TRUE(v.lone);
+  EXPECT_NE(v.describe("ODOMETRY").find("replaces the lone message the channel began with (seq 1099511627776"),
+            std::string::npos)
+      << v.describe("ODOMETRY");
+  for (int i = 2; i < 100; ++i) EXPECT_EQ(g.observe("ODOMETRY", 52'000 + i, kT0 + (i + 1) * kPeriod).kind, Kind::Taken);
+  EXPECT_EQ(g.held(), 0);
+  // Once it has gone on, a stream from mid-way is held again.
+  g.observe("ODOMETRY", 9'000'000, kT0 + 101 * kPeriod);
+  EXPECT_TRUE(g.observe("ODOMETRY", 9'000'001, kT0 + 102 * kPeriod).held());
 }
 
 namespace {

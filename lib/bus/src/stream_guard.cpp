@@ -20,6 +20,8 @@ bool goesOn(int64_t last, int64_t seq) {
 /// replace the established stream with its next kReplaceAfter messages).
 constexpr int64_t kMaxStepUs = 5 * StreamGuard::kSilenceUs;
 
+bool fromStart(int64_t seq) { return seq >= 0 && seq <= StreamGuard::kMaxAhead; }
+
 void add(int64_t seq, int64_t utime, int64_t& last_seq, int64_t& last_utime) {
   last_seq = std::max(last_seq, seq);
   if (!core::apartBy(utime, last_utime, kMaxStepUs)) last_utime = std::max(last_utime, utime);
@@ -28,10 +30,14 @@ void add(int64_t seq, int64_t utime, int64_t& last_seq, int64_t& last_utime) {
 }  // namespace
 
 std::string StreamVerdict::describe(const std::string& channel) const {
+  if (kind == Kind::Replaced && lone)
+    return fmt::format("{}: a stream (first seq {} at utime {}) replaces the lone message the channel began with (seq {} "
+                       "at utime {})",
+                       channel, first_seq, first_utime, established_seq, established_utime);
   if (kind == Kind::Replaced)
     return fmt::format("{}: a new stream (first seq {} at utime {}) replaces the one silent since seq {} at utime {}",
                        channel, first_seq, first_utime, established_seq, established_utime);
-  return fmt::format("{}: a second publisher (first seq {} at utime {}) while the established one goes on (seq {} at "
+  return fmt::format("{}: a second publisher (first seq {} at utime {}) beside the established one (last seq {} at "
                      "utime {}): its messages are held apart",
                      channel, first_seq, first_utime, established_seq, established_utime);
 }
@@ -41,7 +47,7 @@ StreamVerdict StreamGuard::observe(const std::string& channel, int64_t seq, int6
   auto [it, added] = channels_.try_emplace(channel);
   Channel& c = it->second;
   if (added) {
-    c.est = Stream{seq, utime, seq, utime, 1};
+    c.est = Stream{seq, utime, seq, utime, 1, fromStart(seq)};
     return v;
   }
   v.established_seq = c.est.last_seq;
@@ -62,14 +68,17 @@ StreamVerdict StreamGuard::observe(const std::string& channel, int64_t seq, int6
     v.first_seq = c.other.first_seq;
     v.first_utime = c.other.first_utime;
     ++c.other_since_mark;
-    if (c.other_since_mark >= kReplaceAfter && core::apartBy(c.other.last_utime, c.other_mark, kSilenceUs - 1)) {  // the established one is gone
+    const bool est_silent = c.other_since_mark >= kReplaceAfter &&
+                            core::apartBy(c.other.last_utime, c.other_mark, kSilenceUs - 1);
+    if (!c.est.confirmed() || (c.other.from_start && est_silent)) {  // the established one is gone, or was never one
+      v.lone = !c.est.confirmed();
       c.est = c.other;
       c.has_other = false;
       c.reported = false;
       v.kind = StreamVerdict::Kind::Replaced;
       return v;
     }
-    if (c.est_since_other == 0) return v;  // silent since the other began: a restart, so far
+    if (c.other.from_start && c.est_since_other == 0) return v;  // silent since the other began: a restart, so far
     v.kind = StreamVerdict::Kind::Held;
     ++held_;
     if (!c.reported) {
@@ -81,7 +90,7 @@ StreamVerdict StreamGuard::observe(const std::string& channel, int64_t seq, int6
   }
   // Neither: another stream begins (or a lone corrupt seq, which looks the same until the next).
   if (!c.has_other || c.other.count > 1) c.reported = false;
-  c.other = Stream{seq, utime, seq, utime, 1};
+  c.other = Stream{seq, utime, seq, utime, 1, fromStart(seq)};
   c.has_other = true;
   c.est_since_other = 0;
   c.other_mark = utime;
