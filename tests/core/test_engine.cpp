@@ -1,6 +1,7 @@
 // Canonical ordering and the fusion engine: control commands, shadows, events, bad input.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -810,4 +811,46 @@ TEST(Engine, InputsFarInThePastAreDroppedAsTooOldUnlessThreeInARowStartANewTimeB
   ASSERT_EQ(after.states.size(), clean.states.size() + 1);  // + the corrupt input's
   EXPECT_EQ(after.states.back().x, clean.states.back().x);
   EXPECT_EQ(after.states.back().P, clean.states.back().P);
+}
+
+// A stream on a channel no filter uses (GPS fixes to the magnetic filter), its times 25 ms ahead
+// of the odometry: its inputs are ordered and processed in turn, but they do not move the
+// horizon; the canonical states come out one per odometry input, on the odometry's time. (A
+// second publisher's stream there, its times jittered around the live time, released them in
+// bursts with silences of up to 30 ms between.) A shadow that uses GPS makes the fixes the
+// sensors' time again: the states then come out on the fixes.
+TEST(FusionEngine, AMeasurementNoFilterUsesDoesNotMoveTheHorizon) {
+  for (const bool gps_shadow : {false, true}) {
+    EngineConfig cfg = engineConfig();
+    if (gps_shadow) cfg.shadow = {"ukf_gps"};
+    Recorder rec;
+    FusionEngine e(cfg, straightMap(50), rec.outputs());
+    auto activeStates = [&] {
+      return std::count(rec.log.begin(), rec.log.end(), std::string("state:ukf_gated"));
+    };
+    int64_t on_odometry = 0, on_fixes = 0, most_at_once = 0;
+    for (int k = 1; k <= 300; ++k) {
+      const int64_t t = 1'000'000 + k * 10'000;
+      auto before = activeStates();
+      ASSERT_TRUE(e.push(odoIn(t, k, 0.02)));
+      on_odometry += activeStates() - before;
+      most_at_once = std::max<int64_t>(most_at_once, activeStates() - before);
+      GpsInput g;
+      g.utime = t + 25'000;
+      before = activeStates();
+      ASSERT_TRUE(e.push(EngineInput{"GPS", k, g.utime, g}));
+      on_fixes += activeStates() - before;
+    }
+    const auto before_flush = e.counters().processed;
+    e.flush();
+    EXPECT_EQ(e.counters().processed, 600u) << gps_shadow;  // every fix processed all the same
+    EXPECT_GT(before_flush, 500u) << gps_shadow;
+    if (gps_shadow) {
+      EXPECT_GT(on_fixes, 250) << on_odometry;
+    } else {
+      EXPECT_EQ(on_fixes, 0);
+      EXPECT_EQ(most_at_once, 1);
+      EXPECT_EQ(on_odometry, 300 - 6);  // all but the six within the last 50 ms window
+    }
+  }
 }

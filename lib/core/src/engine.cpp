@@ -112,6 +112,24 @@ struct FusionEngine::Impl final : InputOrder::Client {
     if (now == FilterStatus::Ok) gaps.accepted();
     last_status = now;
   }
+  /// The odometry, bearings and the measurements some filter (active or shadow) uses move the
+  /// horizon on; a measurement no filter uses does not (a stream on a channel the filters ignore,
+  /// with its time a little ahead of the sensors', would otherwise release the canonical poses in
+  /// bursts).
+  bool carriesTime(const EngineInput& in) const override {
+    return std::visit(
+        [&](const auto& p) {
+          using T = std::decay_t<decltype(p)>;
+          if constexpr (detail::IsMeasurement<T>::value) {
+            bool used = false;
+            bank.forEach([&](const Filter& f, bool) { used = used || f.uses(InputKind<T>::measurement); });
+            return used;
+          } else {
+            return true;
+          }
+        },
+        in.payload);
+  }
   void late(const EngineInput& in, bool duplicate, int64_t processed_utime) override {
     ++counters.too_old;
     const int64_t newest = order.newest();

@@ -22,7 +22,11 @@ bool InputOrder::push(EngineInput&& in) {
   if (std::holds_alternative<ControlCommand>(in.payload)) return pushCommand(std::move(in));
   const int64_t utime = in.utime;
   return guard_.offer(
-      std::move(in), utime, [this](EngineInput&& e) { return take(std::move(e), true); },
+      std::move(in), utime,
+      [this](EngineInput&& e) {
+        const bool advance = client_.carriesTime(e);
+        return take(std::move(e), advance);
+      },
       [this](const EngineInput& s, int side, int64_t newest) { client_.outlier(s, side > 0, newest); },
       [this](int side, const EngineInput& first, int64_t newest) {
         if (side < 0) drain();

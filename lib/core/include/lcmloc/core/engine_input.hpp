@@ -85,7 +85,13 @@ template <typename... T>
 struct EveryInputRanked<std::variant<T...>> {
   static constexpr bool value = ((kCanonicalRank<T> >= 0) && ...);
 };
+/// Whether T is a measurement kind (its InputKind names a Measurement).
+template <typename T, typename = void>
+struct IsMeasurement : std::false_type {};
+template <typename T>
+struct IsMeasurement<T, std::void_t<decltype(InputKind<T>::measurement)>> : std::true_type {};
 }  // namespace detail
+static_assert(detail::IsMeasurement<GpsInput>::value && !detail::IsMeasurement<OdometryInput>::value);
 static_assert(detail::EveryInputRanked<InputPayload>::value,
               "every kind of EngineInput needs an InputKind with a rank");
 

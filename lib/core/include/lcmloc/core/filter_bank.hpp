@@ -35,6 +35,11 @@ class FilterBank {
     f(*active_, true);
     for (auto& s : shadows_) f(*s, false);
   }
+  template <typename F>
+  void forEach(F&& f) const {
+    f(static_cast<const Filter&>(*active_), true);
+    for (const auto& s : shadows_) f(static_cast<const Filter&>(*s), false);
+  }
 
   /// Publishes f's state (EngineOutputs::on_state). A state that is not finite never leaves: the
   /// filter starts afresh from its configuration and says so (event "restarted").

@@ -35,6 +35,12 @@ class InputOrder {
     /// A new time base from first on, after newest. back: time went back; everything of the old
     /// base was processed, and the client starts every part afresh (reset() included).
     virtual void timeJumped(const EngineInput& first, int64_t newest, bool back) = 0;
+    /// Whether in's time moves the horizon on (releases what is older by the window). An input
+    /// that does not is ordered and processed all the same, at the time the others carry.
+    virtual bool carriesTime(const EngineInput& in) const {
+      (void)in;
+      return true;
+    }
   };
 
   /// window_us: the horizon (EngineConfig::horizonUs()); max_jump_us: EngineConfig::max_time_jump_us;
