@@ -13,6 +13,8 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -889,7 +891,7 @@ TEST_F(LogTools, AFileThatIsNoLogIsSaidToBeNoneByEveryCommand) {
     std::ofstream f(path("notes.lcmlog"));
     for (int i = 0; i < 100; ++i) f << "this is a line of text, not an LCM log\n";
   }
-  for (const std::string args : {"info " + path("notes.lcmlog"), "cut " + path("notes.lcmlog") + " -o " + path("c.lcmlog")}) {
+  for (const std::string& args : std::vector<std::string>{"info " + path("notes.lcmlog"), "cut " + path("notes.lcmlog") + " -o " + path("c.lcmlog")}) {
     const ToolRun r = tool(args);
     EXPECT_EQ(r.rc, 3) << args << "\n" << r.out << r.err;
     EXPECT_NE((r.out + r.err).find("no LCM event in the whole file (3900 bytes, no sync word 0xEDA1DA01"),
