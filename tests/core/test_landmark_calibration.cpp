@@ -127,6 +127,35 @@ TEST(LandmarkCalibration, EachKeyAddsItsStatesWithTheirPriors) {
   EXPECT_THROW(makeFilter(c, many), std::invalid_argument);
 }
 
+// A calibration state the filter does not have is refused, naming the ones it has (it was
+// ignored: the user believed the bias estimated). Filters with no calibration states at all
+// (the ruler filters, a shadow of the same parameters) are left alone.
+TEST(LandmarkCalibration, AStateTheFilterDoesNotHaveIsRefusedNamingItsStates) {
+  FilterConfig c = baseConfig();
+  c.calibration.steering_bias = true;
+  try {
+    makeFilter(c, kBeacons);
+    ADD_FAILURE() << "steering_bias on ukf_landmarks was taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("calibration.steering_bias is not a state of ukf_landmarks (its states: "
+                                         "beacon_bias, odo_scale, yaw_rate_scale, yaw_rate_bias)"),
+              std::string::npos)
+        << e.what();
+  }
+  c.calibration.steering_bias = false;
+  c.calibration.mag_bias = true;
+  EXPECT_THROW(makeFilter(c, kBeacons), std::invalid_argument);
+  FilterConfig g = c;
+  g.type = "tvekf";  // has mag_bias
+  EXPECT_NO_THROW(makeFilter(g, kBeacons));
+  g.calibration.yaw_rate_bias = true;
+  EXPECT_THROW(makeFilter(g, kBeacons), std::invalid_argument);
+  g.type = "ukf_gps";
+  EXPECT_THROW(makeFilter(g, kBeacons), std::invalid_argument);
+  g.type = "dead_reckoning";
+  EXPECT_NO_THROW(makeFilter(g, kBeacons));
+}
+
 // A beacon that reads 3 m long: with its bias state on, the bias is found within 0.2 m (and
 // inside 3 sigma of its estimate) and the position stays within a few centimetres; with the
 // state off, that beacon's ranges are refused or pull the estimate, and the error is larger.

@@ -10,6 +10,7 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 #include <Eigen/Eigenvalues>
 
@@ -80,6 +81,18 @@ void validate(const FilterConfig& c) {
                                    {k.yaw_rate_scale_mean, "yaw_rate_scale_mean"}, {k.yaw_rate_bias_mean, "yaw_rate_bias_mean"},
                                    {k.steering_bias_mean, "steering_bias_mean"}})
     require(std::isfinite(mean), std::string("calibration.") + name + " must be finite");
+  // A filter with calibration states of its own refuses a switch for a state it does not have
+  // (the switch would be ignored, the user believing the bias estimated).
+  const bool landmarks = c.type == "ukf_landmarks", gnss = c.type == "tvekf" || c.type == "ukf_gps";
+  for (const auto& [on, name, ok] :
+       {std::tuple{k.beacon_bias != FilterConfig::Calibration::BeaconBias::Off, "beacon_bias", landmarks},
+        {k.yaw_rate_scale, "yaw_rate_scale", landmarks}, {k.yaw_rate_bias, "yaw_rate_bias", landmarks},
+        {k.steering_bias, "steering_bias", gnss}, {k.mag_bias, "mag_bias", gnss}})
+    require(!on || ok || !(landmarks || gnss),
+            std::string("calibration.") + name + " is not a state of " + c.type + " (its states: " +
+                (landmarks ? "beacon_bias, odo_scale, yaw_rate_scale, yaw_rate_bias"
+                           : "odo_scale, steering_bias, mag_bias") +
+                ")");
 }
 
 }  // namespace

@@ -172,11 +172,11 @@ struct FilterConfig {
     double yaw_rate_bias_mean = 0.0;  ///< prior mean of b [rad/s]
     double yaw_rate_bias_std = 0.01;  ///< prior 1 sigma of b [rad/s]
     double yaw_rate_bias_rw = 1e-4;   ///< random walk of b [rad/s/sqrt(s)]
-    bool steering_bias = false;       ///< GNSS filters only
+    bool steering_bias = false;       ///< GNSS filters only (ukf_landmarks refuses it)
     double steering_bias_mean = 0.0;  ///< prior mean of s [rad]
     double steering_bias_std = 0.01;  ///< prior 1 sigma of s [rad]
     double steering_bias_rw = 1e-5;   ///< random walk of s [rad/sqrt(s)]
-    bool mag_bias = false;            ///< GNSS filters only
+    bool mag_bias = false;            ///< GNSS filters only (ukf_landmarks refuses it)
     double mag_bias_std = 0.025;      ///< steady 1 sigma of m (Markov) [rad]
     double mag_bias_tau = 10.0;       ///< correlation time of m [s]
     bool any() const {
