@@ -241,7 +241,7 @@ TEST_F(EvaluateTest, TruthAt10HzIsInterpolatedAtOddEstimateTimes) {
   ASSERT_TRUE(mid.has_value());
   EXPECT_NEAR(mid->x, 1.0, 1e-12);
   EXPECT_FALSE(eval::interpolateTruth(gappy, 2100001, 0, &why).has_value());
-  eval::EstimateTrack across{"POSE", {}, {}};
+  eval::EstimateTrack across{"POSE", {}, {}, {}};
   for (int64_t u : {50000, 1000000, 2100000}) across.poses.push_back({u, 0, 0, 0, Eigen::Matrix3d::Identity(), true, 0});
   eval::EvaluateOptions opt;
   const auto g = eval::scoreTrack(across, gappy, opt);
@@ -835,7 +835,9 @@ TEST_F(EvaluateTest, TheLockOutTimelineGivesEachSpanAndTheReLocalizationsOfTheTr
                          "re-localization(s) at 5.0 s, 8.5 s"),
             std::string::npos)
       << output_;
-  if (std::system("command -v gnuplot > /dev/null") == 0) EXPECT_GT(fs::file_size(file("out/status_POSE.png")), 1000u);
+  if (std::system("command -v gnuplot > /dev/null") == 0) {
+    EXPECT_GT(fs::file_size(file("out/status_POSE.png")), 1000u);
+  }
 }
 
 TEST_F(EvaluateTest, ATrackThatNeverLeftTrackingHasNoStatusLineNorFigure) {
