@@ -240,17 +240,22 @@ TEST_F(ControlPoseTest, ComposingOnlyTheNewMotionEqualsComposingItAll) {
 }
 
 // Through the engine: the control pose is published for each odometry message as it is pushed,
-// equals the canonical state once the window was flushed and a far later sample of an unused
-// sensor released everything, and the canonical outputs are the same with or without it.
+// equals the canonical state once a far later IMU sample (which the active ruler filter does not
+// compose, but a shadow uses, so that it moves the horizon) released everything, and the
+// canonical outputs are the same with or without it.
 TEST_F(ControlPoseTest, CanonicalOutputIsTheSameWithTheControlPose) {
   const auto all = inputs();
   const core::MarkerMap map = app::csv::loadMap(cfg_.fusion.map_file);
   auto run = [&](bool control) {
     std::vector<core::FilterState> states, controls;
     core::EngineOutputs out;
-    out.on_state = [&](const std::string&, bool, const core::FilterState& s) { states.push_back(s); };
+    out.on_state = [&](const std::string&, bool active, const core::FilterState& s) {
+      if (active) states.push_back(s);
+    };
     if (control) out.on_control = [&](const core::FilterState& s) { controls.push_back(s); };
-    core::FusionEngine engine(app::engineConfig(cfg_), map, out);
+    core::EngineConfig ecfg = app::engineConfig(cfg_);
+    ecfg.shadow = {"odo_ins"};
+    core::FusionEngine engine(ecfg, map, out);
     for (const auto& in : all) engine.push(in);
     core::ImuInput imu;  // 0.5 s after the last input: releases every one of them
     imu.utime = all.back().utime + 500000;
@@ -276,6 +281,32 @@ TEST_F(ControlPoseTest, CanonicalOutputIsTheSameWithTheControlPose) {
   EXPECT_EQ(controls.back().x, with_states.back().x);
   EXPECT_EQ(controls.back().P, with_states.back().P);
   EXPECT_EQ(controls[controls.size() - 2].utime, last_odometry) << "the newest motion, not yet released";
+}
+
+// An IMU sample no filter uses changes nothing in the control pose: none is published for it (it
+// was, at the IMU's rate, the pose before it again). With a filter that uses the IMU, each one is.
+TEST_F(ControlPoseTest, OnlyAnImuSampleSomeFilterUsesPublishesAControlPose) {
+  const core::MarkerMap map = app::csv::loadMap(cfg_.fusion.map_file);
+  for (const bool imu_shadow : {false, true}) {
+    std::size_t controls = 0;
+    core::EngineOutputs out;
+    out.on_control = [&](const core::FilterState&) { ++controls; };
+    core::EngineConfig ecfg = app::engineConfig(cfg_);
+    if (imu_shadow) ecfg.shadow = {"odo_ins"};
+    core::FusionEngine engine(ecfg, map, out);
+    for (int k = 1; k <= 100; ++k) {
+      core::OdometryInput u;
+      u.utime = k * 10000;
+      u.delta_s = 0.02;
+      u.has_steering = true;
+      engine.push(core::EngineInput{"ODOMETRY", k, u.utime, u});
+      core::ImuInput imu;
+      imu.utime = u.utime + 5000;
+      imu.accel = core::Vec3(0, 0, 9.81);
+      engine.push(core::EngineInput{"IMU", k, imu.utime, imu});
+    }
+    EXPECT_EQ(controls, imu_shadow ? 200u : 100u) << imu_shadow;
+  }
 }
 
 }  // namespace

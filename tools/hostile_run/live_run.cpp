@@ -151,6 +151,7 @@ struct Seen {
   std::mutex mu;
   Track track;
   int64_t live_utime = 0;  ///< the last odometry message's time (the live time)
+  Clock::time_point live_at{};  ///< when the system's last odometry message arrived
   std::set<std::string> live_channels;
 };
 
@@ -290,6 +291,7 @@ LiveRunResult runLive(const LiveRunOptions& o) {
         if (m.decode(data, 0, static_cast<int>(n)) == static_cast<int>(n) && m.seq < kSeqBase) {
           std::lock_guard<std::mutex> l(seen.mu);
           seen.live_utime = std::max(seen.live_utime, m.utime);
+          seen.live_at = Clock::now();
         }
       }
       if (o.disturbance != Disturbance::kCorrupt) return;
@@ -372,7 +374,9 @@ LiveRunResult runLive(const LiveRunOptions& o) {
 
   std::lock_guard<std::mutex> l(seen.mu);
   if (seen.track.poses.empty()) throw std::runtime_error("no POSE from the system (" + o.out_dir + "/launcher.out)");
-  for (std::size_t i = 1; i < seen.track.poses.size(); ++i) {  // wall time: the watcher's
+  // Wall time (the watcher's), while the system's odometry comes: the poses still in the horizon
+  // when the input ends come out together, when the daemon flushes it, not on the odometry.
+  for (std::size_t i = 1; i < seen.track.poses.size() && seen.track.poses[i].at <= seen.live_at; ++i) {
     const double silence = seconds(seen.track.poses[i].at - seen.track.poses[i - 1].at);
     r.max_silence_wall_s = std::max(r.max_silence_wall_s, silence);
     r.silences_over += silence > 2 * r.pose_period_s / std::max(o.factor, 1e-9);

@@ -45,7 +45,7 @@ struct LiveRunResult {
   double rmse = 0, max_error = 0;          ///< [m] POSE against the interpolated ground truth
   int64_t scored = 0;                      ///< poses scored (within the truth)
   double max_gap_msg_s = 0;                ///< longest step of POSE's message time [s]
-  double max_silence_wall_s = 0;           ///< longest wall time between two POSE arrivals [s]
+  double max_silence_wall_s = 0;           ///< longest wall time between two POSE arrivals while the odometry came [s]
   double pose_period_s = 0;                ///< the odometry's period (POSE comes per odometry) [s]
   int64_t gaps_over = 0;                   ///< steps of POSE's message time above 2 periods
   int64_t silences_over = 0;               ///< wall times between POSE arrivals above 2 periods / factor

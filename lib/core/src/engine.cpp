@@ -273,8 +273,12 @@ FusionEngine::FusionEngine(FusionEngine&&) noexcept = default;
 FusionEngine& FusionEngine::operator=(FusionEngine&&) noexcept = default;
 
 bool FusionEngine::push(EngineInput&& in) {
+  // An IMU sample moves the control pose only when a filter uses it (composed by the active one,
+  // or moving the horizon: carriesTime); with none it would publish the control pose before it
+  // again, at the IMU's rate.
   const bool motion = impl_->out.on_control && (std::holds_alternative<OdometryInput>(in.payload) ||
-                                                std::holds_alternative<ImuInput>(in.payload));
+                                                (std::holds_alternative<ImuInput>(in.payload) &&
+                                                 impl_->carriesTime(in)));
   // (what the sensor watch needs of it: the input is moved into the window)
   const bool watched = impl_->watch.active() && !std::holds_alternative<ControlCommand>(in.payload);
   const int64_t utime = in.utime;

@@ -34,8 +34,9 @@ class FusionEngine {
   /// left as it was. An input beyond the time-jump guard is held (true) and taken or dropped
   /// later (see EngineConfig::max_time_jump_us). A command waits in the window until an input
   /// other than a command is newer than it by the window (or flush()); one more than
-  /// max_time_jump_us ahead of the newest input is refused ("too_new"). An odometry or IMU
-  /// input taken is followed by the control pose (EngineOutputs::on_control, when set).
+  /// max_time_jump_us ahead of the newest input is refused ("too_new"). An odometry input
+  /// taken is followed by the control pose (EngineOutputs::on_control, when set), and so is an IMU
+  /// input when a filter (active or shadow) uses the IMU.
   bool push(EngineInput&& in);
   bool push(const EngineInput& in) { return push(EngineInput(in)); }
   /// Processes everything still queued (end of log / shutdown).

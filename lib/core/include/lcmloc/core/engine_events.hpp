@@ -153,7 +153,8 @@ struct EngineOutputs {
   std::function<void(const std::string& filter, bool is_active, const FilterState&)> on_state;
   std::function<void(const std::string& filter, bool is_active, const GateDecision&)> on_decision;
   std::function<void(const EngineEvent&)> on_event;
-  /// The control pose (ControlPredictor) after every odometry or IMU input the engine took, the
+  /// The control pose (ControlPredictor) after every odometry input the engine took, and every
+  /// IMU input when a filter (active or shadow) uses the IMU, the
   /// moment it was pushed: the active filter's state with the inputs still waiting in the reorder
   /// window composed on top. Unset: none is computed.
   std::function<void(const FilterState&)> on_control;
