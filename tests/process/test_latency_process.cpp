@@ -59,7 +59,9 @@ TEST_F(LatencyProcessTest, TheBenchmarkWritesAWellFormedReport) {
     EXPECT_LE(r[k]["p50_ms"].as<double>(), r[k]["p99_ms"].as<double>()) << k;
     EXPECT_LE(r[k]["p99_ms"].as<double>(), r[k]["max_ms"].as<double>()) << k;
   }
-  EXPECT_GT(r["control"]["n"].as<int>(), r["relay"]["n"].as<int>()) << "a control pose per ODOMETRY and per IMU";
+  // A control pose per ODOMETRY message (the relay's probe has its rate, 100 Hz), none per IMU
+  // sample: ukf_gated does not use the IMU (there would be twice as many).
+  EXPECT_NEAR(r["control"]["n"].as<int>(), r["relay"]["n"].as<int>(), 10);
   EXPECT_GE(r["cpu"]["daemon_s"].as<double>(), 0.0);
   EXPECT_GT(r["rss_kb"]["peak"].as<int>(), 0);
   EXPECT_GE(r["rss_kb"]["peak"].as<int>(), r["rss_kb"]["last"].as<int>());
