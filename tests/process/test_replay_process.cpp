@@ -1,13 +1,16 @@
 // Replay and hot swap over real processes (udpm on loopback, a unique port per test):
 // live == offline replay byte for byte (with control commands sent by lcmloc-ctl during the run
 // and a shadow filter), lcm-logplayer into a daemon == offline replay and drops reported,
-// process-level hand-over from the bus and from a checkpoint.
+// process-level hand-over from the bus and from a checkpoint; GPS fixes delivered 200 ms late,
+// fused within the horizon live as in the replay.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <thread>
@@ -20,7 +23,10 @@
 #include "lcmloc/bus/transport.hpp"
 #include "lcmloc/fusion_control_t.hpp"
 #include "lcmloc/fusion_status_t.hpp"
+#include "lcmloc/gate_decision_t.hpp"
+#include "lcmloc/gps_fix_t.hpp"
 #include "lcmloc/heartbeat_t.hpp"
+#include "lcmloc/imu_t.hpp"
 #include "lcmloc/odometry_t.hpp"
 #include "lcmloc/pose_t.hpp"
 #include "lcmloc/replay/replay.hpp"
@@ -305,6 +311,73 @@ TEST_F(ReplayProcessTest, LogplayerIntoDaemonEqualsOfflineReplayAndDropsAreRepor
     }
     EXPECT_EQ(offline_last.sequence_gaps, w.status.back().sequence_gaps);
   }
+}
+
+// GPS fixes delivered 200 ms after their time (a receiver's latency), over real LCM: the golden
+// GPS run's log with each fix moved after the odometry and IMU of the 200 ms that follow it,
+// played by lcm-logplayer into a daemon whose horizon covers the delay
+// (fusion.sensors.gps.delay 0.25 s). Every fix is fused, none is refused as late, and the live
+// POSE and GATE are the offline replay's of the same log, byte for byte.
+TEST_F(ReplayProcessTest, GpsFixesDelivered200msLateAreFusedLiveAsInTheReplay) {
+  const std::string golden = LCMLOC_GOLDEN_DIR;
+  std::vector<std::pair<Event, int64_t>> in;  // (event, its message time)
+  for (auto& e : readLog(golden + "/gps.lcmlog")) {
+    int64_t t = 0;
+    if (e.channel == "ODOMETRY") t = decode<lcmloc::odometry_t>(e.data).utime;
+    else if (e.channel == "IMU") t = decode<lcmloc::imu_t>(e.data).utime;
+    else if (e.channel == "GPS") t = decode<lcmloc::gps_fix_t>(e.data).utime;
+    else continue;
+    in.emplace_back(std::move(e), t);
+  }
+  std::vector<Event> late;
+  std::vector<std::pair<Event, int64_t>> waiting;
+  int64_t arrival = 0;
+  int fixes = 0;
+  auto add = [&](Event e, int64_t t) {
+    arrival = std::max(arrival, t);
+    e.timestamp = arrival;  // lcm-logplayer paces by these: the fix goes out when it arrived
+    late.push_back(std::move(e));
+  };
+  for (auto& [e, t] : in) {
+    if (e.channel == "GPS") {
+      ++fixes;
+      waiting.emplace_back(std::move(e), t);
+      continue;
+    }
+    while (!waiting.empty() && waiting.front().second + 200000 < t) {
+      add(std::move(waiting.front().first), t);
+      waiting.erase(waiting.begin());
+    }
+    add(std::move(e), t);
+  }
+  for (auto& [e, t] : waiting) add(std::move(e), arrival);
+  ASSERT_GE(fixes, 10);
+  const std::string log = path("late.lcmlog");
+  writeLog(log, late);
+  // The golden's config with the GPS delay.
+  std::ifstream g(golden + "/gps.yaml");
+  std::string text((std::istreambuf_iterator<char>(g)), std::istreambuf_iterator<char>());
+  const auto at = text.find("\nfusion:\n");
+  ASSERT_NE(at, std::string::npos);
+  text.insert(at + 9, "  sensors: {gps: {delay: 0.25}}\n");
+  const std::string config = writeFile("gps_late.yaml", text);
+
+  Bus bus(url_);
+  Watch w(bus);
+  playIntoDaemon(bus, w, config, {log});
+  if (HasFatalFailure()) return;
+  auto offline = byChannel(replay(log, config, "offline.lcmlog"));
+  for (const char* ch : {"POSE", "GATE"}) {
+    ASSERT_GT(offline[ch].size(), static_cast<std::size_t>(fixes)) << ch;
+    EXPECT_EQ(firstDifference(w.payloads[ch], offline[ch]), -1)
+        << ch << ": live " << w.payloads[ch].size() << " vs replay " << offline[ch].size();
+  }
+  ASSERT_FALSE(w.status.empty());
+  EXPECT_EQ(w.status.back().event, "stopped");
+  EXPECT_EQ(w.status.back().detail.find("later than"), std::string::npos) << w.status.back().detail;
+  int gps_decisions = 0;
+  for (const auto& d : offline["GATE"]) gps_decisions += decode<lcmloc::gate_decision_t>(d).sensor == "GPS";
+  EXPECT_GE(gps_decisions, fixes) << "each fix fused (decided by the filter and its shadow)";
 }
 
 // The same log played twice into one running daemon (as a restarted simulator would be): the
