@@ -108,10 +108,32 @@ TEST(FitNoise, WithoutTruthOrHeadingItSaysWhatItCouldNotFit) {
   const auto g = fit::fitAgainstTruth(r);
   EXPECT_TRUE(g.landmark_range);
   EXPECT_FALSE(g.landmark_bearing);
-  EXPECT_FALSE(g.pw_diag);
   bool said = false;
   for (const auto& n : g.notes) said |= n.find("bearing") != std::string::npos;
   EXPECT_TRUE(said);
+  // The process noise is fitted all the same, the heading taken as the direction of travel:
+  // the position's of the order OdometryProcessNoiseGrowsWithTheOdometryNoise finds with it.
+  ASSERT_TRUE(g.pw_diag);
+  EXPECT_GT((*g.pw_diag)[0], 5e-6);
+  EXPECT_LT((*g.pw_diag)[0], 1e-4);
+}
+
+// A recording with a position-only truth and odometry whose turn is reversed and twice the
+// truth's (as the UWB recording's columns give it): the turn scale is fitted, and the process
+// noise is what is left after it (the filter's scale state starts there), not the metres of a
+// dead reckoning that turns the wrong way.
+TEST(FitNoise, ProcessNoiseAfterTheFittedScalesFromAPositionOnlyTruth) {
+  auto r = circle(0.05, 0.02, 0.0, 16);
+  for (auto& t : r.truth) t.has_heading = false;
+  for (auto& o : r.odometry) o.delta_theta *= -2.0;
+  const auto f = fit::fitAgainstTruth(r);
+  ASSERT_TRUE(f.yaw_rate_scale);
+  EXPECT_TRUE(f.yaw_rate_scale->significant());
+  EXPECT_NEAR(f.yaw_rate_scale->ratio, -0.5, 0.03);
+  ASSERT_TRUE(f.pw_diag) << (f.notes.empty() ? "" : f.notes.back());
+  EXPECT_GT(f.odometry_windows, 1000);
+  EXPECT_GT((*f.pw_diag)[0], 5e-6);
+  EXPECT_LT((*f.pw_diag)[0], 1e-4);
 }
 
 TEST(FitNoise, TheFragmentNamesTheFittedKeysOnly) {

@@ -77,60 +77,6 @@ OdometryWindow walkWindow(const std::vector<core::OdometryInput>& odo, std::size
   return {odo.size(), false};
 }
 
-void fitOdometry(const Recording& r, const FitOptions& opt, NoiseFit& f) {
-  const int64_t max_gap = static_cast<int64_t>(opt.max_truth_gap_s * 1e6);
-  const int64_t max_odo_gap = static_cast<int64_t>(opt.max_odometry_gap_s * 1e6);
-  const int64_t max_window = static_cast<int64_t>(opt.max_window_s * 1e6);
-  std::vector<double> pos2, heading2, dist, turn;
-  std::size_t i = 0;
-  while (i + 1 < r.odometry.size()) {
-    const auto start = truthAt(r.truth, r.odometry[i].utime, max_gap);
-    if (!start || !start->has_heading) {
-      ++i;
-      continue;
-    }
-    core::Pose p(start->x, start->y, start->heading);
-    double s = 0, turned = 0;
-    const auto w = walkWindow(r.odometry, i, max_odo_gap, [&](const core::OdometryInput& o) {
-      const double dth = core::headingIncrement(o, r.wheelbase);
-      p = core::propagatePose(p, o.delta_s, dth);
-      s += std::fabs(o.delta_s);
-      turned += std::fabs(dth);
-      return s >= r.pw_distance || o.utime - r.odometry[i].utime >= max_window;
-    });
-    const std::size_t j = w.end;
-    if (!w.whole) {
-      i = j;
-      continue;
-    }
-    const auto end = truthAt(r.truth, r.odometry[j].utime, max_gap);
-    if (end && end->has_heading && (s > 0 || turned > 0)) {
-      pos2.push_back(0.5 * (std::pow(end->x - p.x(), 2) + std::pow(end->y - p.y(), 2)));
-      heading2.push_back(std::pow(core::wrapAngle(end->heading - p.z()), 2));
-      dist.push_back(s / r.pw_distance);
-      turn.push_back(turned);
-    }
-    i = j;
-  }
-  f.odometry_windows = static_cast<int64_t>(pos2.size());
-  if (pos2.size() < 10) {
-    f.notes.push_back("odometry: " + std::to_string(pos2.size()) +
-                      " windows with a truth heading at both ends (10 needed): process noise not fitted");
-    return;
-  }
-  // Position: variance proportional to the distance (per pw_distance), fitted where the vehicle
-  // moved; heading: per distance and per radian turned.
-  double sum_e = 0, sum_s = 0;
-  for (std::size_t k = 0; k < pos2.size(); ++k) {
-    sum_e += pos2[k];
-    sum_s += dist[k];
-  }
-  const double q_pos = sum_s > 0 ? sum_e / sum_s : 0;
-  const auto [q_heading, q_turn] = fitTwo(heading2, dist, turn);
-  f.pw_diag = core::Vec3(q_pos, q_pos, q_heading);
-  f.pw_turn = q_turn;
-}
-
 /// The truth's heading at utime, or its direction of travel when it has none (over the shortest
 /// interval around utime in which it moved min_move metres, at most 2 s each side).
 std::optional<double> truthHeading(const std::vector<TruthSample>& t, int64_t utime, int64_t max_gap,
@@ -197,6 +143,73 @@ void fitScales(const Recording& r, const FitOptions& opt, NoiseFit& f) {
   if (ds_odo.size() >= 5) f.odometry_scale = throughOrigin(ds_odo, ds_truth);
   if (dth_odo.size() >= 5) f.yaw_rate_scale = throughOrigin(dth_odo, dth_truth);
   else f.notes.push_back("yaw-rate scale: " + std::to_string(dth_odo.size()) + " windows that turn (5 needed): not fitted");
+}
+
+/// The odometry's error growth against the truth: dead reckoning from the truth's pose over
+/// windows of pw_distance (or max_window_s) started at every message (overlapping: a short
+/// recording has few disjoint ones), the odometry corrected by the scales fitted before where
+/// they are significant (the filter's calibration states start there, so the process noise is
+/// what is left after them). A truth without heading gives the start heading by its direction of
+/// travel, and the heading's error only where the direction of travel is known at both ends.
+void fitOdometry(const Recording& r, const FitOptions& opt, NoiseFit& f) {
+  const double k_ds = f.odometry_scale && f.odometry_scale->significant() ? f.odometry_scale->ratio : 1.0;
+  const double k_dth = f.yaw_rate_scale && f.yaw_rate_scale->significant() ? f.yaw_rate_scale->ratio : 1.0;
+  const int64_t max_gap = static_cast<int64_t>(opt.max_truth_gap_s * 1e6);
+  const int64_t max_odo_gap = static_cast<int64_t>(opt.max_odometry_gap_s * 1e6);
+  const int64_t max_window = static_cast<int64_t>(opt.max_window_s * 1e6);
+  std::vector<double> pos2, pos_dist, heading2, dist, turn;
+  std::size_t i = 0;
+  while (i + 1 < r.odometry.size()) {
+    const auto start = truthAt(r.truth, r.odometry[i].utime, max_gap);
+    const auto start_heading = start ? truthHeading(r.truth, r.odometry[i].utime, max_gap) : std::nullopt;
+    if (!start_heading) {
+      ++i;
+      continue;
+    }
+    core::Pose p(start->x, start->y, *start_heading);
+    double s = 0, turned = 0;
+    const auto w = walkWindow(r.odometry, i, max_odo_gap, [&](const core::OdometryInput& o) {
+      const double dth = k_dth * core::headingIncrement(o, r.wheelbase);
+      p = core::propagatePose(p, k_ds * o.delta_s, dth);
+      s += std::fabs(o.delta_s);
+      turned += std::fabs(dth);
+      return s >= r.pw_distance || o.utime - r.odometry[i].utime >= max_window;
+    });
+    const std::size_t j = w.end;
+    if (!w.whole) {
+      i = j;
+      continue;
+    }
+    const auto end = truthAt(r.truth, r.odometry[j].utime, max_gap);
+    if (end && (s > 0 || turned > 0)) {
+      pos2.push_back(0.5 * (std::pow(end->x - p.x(), 2) + std::pow(end->y - p.y(), 2)));
+      pos_dist.push_back(s / r.pw_distance);
+      if (const auto end_heading = truthHeading(r.truth, r.odometry[j].utime, max_gap)) {
+        heading2.push_back(std::pow(core::wrapAngle(*end_heading - p.z()), 2));
+        dist.push_back(s / r.pw_distance);
+        turn.push_back(turned);
+      }
+    }
+    ++i;
+  }
+  f.odometry_windows = static_cast<int64_t>(pos2.size());
+  if (pos2.size() < 10 || heading2.size() < 10) {
+    f.notes.push_back(fmt::format("odometry: {} windows with the truth at both ends, {} with its heading (or direction of "
+                                  "travel) at both (10 of each needed): process noise not fitted",
+                                  pos2.size(), heading2.size()));
+    return;
+  }
+  // Position: variance proportional to the distance (per pw_distance), fitted where the vehicle
+  // moved; heading: per distance and per radian turned.
+  double sum_e = 0, sum_s = 0;
+  for (std::size_t k = 0; k < pos2.size(); ++k) {
+    sum_e += pos2[k];
+    sum_s += pos_dist[k];
+  }
+  const double q_pos = sum_s > 0 ? sum_e / sum_s : 0;
+  const auto [q_heading, q_turn] = fitTwo(heading2, dist, turn);
+  f.pw_diag = core::Vec3(q_pos, q_pos, q_heading);
+  f.pw_turn = q_turn;
 }
 
 }  // namespace
@@ -274,8 +287,8 @@ NoiseFit fitAgainstTruth(const Recording& r, const FitOptions& opt) {
   if (!gps.empty()) f.gps = residualStats(gps);
 
   if (!r.odometry.empty()) {
-    fitOdometry(r, opt, f);
     fitScales(r, opt, f);
+    fitOdometry(r, opt, f);
   }
   return f;
 }
