@@ -168,8 +168,8 @@ TEST_F(ConvertTest, SharedRecordingsConvertAndImport) {
 // The recordings scored as a user would score them: the importer's written config (its noise
 // fitted against the truth), no hand edits, the config's filter replayed by lcmloc-evaluate.
 // The bounds are the real-data targets where they are met; where they are not yet (NEES, robot
-// 2's RMSE and max, the UWB run's 0.12 m: tools/real_data_report.sh prints every figure) the
-// assertion is looser or guards against divergence only: before re-localization and the noise fit, these runs ended
+// 2's RMSE and max: tools/real_data_report.sh prints every figure) the assertion guards against
+// divergence only: before re-localization and the noise fit, these runs ended
 // 36-181 m (landmarks) and 11-20 m (UWB) off.
 TEST_F(ConvertTest, SharedRecordingsScoredWithTheImportersConfig) {
   const std::string data = LCMLOC_SHARED_DATA_DIR;
@@ -204,9 +204,10 @@ TEST_F(ConvertTest, SharedRecordingsScoredWithTheImportersConfig) {
         << "robot " << robot;  // other robots taken for landmarks
   }
   // UWB: the truth has positions only; the process noise is fitted by the direction of travel,
-  // after the odometry's reversed turn scale (0.89 m RMSE with the default process noise).
+  // after the odometry's reversed turn scale (0.89 m RMSE with the default process noise), and
+  // the modules' range bias of about 0.1 m gets its states (0.171 m without them).
   const auto j = score("uwb", "uwb-labyrinth --dir " + data + "/uwb_indoor");
   const auto& e = j.at("tracks").at(0).at("position_error_m");
-  EXPECT_LT(e.at("rmse").get<double>(), 0.25);  // (target 0.12)
-  EXPECT_LT(e.at("max").get<double>(), 0.6);
+  EXPECT_LE(e.at("rmse").get<double>(), 0.12);
+  EXPECT_LT(e.at("max").get<double>(), 0.4);
 }

@@ -72,6 +72,23 @@ TEST(FitNoise, RecoversTheMeasurementNoiseAndTheBeaconBiases) {
   EXPECT_FALSE(f.gps);  // no fix in the recording
 }
 
+// The circle's beacons read 0.1 m per id long (0.1 to 0.4 m): every one's bias is significant,
+// and the prior for the filter's bias states covers them all. The same ranges with the bias
+// taken out give none.
+TEST(FitNoise, ASignificantBeaconRangeBiasGivesAPriorForTheBiasStates) {
+  auto r = circle(0.05, 0.02, 0.0, 17);
+  const auto f = fit::fitAgainstTruth(r);
+  ASSERT_TRUE(f.beacon_bias);
+  EXPECT_EQ(f.beacon_bias->beacons, 4);
+  EXPECT_EQ(f.beacon_bias->of, 4);
+  EXPECT_GT(f.beacon_bias->mean, 0.15);
+  EXPECT_LT(f.beacon_bias->mean, 0.35);
+  EXPECT_GE(f.beacon_bias->mean + f.beacon_bias->std, 0.39);  // the farthest beacon within one sigma
+  EXPECT_LE(f.beacon_bias->mean - f.beacon_bias->std, 0.11);
+  for (auto& b : r.beacons) b.range -= 0.1 * b.beacon_id;
+  EXPECT_FALSE(fit::fitAgainstTruth(r).beacon_bias);
+}
+
 TEST(FitNoise, ARangeBiasIsTheMedianNotTheSpread) {
   const auto f = fit::fitAgainstTruth(circle(0.05, 0.02, 0.3, 8));
   ASSERT_TRUE(f.landmark_range);

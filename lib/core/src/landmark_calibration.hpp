@@ -12,7 +12,7 @@
 namespace lcmloc::core::detail {
 
 /// Per-beacon range-bias states: at most this many (a map with more entries takes the shared one).
-inline constexpr int kMaxBeaconBiasStates = 8;
+inline constexpr int kMaxBeaconBiasStates = FilterConfig::Calibration::kMaxPerBeacon;
 
 /// Where each calibration state sits in the augmented state (-1: switched off).
 struct CalibrationLayout {

@@ -275,6 +275,19 @@ NoiseFit fitAgainstTruth(const Recording& r, const FitOptions& opt) {
   }
   if (!beacon.empty()) f.beacon_range = residualStats(beacon);
   for (auto& [id, v] : by_id) f.beacon_range_by_id[id] = residualStats(std::move(v));
+  if (f.beacon_range) {
+    auto se = [](const Residuals& x) { return 1.2533 * x.sigma / std::sqrt(static_cast<double>(x.n)); };
+    NoiseFit::RangeBias b;
+    b.mean = f.beacon_range->median;
+    b.std = std::max(0.05, 3.0 * se(*f.beacon_range));
+    for (const auto& [id, x] : f.beacon_range_by_id) {
+      if (x.n < 5) continue;
+      ++b.of;
+      b.beacons += std::fabs(x.median) > std::max(3.0 * se(x), 0.02);
+      b.std = std::max(b.std, std::fabs(x.median - b.mean));
+    }
+    if (b.beacons > 0) f.beacon_bias = b;
+  }
 
   std::vector<double> gps;
   for (const auto& g : r.gps) {

@@ -61,7 +61,7 @@ std::string applyFit(const fit::NoiseFit* f, core::FilterConfig& d) {
 
 /// The text of config.yaml for lcmloc-replay: the filter `filter` from the initial pose of
 /// --initial-pose, else the first ground-truth pose, else 0; map.csv when there is a map.
-std::string configText(const ImportOptions& opt, const std::string& filter, bool with_map,
+std::string configText(const ImportOptions& opt, const std::string& filter, std::size_t map_size,
                        const detail::Converted& conv, const fit::NoiseFit* fitted = nullptr) {
   const auto& first_truth = conv.first_truth;
   core::Vec3 pose = opt.initial_pose ? *opt.initial_pose : first_truth ? *first_truth : core::Vec3::Zero();
@@ -83,7 +83,7 @@ std::string configText(const ImportOptions& opt, const std::string& filter, bool
                    num(opt.datum.longitude), num(opt.datum.altitude))
     << "fusion:\n"
     << "  shadow: []\n";
-  if (with_map) c << "  map_file: map.csv              # id,x,y [m]\n";
+  if (map_size > 0) c << "  map_file: map.csv              # id,x,y [m]\n";
   c << "  filter:\n"
     << "    type: " << filter << "\n"
     << fmt::format("    initial_pose: [{}, {}, {}]   # x [m], y [m], theta [rad]{}\n", num(pose[0]), num(pose[1]),
@@ -114,10 +114,16 @@ std::string configText(const ImportOptions& opt, const std::string& filter, bool
   if (fitted && filter == "ukf_landmarks") {
     scale(fitted->odometry_scale, "odo_scale");
     scale(fitted->yaw_rate_scale, "yaw_rate_scale");
+    // The beacons' range bias, where one differs from 0 beyond its uncertainty: a state per
+    // beacon when the map allows it, one shared otherwise.
+    if (const auto& b = fitted->beacon_bias)
+      cal.push_back(fmt::format("beacon_bias: {}, beacon_bias_mean: {}, beacon_bias_std: {}",
+                                map_size <= static_cast<std::size_t>(core::FilterConfig::Calibration::kMaxPerBeacon) ? "per_beacon" : "shared", num(b->mean),
+                                num(b->std)));
   }
   if (!cal.empty())
     c << "    calibration: {" << fmt::format("{}", fmt::join(cal, ", "))
-      << "}   # the odometry's scales fitted against the truth\n";
+      << "}   # fitted against the truth: the odometry's scales, the beacons' range bias\n";
   return c.str();
 }
 
@@ -135,11 +141,11 @@ void checkConfigText(const std::string& text, const std::string& path) {
 /// The config with the noise fitted against the truth of the log just written (read back as the
 /// replay reads it); the fit's lines into r.noise_fit. A fitted config the loader would refuse
 /// is not used (the defaults stay, and a line says why).
-std::string fittedConfig(const ImportOptions& opt, ImportResult& r, bool with_map, const detail::Converted& conv,
+std::string fittedConfig(const ImportOptions& opt, ImportResult& r, std::size_t map_size, const detail::Converted& conv,
                          const std::string& plain) {
   const fit::LogRead read = fit::readRecording(r.log_path, app::parseSystemConfig(plain, r.config_path));
   const fit::NoiseFit f = fit::fitAgainstTruth(read.recording);
-  const std::string text = configText(opt, r.filter, with_map, conv, &f);
+  const std::string text = configText(opt, r.filter, map_size, conv, &f);
   try {
     app::parseSystemConfig(text, r.config_path);
   } catch (const app::ConfigError& e) {
@@ -165,6 +171,10 @@ std::string fittedConfig(const ImportOptions& opt, ImportResult& r, bool with_ma
   };
   scale("distance", f.odometry_scale);
   scale("turn", f.yaw_rate_scale);
+  if (f.beacon_bias && r.filter == "ukf_landmarks")
+    r.noise_fit.push_back(fmt::format("noise fit: beacon range bias: {} of {} beacons' median residual differs from 0 "
+                                      "(their median {:.3g} m, spread {:.2g} m): the filter's range-bias states start there",
+                                      f.beacon_bias->beacons, f.beacon_bias->of, f.beacon_bias->mean, f.beacon_bias->std));
   for (const auto& n : f.notes) r.noise_fit.push_back("noise fit: " + n);
   return text;
 }
@@ -251,7 +261,7 @@ ImportResult importDirectory(const ImportOptions& opt) {
 
   if (!opt.out_dir.empty() && r.usable()) {
     r.config_path = (fs::path(opt.out_dir) / "config.yaml").string();
-    const std::string config = configText(opt, r.filter, !map.empty(), conv);
+    const std::string config = configText(opt, r.filter, map.size(), conv);
     checkConfigText(config, r.config_path);
     fs::create_directories(opt.out_dir, ec);
     if (ec) throw std::runtime_error("cannot create '" + opt.out_dir + "': " + ec.message());
@@ -262,7 +272,7 @@ ImportResult importDirectory(const ImportOptions& opt) {
       app::csv::writeMap(r.map_path, map);
     }
     std::string text = config;
-    if (opt.fit_noise && conv.first_truth) text = fittedConfig(opt, r, !map.empty(), conv, config);
+    if (opt.fit_noise && conv.first_truth) text = fittedConfig(opt, r, map.size(), conv, config);
     std::ofstream out(r.config_path);
     out << text;
     if (!out.flush()) throw std::runtime_error("cannot write '" + r.config_path + "'");

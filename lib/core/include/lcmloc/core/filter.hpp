@@ -156,6 +156,7 @@ struct FilterConfig {
   ///   magnetometer heading bias m:  heading_mag = theta + m
   struct Calibration {
     enum class BeaconBias { Off, Shared, PerBeacon };
+    static constexpr int kMaxPerBeacon = 8;  ///< PerBeacon: at most this many map entries
     BeaconBias beacon_bias = BeaconBias::Off;
     double beacon_bias_mean = 0.0;    ///< prior mean of c (every beacon's) [m]
     double beacon_bias_std = 0.5;     ///< prior 1 sigma of c [m]

@@ -64,6 +64,16 @@ struct NoiseFit {
     bool significant(double min = 0.02) const { return n >= 5 && std::abs(ratio - 1.0) > std::max(3.0 * se, min); }
   };
   std::optional<Scale> odometry_scale, yaw_rate_scale;
+  /// The beacons' range bias, when at least one beacon's median residual differs from 0 by more
+  /// than 3 standard errors of that median (1.2533 sigma / sqrt(n), at least 5 residuals) and
+  /// by more than 0.02 m: a prior for the filter's range-bias states. `mean`: the median of every
+  /// beacon's residuals together; `std`: the farthest beacon's median from it, or 3 standard
+  /// errors of the mean, at least 0.05 m. `beacons`: how many were significant, of `of`.
+  struct RangeBias {
+    double mean = 0.0, std = 0.05;
+    int beacons = 0, of = 0;
+  };
+  std::optional<RangeBias> beacon_bias;
   std::vector<std::string> notes;  ///< what could not be fitted and why
 };
 
