@@ -184,6 +184,47 @@ TEST(UkfLandmarks, RangeOnlyBeaconsConvergeAndAFaultRangeIsRejected) {
   EXPECT_EQ(f->update(bad)->reason, "unknown_id");
 }
 
+// Ranges without the beacon's id (beacon_id -1): the filter tries the beacons the range can match
+// and takes it only when exactly one passes the gate, the decision naming that beacon; the same
+// run as with the ids converges as well. A range that two beacons at the same distance both
+// explain is refused as ambiguous.
+TEST(UkfLandmarks, RangesWithoutAnIdAreAssociatedWhenOneBeaconAloneMatches) {
+  const MarkerMap beacons{{1, 5.0, 5.0}, {2, -5.0, 5.0}, {3, 0.0, -6.0}};
+  auto f = makeFilter(landmarkConfig(Vec3(2.5, 0.4, M_PI / 2 + 0.1), 0.5), beacons);
+  std::mt19937 rng(8);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  int accepted = 0, right = 0, ambiguous = 0;
+  const Pose truth = driveCircle(*f, 200, [&](int k, const Pose& t) {
+    const Marker& m = beacons[static_cast<std::size_t>(k % 3)];
+    BeaconRange b;
+    b.utime = k * 50000 + 1;
+    b.beacon_id = -1;
+    b.range = std::hypot(m.x - t.x(), m.y - t.y()) + noise(rng);
+    b.sensor = "BEACONS";
+    const auto d = f->update(b);
+    ASSERT_TRUE(d);
+    accepted += d->accepted;
+    right += d->accepted && d->marker_id == m.id;
+    ambiguous += d->reason == "ambiguous";
+  });
+  EXPECT_GE(accepted, 150) << ambiguous << " ambiguous";
+  EXPECT_EQ(right, accepted) << "every range taken was given to its own beacon";
+  FilterState s = f->state();
+  EXPECT_LT(std::hypot(s.x[0] - truth.x(), s.x[1] - truth.y()), 0.1);
+  // At the origin, beacons 1 and 2 are both 7.07 m away (beacon 3 6 m): a range of 7.07 m is
+  // either one's.
+  auto g = makeFilter(landmarkConfig(Vec3(0.0, 0.0, M_PI / 2), 0.5), beacons);
+  BeaconRange both;
+  both.utime = 1000;
+  both.beacon_id = -1;
+  both.range = std::hypot(5.0, 5.0);
+  const auto d = g->update(both);
+  ASSERT_TRUE(d);
+  EXPECT_FALSE(d->accepted);
+  EXPECT_EQ(d->reason, "ambiguous");
+  EXPECT_EQ(g->state().x, makeFilter(landmarkConfig(Vec3(0.0, 0.0, M_PI / 2), 0.5), beacons)->state().x);
+}
+
 TEST(UkfLandmarks, EngineHandsLandmarksAndBeaconsToTheFilterWithTheChannelAsSensor) {
   EngineConfig ec;
   ec.filter = landmarkConfig(Vec3(2.0, 0.0, M_PI / 2), 0.01);

@@ -144,20 +144,31 @@ TEST(ImportFormats, AnUnknownColumnIsAnErrorNamingItAndTheFormatItWouldBe) {
   fs::remove_all(d);
 }
 
-TEST(ImportFormats, BeaconsWithoutAnIdAreRefusedSayingSo) {
+// Beacons without an id: a row with `unknown` in the id column is imported with beacon_id -1
+// (the filter associates it with the map); a file without the id column says how to give one; a
+// beacon range without a map is refused.
+TEST(ImportFormats, BeaconRowsWithoutAnIdAreImportedAsUnknown) {
   const auto d = tempDir("beacon_no_id");
   write(d / "map.csv", "id,x,y\n1,0,0\n");
   write(d / "uwb.csv", "time,range\n1,2.5\n");
   import::ImportOptions o;
   o.dir = d.string();
-  EXPECT_HAS(usageError(o), "beacons without an id are not supported");
-  // An id column whose rows say "unknown": those rows are refused, saying why.
-  write(d / "uwb.csv", "time,beacon_id,range\n1,1,2.5\n2,unknown,2.5\n3,1,2.6\n");
+  EXPECT_HAS(usageError(o), "ranges without a beacon_id column: give the column");
+  write(d / "uwb.csv", "time,beacon_id,range\n1,1,2.5\n2,unknown,2.5\n3,1,2.6\n4,7,2.6\n");
+  o.out_dir = (d / "out").string();
   const auto r = import::importDirectory(o);
-  EXPECT_TRUE(refused(r, "uwb.csv", 3, "column 2: beacon id 'unknown': beacons without an id are not supported"))
-      << (r.refusals.empty() ? "" : r.refusals[0].reason);
+  EXPECT_TRUE(refused(r, "uwb.csv", 5, "beacon id 7 not in the map")) << (r.refusals.empty() ? "" : r.refusals[0].reason);
   EXPECT_EQ(r.refusals.size(), 1u);
-  EXPECT_EQ(r.messages, 2);
+  const auto b = messages<lcmloc::beacon_range_t>(r.log_path, "BEACONS");
+  ASSERT_EQ(b.size(), 3u);
+  EXPECT_EQ(b[0].beacon_id, 1);
+  EXPECT_EQ(b[1].beacon_id, -1);
+  EXPECT_EQ(b[1].range, 2.5);
+  fs::remove(d / "map.csv");
+  fs::remove_all(d / "out");
+  o.out_dir.clear();
+  const auto no_map = import::importDirectory(o);
+  EXPECT_TRUE(refused(no_map, "uwb.csv", 3, "a beacon range: no map file (id,x,y) in the directory"));
   fs::remove_all(d);
 }
 

@@ -178,27 +178,65 @@ class LandmarkUkf final : public Filter {
       d.reason = "bad_input";
       return d;
     }
-    const Marker* known = map_->find(b.beacon_id);
-    if (!known) {
-      d.reason = "unknown_id";
-      d.marker_id = b.beacon_id;
-      return d;
-    }
-    const Marker& m = *known;
     const double rs = b.range_std > 0 ? b.range_std : cfg_.landmarks.beacon_std;
     Eigen::Matrix<double, 1, 1> R, z;
     R(0, 0) = rs * rs;
     z(0, 0) = b.range;
-    const int bias = cal_.biasIndex(m.id);  // its range-bias state (-1: none)
-    auto h = [&m, bias](const typename U::Vector& s) {
-      Eigen::Matrix<double, 1, 1> r;
-      r(0, 0) = std::hypot(m.x - s.x(), m.y - s.y());
-      if (bias >= 0) r(0, 0) += s[bias];
-      return r;
+    auto h_of = [this](const Marker& m) {
+      const int bias = cal_.biasIndex(m.id);  // its range-bias state (-1: none)
+      return [&m, bias](const typename U::Vector& s) {
+        Eigen::Matrix<double, 1, 1> r;
+        r(0, 0) = std::hypot(m.x - s.x(), m.y - s.y());
+        if (bias >= 0) r(0, 0) += s[bias];
+        return r;
+      };
     };
-    Innovation<N, 1> in;
-    const int id = ukf_.template innovate<1>(X, h, R, z, 0u, in) ? m.id : -1;
-    return finish(d, id, in, gate1_);
+    Innovation<N, 1> best, cand;
+    int best_id = -1;
+    if (b.beacon_id >= 0) {
+      const Marker* known = map_->find(b.beacon_id);
+      if (!known) {
+        d.reason = "unknown_id";
+        d.marker_id = b.beacon_id;
+        return d;
+      }
+      if (ukf_.template innovate<1>(X, h_of(*known), R, z, 0u, best)) best_id = known->id;
+      return finish(d, best_id, best, gate1_);
+    }
+    // Without an identity: the map entries whose distance from the predicted position can match
+    // the range within 4 sigma (position and range) are tried, and the range is taken only when
+    // exactly one of them passes the gate (a range is a circle: with the estimate uncertain, two
+    // beacons at about the same distance cannot be told apart; "ambiguous", as for landmarks).
+    const auto& P = ukf_.P();
+    const auto& x = ukf_.x();
+    const double var = std::max(P(0, 0) + P(1, 1), 0.0) + rs * rs;
+    // The range-bias states (the last ones, when on): the widest a bias can make a range.
+    double bias_extent = 0;
+    for (int k = std::max(cal_.bias0, 0); cal_.bias0 >= 0 && k < cal_.size(); ++k)
+      bias_extent = std::max(bias_extent, std::abs(x[k]) + 4.0 * std::sqrt(std::max(P(k, k), 0.0)));
+    const double px = x(0), py = x(1);
+    int inside = 0;
+    map_->near(px, py, MapIndex::widen(b.range + 4.0 * std::sqrt(var) + bias_extent, px, py), near_);
+    for (const uint32_t i : near_) {
+      const Marker& m = (*map_)[i];
+      const int bias = cal_.biasIndex(m.id);
+      const double predicted = std::hypot(m.x - px, m.y - py) + (bias >= 0 ? x[bias] : 0.0);
+      const double slack = 4.0 * std::sqrt(var + (bias >= 0 ? std::max(P(bias, bias), 0.0) : 0.0));
+      if (std::abs(predicted - b.range) > slack) continue;
+      if (!ukf_.template innovate<1>(X, h_of(m), R, z, 0u, cand)) continue;
+      inside += cand.mahalanobis <= gate1_;
+      if (best_id < 0 || cand.mahalanobis < best.mahalanobis) {
+        best = cand;
+        best_id = m.id;
+      }
+    }
+    if (inside >= 2) {
+      d.reason = "ambiguous";
+      d.marker_id = best_id;
+      d.mahalanobis = best.mahalanobis;
+      return d;
+    }
+    return finish(d, best_id, best, gate1_);
   }
 
  protected:

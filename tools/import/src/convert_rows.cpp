@@ -35,23 +35,18 @@ void addMsg(EventLog& log, FileReport& rep, int order, const std::string& ch, co
   ++rep.written;
 }
 
-/// The id column (landmark_id, beacon_id; column number c): an integer >= 0, or (landmarks)
-/// "unknown" = -1.
-bool parseId(const std::string& s, std::size_t c, bool landmark, int& id, std::string& why) {
+/// The id column (landmark_id, beacon_id; column number c): an integer >= 0, or "unknown" = -1
+/// (the filter associates the observation with the map itself).
+bool parseId(const std::string& s, std::size_t c, int& id, std::string& why) {
   std::string low = s;
   std::transform(low.begin(), low.end(), low.begin(), [](unsigned char ch) { return std::tolower(ch); });
   if (low == "unknown") {
-    if (landmark) {
-      id = -1;
-      return true;
-    }
-    why = fmt::format("column {}: beacon id 'unknown': beacons without an id are not supported (the filters take a "
-                      "range to the map beacon of its id)", c);
-    return false;
+    id = -1;
+    return true;
   }
   double v = 0;
   if (!app::csv::parseNumber(s, c, v, why)) {
-    if (landmark) why += " (an integer id >= 0 or \"unknown\")";
+    why += " (an integer id >= 0 or \"unknown\")";
     return false;
   }
   if (v < 0 || v != std::floor(v) || v > 2e9) {
@@ -130,7 +125,7 @@ Converted convertRows(std::vector<DataFile>& files, const std::vector<const Data
       for (std::size_t i = 1; i < row.fields.size() && ok; ++i) {
         const std::string& name = df.names[i];
         if (name == "landmark_id" || name == "beacon_id")
-          ok = parseId(row.fields[i], i + 1, df.format == Format::Landmarks, id, why);
+          ok = parseId(row.fields[i], i + 1, id, why);
         else
           ok = app::csv::parseNumber(row.fields[i], i + 1, v[i], why) &&
                (name.size() < 4 || name.compare(name.size() - 4, 4, "_std") != 0 || checkStd(name, i + 1, v[i], why));
@@ -206,9 +201,12 @@ Converted convertRows(std::vector<DataFile>& files, const std::vector<const Data
           break;
         }
         case Format::Beacons: {
-          if (!by_id.count(id)) {
-            refuse(rep, ln, map.empty() ? fmt::format("beacon id {}: no map file (id,x,y) in the directory", id)
-                                        : fmt::format("beacon id {} not in the map", id));
+          if (map.empty()) {
+            refuse(rep, ln, "a beacon range: no map file (id,x,y) in the directory");
+            continue;
+          }
+          if (id >= 0 && !by_id.count(id)) {  // (-1: unknown, associated by the filter)
+            refuse(rep, ln, fmt::format("beacon id {} not in the map", id));
             continue;
           }
           const double range = at("range");

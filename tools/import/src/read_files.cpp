@@ -123,9 +123,9 @@ Classified classify(const std::vector<std::string>& h) {
     c.problem = fmt::format("unknown column{} {} for {} ({})", best_unknown.size() > 1 ? "s" : "", quoted(best_unknown),
                             best->kind, signature(*best));
   } else if (has(cols, "range") && !has(cols, "bearing") && !has(cols, "landmark_id")) {
-    c.problem = "ranges without a beacon_id column: beacons without an id are not supported (the filters take a "
-                "range to the map beacon of its id; ranges of unknown identity are not associated); give each row "
-                "its beacon's map id (time,beacon_id,range[,range_std])";
+    c.problem = "ranges without a beacon_id column: give the column (time,beacon_id,range[,range_std]), with each "
+                "row's beacon map id, or `unknown` where the row does not say which beacon it is (the filter then "
+                "associates the range with the map itself)";
   } else {
     // the format that has most of its required columns: what is missing from it
     std::size_t most = 0;
