@@ -28,6 +28,32 @@ constexpr AngleMask kThetaMask = 1u << 2;
 constexpr AngleMask kBearingMask = 1u << 1;
 
 /// N: 3 (no calibration) or 3 + the calibration states of layout.
+/// The association of a measurement without identity over the candidates tried: the one with
+/// the smallest Mahalanobis distance, and how many passed the gate. It must be unique: when two
+/// pass (the estimate too uncertain to tell them apart, after a lock-out say) the nearest one is
+/// a guess, and a wrong guess pulls the estimate towards the wrong landmark or beacon, where the
+/// next guesses agree with it. Refused as "ambiguous" (not a gate rejection: no lock-out counts it).
+template <class Innov>
+struct UniqueMatch {
+  Innov best;
+  int best_id = -1, inside = 0;
+  void offer(int id, const Innov& c, double gate) {
+    inside += c.mahalanobis <= gate;
+    if (best_id < 0 || c.mahalanobis < best.mahalanobis) {
+      best = c;
+      best_id = id;
+    }
+  }
+  /// Two or more passed the gate: d says so; true.
+  bool ambiguous(GateDecision& d) const {
+    if (inside < 2) return false;
+    d.reason = "ambiguous";
+    d.marker_id = best_id;
+    d.mahalanobis = best.mahalanobis;
+    return true;
+  }
+};
+
 template <int N>
 class LandmarkUkf final : public Filter {
   using U = Ukf<N>;
@@ -144,31 +170,17 @@ class LandmarkUkf final : public Filter {
       const auto& P = ukf_.P();
       const double slack = 4.0 * std::sqrt(std::max(P(0, 0) + P(1, 1), 0.0) + rs * rs);
       const Vec3 pose = ukf_.x().template head<3>();
-      int inside = 0;  // candidates the gate would accept
+      UniqueMatch<Innovation<N, 2>> match;
       map_->near(pose.x(), pose.y(), MapIndex::widen(obs.range + slack, pose.x(), pose.y()), near_);
       for (const uint32_t i : near_) {
         const Marker& m = (*map_)[i];
         const double dist = std::hypot(m.x - pose.x(), m.y - pose.y());
         if (std::abs(dist - obs.range) > slack) continue;
-        if (!ukf_.template innovate<2>(X, h_of(m), R, z, kBearingMask, cand)) continue;
-        inside += cand.mahalanobis <= gate2_;
-        if (best_id < 0 || cand.mahalanobis < best.mahalanobis) {
-          best = cand;
-          best_id = m.id;
-        }
+        if (ukf_.template innovate<2>(X, h_of(m), R, z, kBearingMask, cand)) match.offer(m.id, cand, gate2_);
       }
-      // Without an identity the association must be unique: when two landmarks pass the gate
-      // (the estimate too uncertain to tell them apart, after a lock-out say) the nearest one is
-      // a guess, and a wrong guess pulls the estimate towards the wrong landmark, where the next
-      // guesses agree with it. Refused (not a gate rejection: no lock-out counts it).
-      if (inside >= 2) {
-        d.reason = "ambiguous";
-        d.marker_id = best_id;
-        d.mahalanobis = best.mahalanobis;
-        return d;
-      }
+      if (match.ambiguous(d)) return d;
+      return finish(d, match.best_id, match.best, gate2_);
     }
-    return finish(d, best_id, best, gate2_);
   }
 
   std::optional<GateDecision> update(const BeaconRange& b) override {
@@ -215,7 +227,7 @@ class LandmarkUkf final : public Filter {
     for (int k = std::max(cal_.bias0, 0); cal_.bias0 >= 0 && k < cal_.size(); ++k)
       bias_extent = std::max(bias_extent, std::abs(x[k]) + 4.0 * std::sqrt(std::max(P(k, k), 0.0)));
     const double px = x(0), py = x(1);
-    int inside = 0;
+    UniqueMatch<Innovation<N, 1>> match;
     map_->near(px, py, MapIndex::widen(b.range + 4.0 * std::sqrt(var) + bias_extent, px, py), near_);
     for (const uint32_t i : near_) {
       const Marker& m = (*map_)[i];
@@ -223,20 +235,10 @@ class LandmarkUkf final : public Filter {
       const double predicted = std::hypot(m.x - px, m.y - py) + (bias >= 0 ? x[bias] : 0.0);
       const double slack = 4.0 * std::sqrt(var + (bias >= 0 ? std::max(P(bias, bias), 0.0) : 0.0));
       if (std::abs(predicted - b.range) > slack) continue;
-      if (!ukf_.template innovate<1>(X, h_of(m), R, z, 0u, cand)) continue;
-      inside += cand.mahalanobis <= gate1_;
-      if (best_id < 0 || cand.mahalanobis < best.mahalanobis) {
-        best = cand;
-        best_id = m.id;
-      }
+      if (ukf_.template innovate<1>(X, h_of(m), R, z, 0u, cand)) match.offer(m.id, cand, gate1_);
     }
-    if (inside >= 2) {
-      d.reason = "ambiguous";
-      d.marker_id = best_id;
-      d.mahalanobis = best.mahalanobis;
-      return d;
-    }
-    return finish(d, best_id, best, gate1_);
+    if (match.ambiguous(d)) return d;
+    return finish(d, match.best_id, match.best, gate1_);
   }
 
  protected:
