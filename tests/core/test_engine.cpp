@@ -820,9 +820,14 @@ TEST(Engine, InputsFarInThePastAreDroppedAsTooOldUnlessThreeInARowStartANewTimeB
 // bursts with silences of up to 30 ms between.) A shadow that uses GPS makes the fixes the
 // sensors' time again: the states then come out on the fixes.
 TEST(FusionEngine, AMeasurementNoFilterUsesDoesNotMoveTheHorizon) {
-  for (const bool gps_shadow : {false, true}) {
+  // GPS fixes (used by a GPS shadow only) and bearings (used only when there are landmarks to make
+  // a fix from), each 25 ms ahead of the odometry.
+  enum class Case { Gps, GpsShadow, BearingsNoMap, BearingsMap };
+  for (const Case c : {Case::Gps, Case::GpsShadow, Case::BearingsNoMap, Case::BearingsMap}) {
     EngineConfig cfg = engineConfig();
-    if (gps_shadow) cfg.shadow = {"ukf_gps"};
+    if (c == Case::GpsShadow) cfg.shadow = {"ukf_gps"};
+    if (c == Case::BearingsMap) cfg.landmarks = {{1, Vec2(100, 0)}, {2, Vec2(0, 100)}, {3, Vec2(-100, -100)}};
+    const bool used = c == Case::GpsShadow || c == Case::BearingsMap;
     Recorder rec;
     FusionEngine e(cfg, straightMap(50), rec.outputs());
     auto activeStates = [&] {
@@ -835,22 +840,32 @@ TEST(FusionEngine, AMeasurementNoFilterUsesDoesNotMoveTheHorizon) {
       ASSERT_TRUE(e.push(odoIn(t, k, 0.02)));
       on_odometry += activeStates() - before;
       most_at_once = std::max<int64_t>(most_at_once, activeStates() - before);
-      GpsInput g;
-      g.utime = t + 25'000;
       before = activeStates();
-      ASSERT_TRUE(e.push(EngineInput{"GPS", k, g.utime, g}));
+      if (c == Case::Gps || c == Case::GpsShadow) {
+        GpsInput g;
+        g.utime = t + 25'000;
+        ASSERT_TRUE(e.push(EngineInput{"GPS", k, g.utime, g}));
+      } else {
+        BearingsInput b;
+        b.utime = t + 25'000;
+        b.seq = k;
+        b.ids = {1, 2, 3};
+        b.bearings = {0.1, 1.6, -2.4};
+        ASSERT_TRUE(e.push(EngineInput{"VISION", k, b.utime, b}));
+      }
       on_fixes += activeStates() - before;
     }
     const auto before_flush = e.counters().processed;
     e.flush();
-    EXPECT_EQ(e.counters().processed, 600u) << gps_shadow;  // every fix processed all the same
-    EXPECT_GT(before_flush, 500u) << gps_shadow;
-    if (gps_shadow) {
-      EXPECT_GT(on_fixes, 250) << on_odometry;
+    const int label = static_cast<int>(c);
+    EXPECT_EQ(e.counters().processed, 600u) << label;  // every input processed all the same
+    EXPECT_GT(before_flush, 500u) << label;
+    if (used) {
+      EXPECT_GT(on_fixes, 250) << label << " " << on_odometry;
     } else {
-      EXPECT_EQ(on_fixes, 0);
-      EXPECT_EQ(most_at_once, 1);
-      EXPECT_EQ(on_odometry, 300 - 6);  // all but the six within the last 50 ms window
+      EXPECT_EQ(on_fixes, 0) << label;
+      EXPECT_EQ(most_at_once, 1) << label;
+      EXPECT_EQ(on_odometry, 300 - 6) << label;  // all but the six within the last 50 ms window
     }
   }
 }

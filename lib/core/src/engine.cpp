@@ -112,10 +112,10 @@ struct FusionEngine::Impl final : InputOrder::Client {
     if (now == FilterStatus::Ok) gaps.accepted();
     last_status = now;
   }
-  /// The odometry, bearings and the measurements some filter (active or shadow) uses move the
-  /// horizon on; a measurement no filter uses does not (a stream on a channel the filters ignore,
-  /// with its time a little ahead of the sensors', would otherwise release the canonical poses in
-  /// bursts).
+  /// The odometry, the measurements some filter (active or shadow) uses, and bearings when the
+  /// configuration has landmarks to make a fix from move the horizon on; any other input does not
+  /// (a stream on a channel the filters ignore, with its time a little ahead of the sensors',
+  /// would otherwise release the canonical poses in bursts).
   bool carriesTime(const EngineInput& in) const override {
     return std::visit(
         [&](const auto& p) {
@@ -124,6 +124,8 @@ struct FusionEngine::Impl final : InputOrder::Client {
             bool used = false;
             bank.forEach([&](const Filter& f, bool) { used = used || f.uses(InputKind<T>::measurement); });
             return used;
+          } else if constexpr (std::is_same_v<T, BearingsInput>) {
+            return fixes.usable();
           } else {
             return true;
           }

@@ -23,6 +23,8 @@ class LandmarkFixStage {
   /// Bearings in (b): a fix for every filter, or a decision saying why not.
   void process(const EngineInput& in, const BearingsInput& b);
 
+  /// Whether bearings can make a fix at all (the configuration has landmarks).
+  bool usable() const { return !landmarks_.empty(); }
   /// The gate's threshold: chi-square (3 dof) at fix_gate.probability; +inf: none.
   double gate() const { return gate_; }
   /// Fixes the filter (FilterBank::key) refused in a row.
