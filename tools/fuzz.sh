@@ -17,7 +17,7 @@ Usage: tools/fuzz.sh [--time SECONDS] [--seed N] [--regression] [--no-build] [TA
                  are deterministic), so a long run covers the start of a shorter one (CI: 1)
   --regression   run each target once over its committed corpus only (seconds), no fuzzing
   --no-build     use the targets already built
-  TARGET         lcm_input, log, config, import (default: all)
+  TARGET         lcm_input, log, config, import, udpm (default: all)
 Environment: LCMLOC_FUZZ_BUILD_DIR (default build-fuzz/).
 USAGE
 }
@@ -40,9 +40,9 @@ done
 source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
 build_dir="${LCMLOC_FUZZ_BUILD_DIR:-$LCMLOC_ROOT/build-fuzz}"
 fuzz_dir="$LCMLOC_ROOT/tests/fuzz"
-((${#targets[@]})) || targets=(lcm_input log config import)
+((${#targets[@]})) || targets=(lcm_input log config import udpm)
 for t in "${targets[@]}"; do
-  [[ -f $fuzz_dir/fuzz_$t.cpp ]] || { echo "unknown target '$t' (lcm_input, log, config, import)" >&2; exit 2; }
+  [[ -f $fuzz_dir/fuzz_$t.cpp ]] || { echo "unknown target '$t' (lcm_input, log, config, import, udpm)" >&2; exit 2; }
 done
 
 if ((build)); then

@@ -226,7 +226,42 @@ def import_seeds():
             d.write('"%s"\n' % n)
 
 
+def udpm_datagram(sender, datagram):
+    return struct.pack(">BH", sender, len(datagram)) + datagram
+
+
+def udpm_short(seqno, channel, payload):
+    return struct.pack(">II", 0x4C433032, seqno) + channel + b"\0" + payload
+
+
+def udpm_fragments(seqno, channel, payload, fragment):
+    """LCM 1.3.1's fragments of one message: fragment 0 carries the channel, then payload bytes."""
+    first = fragment - len(channel) - 1
+    pieces = [payload[:first]] + [payload[i:i + fragment] for i in range(first, len(payload), fragment)]
+    out, offset = [], 0
+    for no, piece in enumerate(pieces):
+        head = struct.pack(">IIIIHH", 0x4C433033, seqno, len(payload), offset, no, len(pieces))
+        out.append(head + (channel + b"\0" if no == 0 else b"") + piece)
+        offset += len(piece)
+    return out
+
+
+def udpm_seeds():
+    payload = bytes(range(256)) * 3
+    frags = udpm_fragments(7, b"FUSION_STATUS", payload, 200)
+    write("udpm", "short", b"".join(udpm_datagram(1, udpm_short(k, b"ODOMETRY", bytes([k] * 57))) for k in range(3)))
+    write("udpm", "fragments", b"".join(udpm_datagram(2, d) for d in frags))
+    write("udpm", "fragments_reordered_duplicate",
+          b"".join(udpm_datagram(2, d) for d in [frags[0], frags[2], frags[1], frags[1]] + frags[3:]))
+    other = udpm_fragments(9, b"POSE", payload[:300], 120)
+    write("udpm", "fragments_two_senders", b"".join(
+        udpm_datagram(s, d) for pair in zip(frags, other) for s, d in zip((2, 3), pair)))
+    write("udpm", "unsubscribed", b"".join(udpm_datagram(4, d) for d in udpm_fragments(1, b"XIMAGE", payload, 300)))
+    write("udpm", "first_fragment_missing", b"".join(udpm_datagram(5, d) for d in frags[1:]))
+
+
 def main():
+    udpm_seeds()
     t = lcm_types()
     ruler, gps, ins, made = lcm_input(t)
     log_seeds(ruler, gps, ins, made)

@@ -1,8 +1,14 @@
 #include "lcmloc/bus/transport.hpp"
 
+#include <poll.h>
+
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <regex>
+#include <thread>
+#include <unordered_map>
 
 #include <spdlog/spdlog.h>
 
@@ -64,15 +70,84 @@ struct Bus::Sub {
   }
 };
 
+/// The own receive (ownReceive()): subscriptions as LCM 1.3.1 matches them (the channel regex
+/// anchored at both ends), and which of them each channel name goes to, found once per name.
+struct Bus::Own {
+  struct Route {
+    std::regex re;
+    RawHandler handler;
+  };
+  std::unique_ptr<UdpmReceiver> socket;  ///< opened at the first subscription
+  std::vector<Route> routes;
+  std::unordered_map<std::string, std::vector<std::size_t>> by_channel;
+  std::string key;                    ///< (reused for lookups)
+  std::string channel;                ///< the channel being dispatched
+  std::vector<std::size_t> dispatching;  ///< (reused: a handler may subscribe while it runs)
+  static constexpr std::size_t kMaxNames = 4096;  ///< a sender inventing names cannot grow it further
+
+  const std::vector<std::size_t>& routesFor(std::string_view channel) {
+    key.assign(channel.data(), channel.size());
+    auto it = by_channel.find(key);
+    if (it != by_channel.end()) return it->second;
+    if (by_channel.size() >= kMaxNames) by_channel.clear();
+    std::vector<std::size_t> match;
+    for (std::size_t i = 0; i < routes.size(); ++i)
+      if (std::regex_match(key, routes[i].re)) match.push_back(i);
+    return by_channel.emplace(key, std::move(match)).first->second;
+  }
+};
+
+namespace {
+constexpr const char* kSelfTestChannel = "LCM_SELF_TEST";  // the channel and text LCM's own self test uses
+constexpr const char* kSelfTestText = "lcm self test";
+std::string routeHint(const std::string& url) {
+  return url.rfind("udpm://", 0) == 0 || url.empty()
+             ? " (udpm needs a multicast route; on loopback: `ip route add 224.0.0.0/4 dev lo` as root)"
+             : "";
+}
+}  // namespace
+
 Bus::Bus(const std::string& url) : url_(url) {
+  const char* receive = std::getenv("LCMLOC_LCM_RECEIVE");
+  if (!(receive && std::strcmp(receive, "lcm") == 0)) own_ = parseUdpmUrl(url);
   lcm_ = std::make_unique<lcm::LCM>(url);
-  if (!lcm_->good() || lcm_->getFileno() < 0) {
-    std::string hint;
-    if (url.rfind("udpm://", 0) == 0 || url.empty())
-      hint = " (udpm needs a multicast route; on loopback: `ip route add 224.0.0.0/4 dev lo` as root)";
-    throw TransportError("cannot start LCM on '" + url + "'" + hint);
+  // (getFileno() starts LCM's receive thread and runs its self test: only when LCM receives)
+  if (!lcm_->good() || (!own_ && lcm_->getFileno() < 0))
+    throw TransportError("cannot start LCM on '" + url + "'" + routeHint(url));
+  if (own_) {
+    rx_ = std::make_unique<Own>();
+    selfTest();
   }
 }
+
+void Bus::selfTest() {
+  // As LCM's own: a message to ourselves through the group, sent again every 100 ms, must come
+  // back (a multicast route and no firewall in the way). The socket is closed again; the first
+  // subscription opens it, so a process that only publishes holds no receive buffer.
+  try {
+    UdpmReceiver socket(*own_);
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+    bool back = false;
+    while (!back && std::chrono::steady_clock::now() < until) {
+      if (lcm_->publish(kSelfTestChannel, kSelfTestText, static_cast<unsigned>(std::strlen(kSelfTestText))) < 0)
+        break;
+      const auto resend = std::chrono::steady_clock::now() + std::chrono::milliseconds(100);
+      while (!back && std::chrono::steady_clock::now() < resend) {
+        if (socket.handle(10, [](std::string_view ch) { return ch == kSelfTestChannel; },
+                          [&](const UdpmMessage& m) {
+                            back = m.size == std::strlen(kSelfTestText) &&
+                                   std::memcmp(m.data, kSelfTestText, m.size) == 0;
+                          }) < 0)
+          break;
+      }
+    }
+    if (!back) throw TransportError("LCM's self test message did not come back");
+  } catch (const TransportError& e) {
+    throw TransportError("cannot start LCM on '" + url_ + "': " + e.what() + routeHint(url_));
+  }
+}
+
+bool Bus::wanted(std::string_view channel) { return !rx_->routesFor(channel).empty(); }
 
 Bus::~Bus() = default;
 
@@ -93,6 +168,18 @@ bool MessageBus::publishFailed(const std::string& channel, const char* what) {
 }
 
 void Bus::subscribeRaw(const std::string& channel, RawHandler handler) {
+  if (own_) {
+    std::regex re;
+    try {
+      re = std::regex("^" + channel + "$", std::regex::ECMAScript | std::regex::optimize);
+    } catch (const std::regex_error& e) {
+      throw TransportError("cannot subscribe to '" + channel + "': not a valid channel regex (" + e.what() + ")");
+    }
+    if (!rx_->socket) rx_->socket = std::make_unique<UdpmReceiver>(*own_);
+    rx_->routes.push_back(Own::Route{std::move(re), std::move(handler)});
+    rx_->by_channel.clear();
+    return;
+  }
   // LCM 1.3.1's C++ subscribe returns a Subscription even when the channel regex does not
   // compile (its C subscription is then null, and the first use of it crashes): probe with the
   // C API, which returns null (and prints GLib's reason on stderr).
@@ -109,7 +196,21 @@ void Bus::subscribeRaw(const std::string& channel, RawHandler handler) {
   subs_.push_back(std::move(sub));
 }
 
-int Bus::handle(int timeout_ms) { return lcm_->handleTimeout(timeout_ms); }
+int Bus::handle(int timeout_ms) {
+  if (!own_) return lcm_->handleTimeout(timeout_ms);
+  if (!rx_->socket) {  // nothing subscribed: nothing to receive
+    const int r = ::poll(nullptr, 0, timeout_ms);
+    return r < 0 ? -1 : 0;
+  }
+  Own& o = *rx_;
+  return o.socket->handle(
+      timeout_ms, [this](std::string_view ch) { return wanted(ch); },
+      [&o](const UdpmMessage& m) {
+        o.dispatching = o.routesFor(m.channel);
+        o.channel.assign(o.key);  // (routesFor left the name there; assign keeps its storage)
+        for (std::size_t i : o.dispatching) o.routes[i].handler(o.channel, m.data, m.size, m.recv_utime);
+      });
+}
 
 bool MessageBus::drain(int max_ms) {
   const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(max_ms);

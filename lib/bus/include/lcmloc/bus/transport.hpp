@@ -16,6 +16,8 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "lcmloc/bus/udpm_receiver.hpp"
+
 namespace lcmloc::bus {
 
 class TransportError : public std::runtime_error {
@@ -134,7 +136,9 @@ class MessageBus {
   int64_t publish_errors_ = 0;
 };
 
-/// The LCM transport.
+/// The LCM transport. Publishing is LCM's. On a udpm:// URL the receive is our own
+/// (UdpmReceiver, udpm_receiver.hpp: the socket drained in the thread that calls handle()),
+/// unless LCMLOC_LCM_RECEIVE=lcm is set in the environment; on any other URL it is LCM's.
 class Bus : public MessageBus {
  public:
   explicit Bus(const std::string& url);
@@ -149,14 +153,21 @@ class Bus : public MessageBus {
 
   int handle(int timeout_ms) override;
 
-  lcm::LCM& lcm() { return *lcm_; }
+  /// True when this bus receives on its own socket rather than through LCM's receive thread.
+  bool ownReceive() const { return own_.has_value(); }
 
  private:
   struct Sub;
+  struct Own;
+
+  void selfTest();
+  bool wanted(std::string_view channel);
 
   std::string url_;
   std::unique_ptr<lcm::LCM> lcm_;
   std::vector<std::unique_ptr<Sub>> subs_;
+  std::optional<UdpmAddress> own_;
+  std::unique_ptr<Own> rx_;
 };
 
 /// Wall clock in microseconds since the epoch (heartbeats, log timestamps; never fusion logic).
