@@ -40,8 +40,9 @@ int main(int argc, char** argv) {
     const std::string url = bus::withReceiveBuffer(opts.lcm_url, cfg.logger.recv_buf_size);
 
     bus::Bus bus(url);
-    logger::sizeReceiveBuffer(url, cfg.logger.recv_buf_size);
     logger::Recorder recorder(ro, bus);
+    // (after the subscription: the bus opens its receive socket then)
+    logger::sizeReceiveBuffer(url, cfg.logger.recv_buf_size);
     while (!app::stopRequested()) {
       if (g_hup.exchange(false)) recorder.requestRotate();
       if (!recorder.step(100)) break;  // a write error
