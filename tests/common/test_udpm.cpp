@@ -193,7 +193,10 @@ TEST(Udpm, AFragmentOutsideItsMessageIsBadAndDropsTheMessage) {
 
 TEST(Udpm, AMessageNoOneSubscribesToIsNotReassembled) {
   Feed f;
-  for (const auto& d : fragments(1, "IGNORED", payloadOf(3000), 1000)) EXPECT_EQ(f.add(d), Result::Partial);
+  const auto frags = fragments(1, "IGNORED", payloadOf(3000), 1000);
+  EXPECT_EQ(f.add(frags[0]), Result::Ignored);
+  for (std::size_t i = 1; i < frags.size(); ++i) EXPECT_EQ(f.add(frags[i]), Result::Partial);
+  EXPECT_EQ(f.add(shortDatagram(1, "IGNORED", payloadOf(10))), Result::Ignored);
   EXPECT_TRUE(f.got.empty());
   EXPECT_EQ(f.a.pendingBytes(), 0u);
 }

@@ -98,6 +98,7 @@ UdpmAssembler::Result UdpmAssembler::add(const uint8_t* p, std::size_t n, uint64
   if (magic == kMagicShort) {
     const auto channel = channelAt(p + kShortHeader, n - kShortHeader);
     if (!channel) return Result::Bad;
+    if (!wanted(*channel)) return Result::Ignored;
     const std::size_t at = kShortHeader + channel->size() + 1;
     *out = UdpmMessage{*channel, p + at, n - at, recv_utime};
     return Result::Message;
@@ -122,7 +123,7 @@ UdpmAssembler::Result UdpmAssembler::add(const uint8_t* p, std::size_t n, uint64
     if (number != 0) return Result::Partial;  // its first fragment was missed: nothing to add to
     const auto channel = channelAt(body, body_size);
     if (!channel) return Result::Bad;
-    if (!wanted(*channel)) return Result::Partial;
+    if (!wanted(*channel)) return Result::Ignored;
     while (!pending_.empty() &&
            (pending_.size() >= kMaxPendingSenders || pending_bytes_ + size > kMaxPendingBytes)) {
       auto oldest = pending_.begin();
@@ -274,8 +275,7 @@ int UdpmReceiver::readSome(const Wanted& wanted, const Dispatch& dispatch, int m
       const uint64_t sender = (uint64_t{ntohl(b.from[i].sin_addr.s_addr)} << 16) | ntohs(b.from[i].sin_port);
       UdpmMessage m;
       if (assembler_.add(static_cast<const uint8_t*>(b.iov[i].iov_base), b.msgs[i].msg_len, sender, utime, wanted,
-                         &m) == UdpmAssembler::Result::Message &&
-          wanted(m.channel)) {
+                         &m) == UdpmAssembler::Result::Message) {
         dispatch(m);
         ++*dispatched;
       }

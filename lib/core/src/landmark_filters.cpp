@@ -151,12 +151,8 @@ class LandmarkUkf final : public Filter {
       return [&m](const typename U::Vector& s) { return predictRangeBearing(Pose(s.template head<3>()), m.x, m.y); };
     };
     if (obs.landmark_id >= 0) {
-      const Marker* known = map_->find(obs.landmark_id);
-      if (!known) {
-        d.reason = "unknown_id";
-        d.marker_id = obs.landmark_id;
-        return d;
-      }
+      const Marker* known = knownOr(obs.landmark_id, d);
+      if (!known) return d;
       const Marker& m = *known;
       if (ukf_.template innovate<2>(X, h_of(m), R, z, kBearingMask, best)) best_id = m.id;
       finish(d, best_id, best, gate2_);
@@ -183,6 +179,17 @@ class LandmarkUkf final : public Filter {
     }
   }
 
+  /// The map entry of a measurement's identity; nullptr, with d's reason "unknown_id", when the
+  /// map has none.
+  const Marker* knownOr(int id, GateDecision& d) const {
+    const Marker* m = map_->find(id);
+    if (!m) {
+      d.reason = "unknown_id";
+      d.marker_id = id;
+    }
+    return m;
+  }
+
   std::optional<GateDecision> update(const BeaconRange& b) override {
     GateDecision d = decision(b.utime, b.sensor, b.seq, gate1_);
     typename U::Sigmas X;
@@ -206,12 +213,8 @@ class LandmarkUkf final : public Filter {
     Innovation<N, 1> best, cand;
     int best_id = -1;
     if (b.beacon_id >= 0) {
-      const Marker* known = map_->find(b.beacon_id);
-      if (!known) {
-        d.reason = "unknown_id";
-        d.marker_id = b.beacon_id;
-        return d;
-      }
+      const Marker* known = knownOr(b.beacon_id, d);
+      if (!known) return d;
       if (ukf_.template innovate<1>(X, h_of(*known), R, z, 0u, best)) best_id = known->id;
       return finish(d, best_id, best, gate1_);
     }

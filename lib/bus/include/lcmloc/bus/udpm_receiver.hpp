@@ -54,10 +54,12 @@ class UdpmAssembler {
   static constexpr std::size_t kMaxPendingBytes = 16u << 20;  ///< all senders' partial messages
   static constexpr std::size_t kMaxPendingSenders = 1000;
 
-  enum class Result { Message, Partial, Bad };
-  /// Adds one datagram from sender (any key that tells senders apart: address and port).
-  /// wanted(channel) is asked before a fragmented message is buffered (as LCM does, a message no
-  /// one subscribes to is not reassembled). Message: *out holds it.
+  /// Message: *out holds one. Partial: a fragment kept (or a duplicate, or one whose message's
+  /// first fragment was missed). Ignored: a message, or the first fragment of one, on a channel
+  /// no one subscribes to (as in LCM, such a message is not reassembled). Bad: not LCM's protocol.
+  enum class Result { Message, Partial, Ignored, Bad };
+  /// Adds one datagram from sender (any key that tells senders apart: address and port);
+  /// wanted(channel) says whether anyone subscribes to the channel.
   Result add(const uint8_t* packet, std::size_t size, uint64_t sender, int64_t recv_utime,
              const std::function<bool(std::string_view)>& wanted, UdpmMessage* out);
 
