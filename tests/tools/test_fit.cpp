@@ -255,3 +255,33 @@ TEST(FitNoise, TheOdometrysScalesAreFittedAgainstAPositionOnlyTruth) {
   EXPECT_FALSE(g.odometry_scale->significant()) << g.odometry_scale->ratio << " +- " << g.odometry_scale->se;
   EXPECT_FALSE(g.yaw_rate_scale->significant()) << g.yaw_rate_scale->ratio << " +- " << g.yaw_rate_scale->se;
 }
+
+namespace {
+
+TEST(NoiseFit, TheHeadingsGrowthPerDistanceAndPerTurnIsFittedByMaximumLikelihood) {
+  // Windows of very different size (log-uniform distance and turn, as a robot that mostly turns
+  // on the spot and sometimes drives): the error of each is Gaussian with variance a s + b r.
+  for (const unsigned seed : {1u, 2u, 3u}) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> n(0.0, 1.0);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const double a = 0.003, b = 0.02;
+    std::vector<double> e2, s, r;
+    for (int i = 0; i < 3000; ++i) {
+      s.push_back(std::pow(10.0, -2.0 + 2.5 * u(rng)));  // 0.01 .. 3 (per pw_distance)
+      r.push_back(std::pow(10.0, -2.5 + 3.0 * u(rng)));  // 0.003 .. 3 rad
+      e2.push_back(std::pow(std::sqrt(a * s.back() + b * r.back()) * n(rng), 2));
+    }
+    const auto [fa, fb] = fit::fitVarianceGrowth(e2, s, r);
+    EXPECT_NEAR(fa, a, 0.15 * a) << seed;
+    EXPECT_NEAR(fb, b, 0.15 * b) << seed;
+  }
+  // No growth at all, or growth with the turn only: no negative term, none made up.
+  const std::vector<double> s{1, 2, 1, 3}, r{0.5, 0.1, 2, 1};
+  EXPECT_EQ(fit::fitVarianceGrowth({0, 0, 0, 0}, s, r), std::make_pair(0.0, 0.0));
+  const auto [fa, fb] = fit::fitVarianceGrowth({0.05, 0.01, 0.2, 0.1}, s, r);
+  EXPECT_EQ(fa, 0.0);
+  EXPECT_NEAR(fb, 0.1, 1e-9);
+}
+
+}  // namespace

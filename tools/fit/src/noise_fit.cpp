@@ -35,16 +35,17 @@ void rangeBearing(const TruthSample& p, double x, double y, double& range, doubl
   bearing = core::wrapAngle(std::atan2(dy, dx) - p.heading);
 }
 
-/// Least squares of e2 ~ a s + b r with a, b >= 0 (the heading's error growth per distance and
-/// per radian turned).
-std::pair<double, double> fitTwo(const std::vector<double>& e2, const std::vector<double>& s, const std::vector<double>& r) {
+/// Weighted least squares of e2 ~ a s + b r with a, b >= 0 (weights w; empty: all 1).
+std::pair<double, double> fitTwoWeighted(const std::vector<double>& e2, const std::vector<double>& s,
+                                         const std::vector<double>& r, const std::vector<double>& w) {
   double ss = 0, sr = 0, rr = 0, se = 0, re = 0;
   for (std::size_t i = 0; i < e2.size(); ++i) {
-    ss += s[i] * s[i];
-    sr += s[i] * r[i];
-    rr += r[i] * r[i];
-    se += s[i] * e2[i];
-    re += r[i] * e2[i];
+    const double wi = w.empty() ? 1.0 : w[i];
+    ss += wi * s[i] * s[i];
+    sr += wi * s[i] * r[i];
+    rr += wi * r[i] * r[i];
+    se += wi * s[i] * e2[i];
+    re += wi * r[i] * e2[i];
   }
   const double det = ss * rr - sr * sr;
   double a = det > 0 ? (se * rr - re * sr) / det : -1, b = det > 0 ? (re * ss - se * sr) / det : -1;
@@ -52,8 +53,9 @@ std::pair<double, double> fitTwo(const std::vector<double>& e2, const std::vecto
     const double a1 = ss > 0 ? std::max(0.0, se / ss) : 0, b1 = rr > 0 ? std::max(0.0, re / rr) : 0;
     double ra = 0, rb = 0;
     for (std::size_t i = 0; i < e2.size(); ++i) {
-      ra += std::pow(e2[i] - a1 * s[i], 2);
-      rb += std::pow(e2[i] - b1 * r[i], 2);
+      const double wi = w.empty() ? 1.0 : w[i];
+      ra += wi * std::pow(e2[i] - a1 * s[i], 2);
+      rb += wi * std::pow(e2[i] - b1 * r[i], 2);
     }
     a = ra <= rb ? a1 : 0;
     b = ra <= rb ? 0 : b1;
@@ -207,12 +209,36 @@ void fitOdometry(const Recording& r, const FitOptions& opt, NoiseFit& f) {
     sum_s += pos_dist[k];
   }
   const double q_pos = sum_s > 0 ? sum_e / sum_s : 0;
-  const auto [q_heading, q_turn] = fitTwo(heading2, dist, turn);
+  const auto [q_heading, q_turn] = fitVarianceGrowth(heading2, dist, turn);
   f.pw_diag = core::Vec3(q_pos, q_pos, q_heading);
   f.pw_turn = q_turn;
 }
 
 }  // namespace
+
+/// The heading's error growth per distance (a) and per radian turned (b), a, b >= 0: maximum
+/// likelihood of the errors e (e2 = e^2) as zero-mean Gaussian with variance a s + b r. Fisher
+/// scoring, which for a variance linear in its parameters is least squares of e2 weighted by
+/// 1 / variance^2, repeated from the unweighted fit until it settles. (The unweighted fit alone
+/// lets the few windows with the largest errors decide, and can put all the growth on one term.)
+std::pair<double, double> fitVarianceGrowth(const std::vector<double>& e2, const std::vector<double>& s,
+                                            const std::vector<double>& r) {
+  auto [a, b] = fitTwoWeighted(e2, s, r, {});
+  double mean = 0;
+  for (double e : e2) mean += e / static_cast<double>(e2.size());
+  const double floor = 1e-6 * mean;  // (a window that hardly moved must not take all the weight)
+  std::vector<double> w(e2.size());
+  for (int iter = 0; iter < 100 && (a > 0 || b > 0); ++iter) {
+    for (std::size_t i = 0; i < e2.size(); ++i) w[i] = 1.0 / std::pow(std::max(a * s[i] + b * r[i], floor), 2);
+    const auto [a2, b2] = fitTwoWeighted(e2, s, r, w);
+    const bool settled = std::abs(a2 - a) <= 1e-6 * (a + b) && std::abs(b2 - b) <= 1e-6 * (a + b);
+    a = a2;
+    b = b2;
+    if (settled) break;
+  }
+  return {a, b};
+}
+
 
 Residuals residualStats(std::vector<double> v) {
   Residuals r;

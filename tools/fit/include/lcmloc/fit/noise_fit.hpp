@@ -9,6 +9,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "lcmloc/core/types.hpp"
@@ -80,6 +81,12 @@ struct NoiseFit {
 /// Fits what the recording allows (a measurement kind needs rows of known identity inside the
 /// truth's span; the bearing and the odometry's heading need a truth heading).
 NoiseFit fitAgainstTruth(const Recording& r, const FitOptions& opt = {});
+
+/// The growth of a variance over windows of travel: a per unit of s and b per unit of r (a, b >= 0)
+/// such that the errors e_i (e2_i = e_i^2) are most likely as zero-mean Gaussian with variance
+/// a s_i + b r_i (the heading's error per distance and per radian turned).
+std::pair<double, double> fitVarianceGrowth(const std::vector<double>& e2, const std::vector<double>& s,
+                                            const std::vector<double>& r);
 
 /// The fit as a YAML fragment of `fusion.filter` keys (only the fitted ones), with comments
 /// saying where each value comes from; merge it into a config or read it with --config.
