@@ -109,10 +109,11 @@ double writeScenario(const LiveRunOptions& o, const std::string& path, const std
   return every / rate;
 }
 
-/// The system's outputs as seen: by the watcher (with the wall time each arrived) or in the
-/// logger's log.
+/// The system's outputs as seen: by the watcher (with the time each reached its socket: the
+/// kernel's receive time, so that the watcher's own work, in the process that also sends the
+/// floods, does not delay what it measures) or in the logger's log.
 struct Track {
-  struct Pose { int64_t utime; double x, y; bool finite; Clock::time_point at; };
+  struct Pose { int64_t utime; double x, y; bool finite; int64_t recv_utime; };
   std::vector<Pose> poses;
   std::vector<eval::TruthPose> truth;
   std::map<std::string, std::string> second;  ///< channel -> the status's second_publisher (or source_replaced) words
@@ -121,14 +122,14 @@ struct Track {
 
 /// Takes one message of the pose, truth or status channel into t; false for any other channel.
 bool take(const app::ChannelConfig& ch, const std::string& channel, const uint8_t* data, std::size_t n,
-          Clock::time_point at, Track& t) {
+          int64_t recv_utime, Track& t) {
   const int len = static_cast<int>(n);
   if (channel == ch.pose) {
     pose_t p{};
     if (p.decode(data, 0, len) < 0 || p.state.size() < 2) return true;
     bool finite = true;
     for (double v : p.state) finite = finite && std::isfinite(v);
-    t.poses.push_back({p.utime, p.state[0], p.state[1], finite, at});
+    t.poses.push_back({p.utime, p.state[0], p.state[1], finite, recv_utime});
   } else if (channel == ch.ground_truth) {
     ground_truth_t g{};
     if (g.decode(data, 0, len) >= 0) t.truth.push_back({g.utime, g.x, g.y, g.heading, true});
@@ -151,7 +152,7 @@ struct Seen {
   std::mutex mu;
   Track track;
   int64_t live_utime = 0;  ///< the last odometry message's time (the live time)
-  Clock::time_point live_at{};  ///< when the system's last odometry message arrived
+  int64_t live_recv_utime = 0;  ///< when the system's last odometry message reached the watcher's socket [us, wall]
   std::set<std::string> live_channels;
 };
 
@@ -275,7 +276,7 @@ LiveRunResult runLive(const LiveRunOptions& o) {
     const std::size_t n = rb->data_size;
     {
       std::lock_guard<std::mutex> l(seen.mu);
-      if (take(cfg.channels, channel, data, n, Clock::now(), seen.track)) return;
+      if (take(cfg.channels, channel, data, n, rb->recv_utime, seen.track)) return;
     }
     {  // an input channel
       const std::string bytes(reinterpret_cast<const char*>(data), n);
@@ -291,7 +292,7 @@ LiveRunResult runLive(const LiveRunOptions& o) {
         if (m.decode(data, 0, static_cast<int>(n)) == static_cast<int>(n) && m.seq < kSeqBase) {
           std::lock_guard<std::mutex> l(seen.mu);
           seen.live_utime = std::max(seen.live_utime, m.utime);
-          seen.live_at = Clock::now();
+          seen.live_recv_utime = rb->recv_utime;
         }
       }
       if (o.disturbance != Disturbance::kCorrupt) return;
@@ -374,20 +375,32 @@ LiveRunResult runLive(const LiveRunOptions& o) {
 
   std::lock_guard<std::mutex> l(seen.mu);
   if (seen.track.poses.empty()) throw std::runtime_error("no POSE from the system (" + o.out_dir + "/launcher.out)");
-  // Wall time (the watcher's), while the system's odometry comes: the poses still in the horizon
-  // when the input ends come out together, when the daemon flushes it, not on the odometry.
-  for (std::size_t i = 1; i < seen.track.poses.size() && seen.track.poses[i].at <= seen.live_at; ++i) {
-    const double silence = seconds(seen.track.poses[i].at - seen.track.poses[i - 1].at);
-    r.max_silence_wall_s = std::max(r.max_silence_wall_s, silence);
-    r.silences_over += silence > 2 * r.pose_period_s / std::max(o.factor, 1e-9);
-  }
-  // Message time, errors and the status: from the logger's log (a recorder with a large receive
-  // buffer), or the watcher's when there is none.
+  // Message time, errors, the status and the wall-clock silences: from the logger's log (a
+  // recorder with a large receive buffer, its timestamps the kernel's receive times), or the
+  // watcher's when there is none. (The watcher shares its process with the sender of the floods,
+  // and LCM's receive thread there drops datagrams under them: a POSE it lost would count as a
+  // silence the system never had.)
   Track recorded;
+  int64_t recorded_live = 0;  // the system's last odometry message in the log [us, receive time]
   if (fs::exists(log)) {
     logio::scanLog(log, [&](const logio::RawEvent& e) {
-      take(cfg.channels, *e.channel, e.data, static_cast<std::size_t>(e.size), Clock::time_point{}, recorded);
+      take(cfg.channels, *e.channel, e.data, static_cast<std::size_t>(e.size), e.utime, recorded);
+      if (*e.channel == cfg.channels.odometry) {
+        odometry_t m{};
+        if (m.decode(e.data, 0, static_cast<int>(e.size)) == static_cast<int>(e.size) && m.seq < kSeqBase)
+          recorded_live = std::max(recorded_live, e.utime);
+      }
     });
+  }
+  // While the system's odometry comes: the poses still in the horizon when the input ends come
+  // out together, when the daemon flushes it, not on the odometry.
+  const bool from_log = !recorded.poses.empty();
+  const Track& timed = from_log ? recorded : seen.track;
+  const int64_t live_end = from_log ? recorded_live : seen.live_recv_utime;
+  for (std::size_t i = 1; i < timed.poses.size() && timed.poses[i].recv_utime <= live_end; ++i) {
+    const double silence = 1e-6 * static_cast<double>(timed.poses[i].recv_utime - timed.poses[i - 1].recv_utime);
+    r.max_silence_wall_s = std::max(r.max_silence_wall_s, silence);
+    r.silences_over += silence > 2 * r.pose_period_s / std::max(o.factor, 1e-9);
   }
   r.from_log = !recorded.poses.empty();
   score(r.from_log ? recorded : seen.track, r.pose_period_s, r);
