@@ -285,3 +285,53 @@ TEST(NoiseFit, TheHeadingsGrowthPerDistanceAndPerTurnIsFittedByMaximumLikelihood
 }
 
 }  // namespace
+
+namespace {
+
+/// A robot weaving (turn rate 0.6 sin(2 pi t / 6) rad/s at 0.3 m/s) for 300 s, truth at 100 Hz;
+/// its odometry at 50 Hz is stamped `lag` seconds before the motion it reports (a vehicle that
+/// reports its commands), with a little white noise.
+fit::Recording weave(double lag, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  const double kPi = 3.14159265358979323846, v = 0.3, a = 0.6, period = 6.0;
+  auto heading = [&](double t) { return a * period / (2 * kPi) * (1 - std::cos(2 * kPi * t / period)); };
+  fit::Recording r;
+  r.pw_distance = 1.0;
+  double x = 0, y = 0;
+  for (int64_t k = 0; k <= 30000; ++k) {
+    const double t = k * 0.01;
+    if (k > 0) {
+      x += v * 0.01 * std::cos(heading(t - 0.005));
+      y += v * 0.01 * std::sin(heading(t - 0.005));
+    }
+    r.truth.push_back({1000000 + k * 10000, x, y, core::wrapAngle(heading(t)), true});
+    if (k % 2 == 0 && k > 0) {
+      core::OdometryInput o;
+      o.utime = 1000000 + k * 10000;
+      o.delta_s = (v + 0.01 * n(rng)) * 0.02;
+      o.delta_theta = heading(t + lag) - heading(t + lag - 0.02) + 0.002 * n(rng);
+      r.odometry.push_back(o);
+    }
+  }
+  return r;
+}
+
+}  // namespace
+
+TEST(FitNoise, TheLagOfTheTruthsMotionBehindTheOdometryIsFitted) {
+  for (const double lag : {0.3, -0.15}) {
+    const auto f = fit::fitAgainstTruth(weave(lag, 3));
+    ASSERT_TRUE(f.odometry_lag) << lag;
+    EXPECT_NEAR(f.odometry_lag->seconds, lag, 0.011) << lag;
+    EXPECT_TRUE(f.odometry_lag->significant()) << lag;
+    EXPECT_LT(f.odometry_lag->rms, 0.5 * f.odometry_lag->rms_at_zero) << lag;
+    // The turn scale, fitted to the odometry moved by the lag, is the truth's 1.
+    ASSERT_TRUE(f.yaw_rate_scale);
+    EXPECT_NEAR(f.yaw_rate_scale->ratio, 1.0, 0.02) << lag;
+  }
+  const auto none = fit::fitAgainstTruth(weave(0.0, 4));
+  ASSERT_TRUE(none.odometry_lag);
+  EXPECT_FALSE(none.odometry_lag->significant()) << none.odometry_lag->seconds;
+  EXPECT_LT(std::abs(none.odometry_lag->seconds), 0.011);
+}

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <sstream>
 #include <unordered_map>
@@ -109,6 +110,76 @@ NoiseFit::Scale throughOrigin(const std::vector<double>& x, const std::vector<do
   for (std::size_t i = 0; i < x.size(); ++i) rss += std::pow(y[i] - s.ratio * x[i], 2);
   s.se = std::sqrt(rss / static_cast<double>(s.n - 1) / xx);
   return s;
+}
+
+/// NoiseFit::odometry_lag: windows of about 1 s of odometry, one every 0.25 s; at each lag L the
+/// odometry's turn over [t0, t1] against the truth's heading change over [t0 + L, t1 + L], the
+/// odometry scaled by least squares. A 50 ms grid over +-1 s, then 10 ms around its best.
+void fitOdometryLag(const Recording& r, const FitOptions& opt, NoiseFit& f) {
+  const int64_t max_gap = static_cast<int64_t>(opt.max_truth_gap_s * 1e6);
+  const int64_t max_odo_gap = static_cast<int64_t>(opt.max_odometry_gap_s * 1e6);
+  struct Window {
+    int64_t t0, t1;
+    double turn;
+  };
+  std::vector<Window> windows;
+  int64_t next = INT64_MIN;
+  for (std::size_t i = 0; i + 1 < r.odometry.size(); ++i) {
+    if (r.odometry[i].utime < next) continue;
+    double turn = 0;
+    const auto w = walkWindow(r.odometry, i, max_odo_gap, [&](const core::OdometryInput& o) {
+      turn += core::headingIncrement(o, r.wheelbase);
+      return o.utime - r.odometry[i].utime >= 1000000;
+    });
+    if (!w.whole) continue;
+    windows.push_back({r.odometry[i].utime, r.odometry[w.end].utime, turn});
+    next = r.odometry[i].utime + 250000;
+  }
+  if (windows.size() < 50) return;
+  // RMS at lag L [us] over the windows with the truth's heading at both ends (n: how many;
+  // truth_rms: the RMS of the truth's heading change over them).
+  auto rmsAt = [&](int64_t lag, int64_t* n, double* truth_rms = nullptr) {
+    std::vector<double> a, b;
+    for (const Window& w : windows) {
+      const auto h0 = truthHeading(r.truth, w.t0 + lag, max_gap), h1 = truthHeading(r.truth, w.t1 + lag, max_gap);
+      if (!h0 || !h1) continue;
+      a.push_back(w.turn);
+      b.push_back(core::wrapAngle(*h1 - *h0));
+    }
+    *n = static_cast<int64_t>(a.size());
+    if (a.size() < 50) return std::numeric_limits<double>::infinity();
+    const double k = throughOrigin(a, b).ratio;
+    double ss = 0;
+    double bb = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      ss += std::pow(k * a[i] - b[i], 2);
+      bb += b[i] * b[i];
+    }
+    if (truth_rms) *truth_rms = std::sqrt(bb / static_cast<double>(a.size()));
+    return std::sqrt(ss / static_cast<double>(a.size()));
+  };
+  NoiseFit::Lag lag;
+  int64_t n0 = 0;
+  lag.rms_at_zero = rmsAt(0, &n0);
+  if (!std::isfinite(lag.rms_at_zero)) return;
+  int64_t best = 0;
+  double best_rms = lag.rms_at_zero;
+  auto search = [&](int64_t from, int64_t to, int64_t step) {
+    for (int64_t l = from; l <= to; l += step) {
+      int64_t n = 0;
+      const double v = rmsAt(l, &n);
+      if (v < best_rms) {
+        best_rms = v;
+        best = l;
+      }
+    }
+  };
+  search(-1000000, 1000000, 50000);
+  search(best - 40000, best + 40000, 10000);
+  lag.seconds = static_cast<double>(best) * 1e-6;
+  lag.rms = best_rms;
+  rmsAt(best, &lag.n, &lag.truth_rms);
+  f.odometry_lag = lag;
 }
 
 /// The odometry's distance and turn scales against the truth over windows of about 1 s.
@@ -326,8 +397,17 @@ NoiseFit fitAgainstTruth(const Recording& r, const FitOptions& opt) {
   if (!gps.empty()) f.gps = residualStats(gps);
 
   if (!r.odometry.empty()) {
-    fitScales(r, opt, f);
-    fitOdometry(r, opt, f);
+    fitOdometryLag(r, opt, f);
+    if (f.odometry_lag && f.odometry_lag->significant()) {
+      Recording moved = r;  // the odometry at the time of its motion
+      const auto dt = static_cast<int64_t>(std::llround(f.odometry_lag->seconds * 1e6));
+      for (auto& o : moved.odometry) o.utime += dt;
+      fitScales(moved, opt, f);
+      fitOdometry(moved, opt, f);
+    } else {
+      fitScales(r, opt, f);
+      fitOdometry(r, opt, f);
+    }
   }
   return f;
 }

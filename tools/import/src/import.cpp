@@ -18,6 +18,7 @@
 #include "lcmloc/fit/fit_log.hpp"
 #include "lcmloc/core/angles.hpp"
 #include "lcmloc/import/checks.hpp"
+#include "lcmloc/odometry_t.hpp"
 
 namespace lcmloc::import {
 namespace fs = std::filesystem;
@@ -141,7 +142,7 @@ void checkConfigText(const std::string& text, const std::string& path) {
 /// The config with the noise fitted against the truth of the log just written (read back as the
 /// replay reads it); the fit's lines into r.noise_fit. A fitted config the loader would refuse
 /// is not used (the defaults stay, and a line says why).
-std::string fittedConfig(const ImportOptions& opt, ImportResult& r, std::size_t map_size, const detail::Converted& conv,
+std::string fittedConfig(const ImportOptions& opt, ImportResult& r, std::size_t map_size, detail::Converted& conv,
                          const std::string& plain) {
   const fit::LogRead read = fit::readRecording(r.log_path, app::parseSystemConfig(plain, r.config_path));
   const fit::NoiseFit f = fit::fitAgainstTruth(read.recording);
@@ -175,6 +176,21 @@ std::string fittedConfig(const ImportOptions& opt, ImportResult& r, std::size_t 
     r.noise_fit.push_back(fmt::format("noise fit: beacon range bias: {} of {} beacons' median residual differs from 0 "
                                       "(their median {:.3g} m, spread {:.2g} m): the filter's range-bias states start there",
                                       f.beacon_bias->beacons, f.beacon_bias->of, f.beacon_bias->mean, f.beacon_bias->std));
+  if (const auto& lag = f.odometry_lag) {
+    if (lag->significant()) {
+      // The odometry written at the time of its motion (the scales and the process noise were
+      // fitted to it so).
+      conv.log.retime<lcmloc::odometry_t>(opt.channels.odometry, std::llround(lag->seconds * 1e6));
+      conv.log.write(r.log_path);
+      r.first_utime = conv.log.firstUtime();
+      r.last_utime = conv.log.lastUtime();
+    }
+    r.noise_fit.push_back(fmt::format(
+        "noise fit: odometry lag: the truth's turn follows the odometry's by {:.2f} s (RMS of the heading change over "
+        "1 s: {:.4g} rad at 0 s, {:.4g} rad at the lag, the truth's own {:.4g} rad; {} windows){}",
+        lag->seconds, lag->rms_at_zero, lag->rms, lag->truth_rms, lag->n,
+        lag->significant() ? ": the odometry's times are moved by it in the log" : ": not significant, not applied"));
+  }
   for (const auto& n : f.notes) r.noise_fit.push_back("noise fit: " + n);
   return text;
 }

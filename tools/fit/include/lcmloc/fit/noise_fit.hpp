@@ -65,6 +65,25 @@ struct NoiseFit {
     bool significant(double min = 0.02) const { return n >= 5 && std::abs(ratio - 1.0) > std::max(3.0 * se, min); }
   };
   std::optional<Scale> odometry_scale, yaw_rate_scale;
+  /// How much later than its time the odometry's motion shows in the truth (a vehicle that reports
+  /// its commanded speed and turn rate, or a clock offset): the lag, on a 10 ms grid within +-1 s,
+  /// that minimizes the RMS of the heading change over windows of about 1 s against the truth's
+  /// (the odometry's turn scaled by least squares at each lag). `rms_at_zero`, `rms`: that RMS
+  /// without a lag and at it [rad]; `n`: the windows. When significant the scales and the process
+  /// noise are fitted to the odometry moved by the lag (the importer moves it so in the log).
+  struct Lag {
+    double seconds = 0.0, rms_at_zero = 0.0, rms = 0.0;
+    double truth_rms = 0.0;  ///< RMS of the truth's heading change over the windows [rad]
+    int64_t n = 0;
+    /// At least 20 ms, the RMS at least 10 % below that without it, over 50 windows or more, and
+    /// the odometry's turn a good model of the truth's at the lag (RMS at most half the truth's
+    /// own: a truth whose heading is noise, e.g. a position-only truth's direction of travel at
+    /// walking pace, cannot tell a lag).
+    bool significant() const {
+      return n >= 50 && std::abs(seconds) >= 0.02 && rms < 0.9 * rms_at_zero && rms <= 0.5 * truth_rms;
+    }
+  };
+  std::optional<Lag> odometry_lag;
   /// The beacons' range bias, when at least one beacon's median residual differs from 0 by more
   /// than 3 standard errors of that median (1.2533 sigma / sqrt(n), at least 5 residuals) and
   /// by more than 0.02 m: a prior for the filter's range-bias states. `mean`: the median of every

@@ -17,6 +17,21 @@ class EventLog {
     events_.push_back({utime, order, static_cast<int64_t>(events_.size()), channel, std::move(b)});
     sorted_ = false;
   }
+  /// Moves every message on channel (of type T, whose `utime` field is its time) by dt [us], in
+  /// the message and as the event's time (a sensor's clock offset found by a fit).
+  template <typename T>
+  void retime(const std::string& channel, int64_t dt) {
+    for (auto& e : events_) {
+      if (e.channel != channel) continue;
+      T m;
+      if (m.decode(e.bytes.data(), 0, static_cast<int>(e.bytes.size())) < 0) continue;
+      m.utime += dt;
+      e.bytes.resize(static_cast<std::size_t>(m.getEncodedSize()));
+      m.encode(e.bytes.data(), 0, static_cast<int>(e.bytes.size()));
+      e.utime += dt;
+      sorted_ = false;
+    }
+  }
   /// Sorts by (utime, order, insertion).
   void sort();
   std::size_t size() const { return events_.size(); }
