@@ -36,6 +36,13 @@ void printFit(const NoiseFit& f, const LogRead& read) {
   };
   scale("odometry distance scale", f.odometry_scale);
   scale("odometry turn scale", f.yaw_rate_scale);
+  if (const auto& lag = f.odometry_lag)
+    std::printf("odometry lag: the truth's turn follows the odometry's by %.2f s (RMS of the heading change over 1 s: "
+                "%.4g rad at 0 s, %.4g rad at the lag, the truth's own %.4g rad; %lld windows)%s\n",
+                lag->seconds, lag->rms_at_zero, lag->rms, lag->truth_rms, static_cast<long long>(lag->n),
+                lag->significant() ? ": significant; the scales and the process noise above are fitted to the odometry "
+                                     "moved by it (lcmloc-import moves it so in the log it writes)"
+                                   : ": not significant");
   for (const auto& n : f.notes) std::printf("note: %s\n", n.c_str());
 }
 
