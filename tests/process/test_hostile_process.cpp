@@ -24,7 +24,6 @@ class HostileProcess : public ProcessFixture {};
 
 TEST_F(HostileProcess, EveryKindOfBadMessageOnEveryInputChannelOfARunningDaemon) {
   const lcmloc::app::SystemConfig cfg = lcmloc::app::loadSystemConfig(LCMLOC_PAPER_YAML);
-  Child daemon(LCMLOC_FUSION, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML}, path("fusion.out"));
   lcm::LCM lcm(url_);
   ASSERT_TRUE(lcm.good());
   std::mutex mu;
@@ -57,6 +56,8 @@ TEST_F(HostileProcess, EveryKindOfBadMessageOnEveryInputChannelOfARunningDaemon)
       if (t.joinable()) t.join();
     }
   } join{stop, rx};
+  // The daemon starts once this side listens: its "started" status is published once.
+  Child daemon(LCMLOC_FUSION, {"--lcm-url", url_, "--config", LCMLOC_PAPER_YAML}, path("fusion.out"));
   // Wait for the daemon to listen (its "started" status; slow on a loaded machine).
   const auto deadline = std::chrono::steady_clock::now() + 30s;
   auto started = [&] {
