@@ -7,7 +7,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <regex>
-#include <thread>
 #include <unordered_map>
 
 #include <spdlog/spdlog.h>
