@@ -127,6 +127,46 @@ TEST(UkfLandmarks, KnownIdConvergesAndRejectsAFaultObservation) {
   EXPECT_EQ(u->reason, "unknown_id");
 }
 
+// Observations whose errors persist from one to the next: the correlation factor discounts what
+// each tells the update, and leaves the gate's distance (against the observation's own variance)
+// as it is, so that the gate does not widen for it.
+TEST(UkfLandmarks, TheCorrelationFactorWeighsTheUpdateAndNotTheGate) {
+  const auto map = landmarks();
+  FilterConfig c = landmarkConfig(Vec3(2.0, 0.0, M_PI / 2), 0.04);
+  auto plain = makeFilter(c, map);
+  c.landmarks.correlation_factor = 16.0;
+  auto discounted = makeFilter(c, map);
+  const Pose truth(2.0, 0.0, M_PI / 2);
+  // 0.1 m long: within the gate of both.
+  const auto a = plain->update(observe(truth, map[0], map[0].id, 1000, 0.1));
+  const auto b = discounted->update(observe(truth, map[0], map[0].id, 1000, 0.1));
+  ASSERT_TRUE(a && b);
+  EXPECT_TRUE(a->accepted);
+  EXPECT_TRUE(b->accepted);
+  EXPECT_NEAR(a->mahalanobis, b->mahalanobis, 1e-9 * a->mahalanobis);
+  // Landmark 10 lies 3 m along +x from (2, 0): a longer range pushes x back.
+  const double moved_plain = 2.0 - plain->state().x[0], moved = 2.0 - discounted->state().x[0];
+  EXPECT_GT(moved_plain, 0.05);
+  EXPECT_GT(moved, 0.0);
+  // The gain on x: P / (P + R) without, P / (P + 16 R) with (P 0.04, R 0.05^2).
+  EXPECT_NEAR(moved / moved_plain, (0.04 + 0.0025) / (0.04 + 0.04), 0.05);
+  EXPECT_GT(discounted->state().P(0, 0), 2.0 * plain->state().P(0, 0));
+  // 0.8 m long: 3.9 sigma of the prior and the range, refused by both (were the factor part of
+  // the gate's variance, 2.8 sigma: taken).
+  auto c1 = landmarkConfig(Vec3(2.0, 0.0, M_PI / 2), 0.04);
+  auto p1 = makeFilter(c1, map);
+  c1.landmarks.correlation_factor = 16.0;
+  auto d1 = makeFilter(c1, map);
+  const auto r1 = p1->update(observe(truth, map[0], map[0].id, 2000, 0.8));
+  const auto r2 = d1->update(observe(truth, map[0], map[0].id, 2000, 0.8));
+  ASSERT_TRUE(r1 && r2);
+  EXPECT_EQ(r1->reason, "gate");
+  EXPECT_EQ(r2->reason, "gate");
+  EXPECT_NEAR(r1->mahalanobis, r2->mahalanobis, 1e-9 * r1->mahalanobis);
+  c1.landmarks.correlation_factor = 0.5;
+  EXPECT_THROW(makeFilter(c1, map), std::invalid_argument);
+}
+
 TEST(UkfLandmarks, UnknownIdAssociatesTheNearestLandmarkAndConverges) {
   const auto map = landmarks();
   auto f = makeFilter(landmarkConfig(Vec3(2.3, 0.2, M_PI / 2 - 0.05), 0.3), map);

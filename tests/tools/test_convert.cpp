@@ -192,6 +192,11 @@ TEST_F(ConvertTest, SharedRecordingsScoredWithTheImportersConfig) {
     const double rmse = e.at("rmse").get<double>(), max = e.at("max").get<double>();
     EXPECT_LE(rmse, 0.25) << "robot " << robot;
     EXPECT_LT(max, 1.5) << "robot " << robot;
+    // Consistent: the landmarks' residuals correlate from one observation to the next (about
+    // 0.9), and the fitted correlation factor discounts them so (NEES 12-15 without it).
+    const double nees = j.at("tracks").at(0).at("nees_xytheta").at("mean").get<double>();
+    EXPECT_GE(nees, 1.0) << "robot " << robot;
+    EXPECT_LE(nees, 6.0) << "robot " << robot;
     const auto& u = j.at("unknown_identity");
     const auto& by = u.at("by_filter").at(0);
     EXPECT_LE(by.at("unknown_accepted").get<double>(), 0.02 * u.at("without_identity").get<double>())

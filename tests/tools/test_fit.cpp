@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <random>
 
 #include "lcmloc/core/angles.hpp"
@@ -87,6 +88,37 @@ TEST(FitNoise, ASignificantBeaconRangeBiasGivesAPriorForTheBiasStates) {
   EXPECT_LE(f.beacon_bias->mean - f.beacon_bias->std, 0.11);
   for (auto& b : r.beacons) b.range -= 0.1 * b.beacon_id;
   EXPECT_FALSE(fit::fitAgainstTruth(r).beacon_bias);
+}
+
+// Range errors that follow each landmark from one observation to the next (AR(1), rho 0.8 at the
+// circle's 0.2 s per landmark) and white bearing errors: the correlation factor is
+// (1 + 0.8) / (1 - 0.8) = 9. White errors in both give about 1.
+TEST(FitNoise, TheCorrelationOfSuccessiveObservationsGivesTheCorrelationFactor) {
+  const auto white = fit::fitAgainstTruth(circle(0.05, 0.02, 0.0, 21));
+  ASSERT_TRUE(white.landmark_correlation);
+  EXPECT_NEAR(white.landmark_correlation->range_rho, 0.0, 0.05);
+  EXPECT_NEAR(white.landmark_correlation->bearing_rho, 0.0, 0.05);
+  EXPECT_LT(white.landmark_correlation->factor, 1.15);
+  auto r = circle(0.05, 0.02, 0.0, 22);
+  std::mt19937_64 rng(23);
+  std::normal_distribution<double> n(0.0, 1.0);
+  const double rho = 0.8, sigma = 0.05;
+  std::map<int, double> e;  // each landmark's current range error
+  for (auto& o : r.landmarks) {
+    const auto& p = r.truth[static_cast<std::size_t>((o.utime - 1000000) / 10000)];
+    ASSERT_EQ(p.utime, o.utime);
+    const auto& m = r.map[static_cast<std::size_t>(o.landmark_id - 1)];
+    double& err = e[o.landmark_id];
+    err = rho * err + std::sqrt(1.0 - rho * rho) * sigma * n(rng);
+    o.range = std::hypot(m.x - p.x, m.y - p.y) + err;
+  }
+  const auto f = fit::fitAgainstTruth(r);
+  ASSERT_TRUE(f.landmark_correlation);
+  EXPECT_EQ(f.landmark_correlation->pairs, 12000);  // 3001 observations of each of 4, less the first
+  EXPECT_NEAR(f.landmark_correlation->range_rho, rho, 0.03);
+  EXPECT_NEAR(f.landmark_correlation->bearing_rho, 0.0, 0.05);
+  EXPECT_NEAR(f.landmark_correlation->factor, 9.0, 1.5);
+  EXPECT_NE(fit::configFragment(f, 1.0).find("correlation_factor: "), std::string::npos);
 }
 
 TEST(FitNoise, ARangeBiasIsTheMedianNotTheSpread) {

@@ -327,6 +327,7 @@ core::FilterConfig parseFilterConfig(const YAML::Node& node, const core::FilterC
     l.get("range_std", c.landmarks.range_std, 1e-9, 1e6);
     l.get("bearing_std", c.landmarks.bearing_std, 1e-9, 10.0);
     l.get("beacon_std", c.landmarks.beacon_std, 1e-9, 1e6);
+    l.get("correlation_factor", c.landmarks.correlation_factor, 1.0, 1e6);
     l.finish();
   }
   parseCalibration(r, c.calibration);

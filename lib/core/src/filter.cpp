@@ -67,6 +67,8 @@ void validate(const FilterConfig& c) {
   require(std::isfinite(c.landmarks.bearing_std) && c.landmarks.bearing_std > 0,
           "landmarks.bearing_std must be > 0");
   require(std::isfinite(c.landmarks.beacon_std) && c.landmarks.beacon_std > 0, "landmarks.beacon_std must be > 0");
+  require(std::isfinite(c.landmarks.correlation_factor) && c.landmarks.correlation_factor >= 1,
+          "landmarks.correlation_factor must be >= 1");
   const auto& k = c.calibration;
   for (const auto& [std0, name] : {std::pair{k.beacon_bias_std, "beacon_bias_std"}, {k.odo_scale_std, "odo_scale_std"},
                                    {k.yaw_rate_scale_std, "yaw_rate_scale_std"}, {k.yaw_rate_bias_std, "yaw_rate_bias_std"},

@@ -144,7 +144,19 @@ class LandmarkUkf final : public Filter {
     const double rs = obs.range_std > 0 ? obs.range_std : cfg_.landmarks.range_std;
     const double bs = obs.bearing_std > 0 ? obs.bearing_std : cfg_.landmarks.bearing_std;
     const Mat2 R = Vec2(rs * rs, bs * bs).asDiagonal();
+    const double kappa = cfg_.landmarks.correlation_factor;
+    const Mat2 R_update = kappa * R;
     const Vec2 z(obs.range, wrapAngle(obs.bearing));
+    // The gate's distance against the observation's own variance (S less the update's share of
+    // the correlation factor): the factor discounts how much an observation tells, not how far
+    // from the prediction it may lie.
+    auto gate_on_own = [&R, kappa](Innovation<N, 2>& in) {
+      if (kappa == 1.0) return true;
+      Mat2 S_inv;
+      if (!inverseSpd<2>(Mat2(in.S - (kappa - 1.0) * R), S_inv)) return false;
+      in.mahalanobis = in.v.dot(S_inv * in.v);
+      return std::isfinite(in.mahalanobis);
+    };
     Innovation<N, 2> best, cand;
     int best_id = -1;
     auto h_of = [](const Marker& m) {
@@ -154,7 +166,7 @@ class LandmarkUkf final : public Filter {
       const Marker* known = knownOr(obs.landmark_id, d);
       if (!known) return d;
       const Marker& m = *known;
-      if (ukf_.template innovate<2>(X, h_of(m), R, z, kBearingMask, best)) best_id = m.id;
+      if (ukf_.template innovate<2>(X, h_of(m), R_update, z, kBearingMask, best) && gate_on_own(best)) best_id = m.id;
       finish(d, best_id, best, gate2_);
       if (d.accepted) evidence_.clear();
       else if (d.reason == "gate") relocalize(d, obs, m, rs, bs);
@@ -172,7 +184,8 @@ class LandmarkUkf final : public Filter {
         const Marker& m = (*map_)[i];
         const double dist = std::hypot(m.x - pose.x(), m.y - pose.y());
         if (std::abs(dist - obs.range) > slack) continue;
-        if (ukf_.template innovate<2>(X, h_of(m), R, z, kBearingMask, cand)) match.offer(m.id, cand, gate2_);
+        if (ukf_.template innovate<2>(X, h_of(m), R_update, z, kBearingMask, cand) && gate_on_own(cand))
+          match.offer(m.id, cand, gate2_);
       }
       if (match.ambiguous(d)) return d;
       return finish(d, match.best_id, match.best, gate2_);

@@ -218,6 +218,7 @@ core::FilterConfig withFit(core::FilterConfig cfg, const NoiseFit& f, double pw_
   if (f.pw_turn) cfg.pw_turn = *f.pw_turn;
   if (f.landmark_range) cfg.landmarks.range_std = f.landmark_range->sigma;
   if (f.landmark_bearing) cfg.landmarks.bearing_std = f.landmark_bearing->sigma;
+  if (f.landmark_correlation) cfg.landmarks.correlation_factor = f.landmark_correlation->factor;
   if (f.beacon_range) cfg.landmarks.beacon_std = f.beacon_range->sigma;
   if (f.gps) cfg.gnss.gps_std = f.gps->sigma;
   return cfg;

@@ -338,6 +338,15 @@ NoiseFit fitAgainstTruth(const Recording& r, const FitOptions& opt) {
     return it == ids.end() ? nullptr : it->second;
   };
   std::vector<double> range, bearing;
+  // Each landmark's latest residual, for the correlation of successive ones.
+  struct Last {
+    int64_t utime;
+    double range, bearing;
+    bool has_bearing;
+  };
+  std::map<int, Last> last;
+  std::vector<double> range_a, range_b, bearing_a, bearing_b;
+  const auto max_pair_gap = static_cast<int64_t>(opt.max_pair_gap_s * 1e6);
   int64_t unknown = 0, not_in_map = 0;
   for (const auto& o : r.landmarks) {
     if (o.landmark_id < 0) {
@@ -351,7 +360,27 @@ NoiseFit fitAgainstTruth(const Recording& r, const FitOptions& opt) {
     double rg, br;
     rangeBearing(*p, m->x, m->y, rg, br);
     range.push_back(o.range - rg);
-    if (p->has_heading) bearing.push_back(core::wrapAngle(o.bearing - br));
+    const double eb = core::wrapAngle(o.bearing - br);
+    if (p->has_heading) bearing.push_back(eb);
+    const auto prev = last.find(o.landmark_id);
+    if (prev != last.end() && o.utime - prev->second.utime <= max_pair_gap && o.utime >= prev->second.utime) {
+      range_a.push_back(prev->second.range);
+      range_b.push_back(range.back());
+      if (p->has_heading && prev->second.has_bearing) {
+        bearing_a.push_back(prev->second.bearing);
+        bearing_b.push_back(eb);
+      }
+    }
+    last[o.landmark_id] = {o.utime, range.back(), eb, p->has_heading};
+  }
+  if (range_a.size() >= 30) {
+    NoiseFit::Correlation c;
+    c.pairs = static_cast<int64_t>(range_a.size());
+    c.range_rho = correlation(range_a, range_b);
+    if (bearing_a.size() >= 30) c.bearing_rho = correlation(bearing_a, bearing_b);
+    const double rho = std::clamp(std::max(c.range_rho, c.bearing_rho), 0.0, 0.98);
+    c.factor = (1.0 + rho) / (1.0 - rho);
+    f.landmark_correlation = c;
   }
   if (!range.empty()) f.landmark_range = residualStats(range);
   if (!bearing.empty()) f.landmark_bearing = residualStats(bearing);
@@ -412,6 +441,25 @@ NoiseFit fitAgainstTruth(const Recording& r, const FitOptions& opt) {
   return f;
 }
 
+double correlation(const std::vector<double>& a, const std::vector<double>& b) {
+  const std::size_t n = std::min(a.size(), b.size());
+  if (n < 2) return 0.0;
+  double ma = 0, mb = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    ma += a[i];
+    mb += b[i];
+  }
+  ma /= double(n);
+  mb /= double(n);
+  double sab = 0, saa = 0, sbb = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    sab += (a[i] - ma) * (b[i] - mb);
+    saa += (a[i] - ma) * (a[i] - ma);
+    sbb += (b[i] - mb) * (b[i] - mb);
+  }
+  return saa > 0 && sbb > 0 ? sab / std::sqrt(saa * sbb) : 0.0;
+}
+
 std::string configFragment(const NoiseFit& f, double pw_distance) {
   std::ostringstream y;
   y << "# Noise fitted against the ground truth (lcmloc-fit-noise): the robust spread (1.4826 MAD)\n"
@@ -432,6 +480,9 @@ std::string configFragment(const NoiseFit& f, double pw_distance) {
     if (f.landmark_bearing)
       y << fmt::format("      bearing_std: {:.6g}   # {} residuals, median {:.4g} rad\n", f.landmark_bearing->sigma,
                        f.landmark_bearing->n, f.landmark_bearing->median);
+    if (const auto& c = f.landmark_correlation)
+      y << fmt::format("      correlation_factor: {:.4g}   # successive observations' residuals correlate {:.2f} (range), {:.2f} (bearing); {} pairs\n",
+                       c->factor, c->range_rho, c->bearing_rho, c->pairs);
     if (f.beacon_range)
       y << fmt::format("      beacon_std: {:.6g}    # {} residuals of every beacon together (each one's median, its range bias, in the report)\n",
                        f.beacon_range->sigma, f.beacon_range->n);

@@ -25,6 +25,10 @@ void printFit(const NoiseFit& f, const LogRead& read) {
     row(what.c_str(), v);
   }
   row("gps per axis [m]", f.gps);
+  if (const auto& c = f.landmark_correlation)
+    std::printf("landmark residuals of successive observations: correlation %.2f (range), %.2f (bearing), %lld pairs: "
+                "correlation_factor %.3g\n",
+                c->range_rho, c->bearing_rho, static_cast<long long>(c->pairs), c->factor);
   if (f.pw_diag)
     std::printf("odometry: %lld windows: pw_diag [%.4g, %.4g, %.4g] per %g m, pw_turn %.4g rad^2/rad\n",
                 static_cast<long long>(f.odometry_windows), (*f.pw_diag)[0], (*f.pw_diag)[1], (*f.pw_diag)[2],

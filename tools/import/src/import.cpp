@@ -55,6 +55,7 @@ std::string applyFit(const fit::NoiseFit* f, core::FilterConfig& d) {
   }
   if (f->landmark_range) take("range_std", f->landmark_range->sigma, d.landmarks.range_std);
   if (f->landmark_bearing) take("bearing_std", f->landmark_bearing->sigma, d.landmarks.bearing_std);
+  if (f->landmark_correlation) take("correlation_factor", f->landmark_correlation->factor, d.landmarks.correlation_factor);
   if (f->beacon_range) take("beacon_std", f->beacon_range->sigma, d.landmarks.beacon_std);
   if (f->gps) take("gps_std", f->gps->sigma, d.gnss.gps_std);
   return said + "\n";
@@ -97,8 +98,9 @@ std::string configText(const ImportOptions& opt, const std::string& filter, std:
                    num(d.pw_diag[0]), num(d.pw_diag[1]), num(d.pw_diag[2]))
     << fmt::format("    pw_distance: {}                # [m]\n", num(d.pw_distance))
     << fmt::format("    pw_turn: {}                   # heading variance per radian turned [rad^2/rad]\n", num(d.pw_turn))
-    << fmt::format("    landmarks: {{range_std: {}, bearing_std: {}, beacon_std: {}}}  # [m], [rad], [m]\n",
-                   num(d.landmarks.range_std), num(d.landmarks.bearing_std), num(d.landmarks.beacon_std));
+    << fmt::format("    landmarks: {{range_std: {}, bearing_std: {}, beacon_std: {}, correlation_factor: {}}}  # [m], [rad], [m], [-]\n",
+                   num(d.landmarks.range_std), num(d.landmarks.bearing_std), num(d.landmarks.beacon_std),
+                   num(d.landmarks.correlation_factor));
   std::vector<std::string> gnss;
   if (fitted && fitted->gps && fitted->gps->sigma > 0) gnss.push_back("gps_std: " + num(d.gnss.gps_std));
   if (conv.imu_without_mag) gnss.push_back("use_magnetometer: false");  // the IMU rows have no magnetometer
@@ -160,6 +162,10 @@ std::string fittedConfig(const ImportOptions& opt, ImportResult& r, std::size_t 
   line("landmark bearing [rad]", f.landmark_bearing);
   line("beacon range [m]", f.beacon_range);
   line("gps per axis [m]", f.gps);
+  if (const auto& c = f.landmark_correlation)
+    r.noise_fit.push_back(fmt::format("noise fit: landmark residuals of successive observations correlate {:.2f} (range), "
+                                      "{:.2f} (bearing), {} pairs: each update weighs an observation as {:.3g} times its variance",
+                                      c->range_rho, c->bearing_rho, c->pairs, c->factor));
   if (f.pw_diag)
     r.noise_fit.push_back(fmt::format("noise fit: odometry pw_diag [{:.4g}, {:.4g}, {:.4g}] per {} m, pw_turn {:.4g} ({} windows)",
                                       (*f.pw_diag)[0], (*f.pw_diag)[1], (*f.pw_diag)[2], read.recording.pw_distance,

@@ -141,6 +141,11 @@ struct FilterConfig {
     double range_std = 0.1;       ///< landmark range, 1 sigma [m]
     double bearing_std = 0.02;    ///< landmark bearing, 1 sigma [rad]
     double beacon_std = 0.1;      ///< beacon range, 1 sigma [m]
+    /// Landmark observations whose errors are correlated from one observation to the next (a
+    /// map error, a range error that depends on the distance): each update weighs the
+    /// observation as (range, bearing) variance x this (the observations per independent one),
+    /// while the gate still tests it against the variance itself. 1: independent.
+    double correlation_factor = 1.0;
   } landmarks;
   /// Self-calibration states appended to a filter's state, each switched on here (all off by
   /// default: the filter is then the one without them). Each starts at its prior mean (0 unless

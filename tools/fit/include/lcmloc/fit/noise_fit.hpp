@@ -36,6 +36,7 @@ struct FitOptions {
   double max_truth_gap_s = 0.5;   ///< a residual between truth samples further apart is not used
   double max_window_s = 5.0;      ///< an odometry window ends after this long or pw_distance of travel
   double max_odometry_gap_s = 0.5;  ///< a window with odometry further apart is dropped
+  double max_pair_gap_s = 2.0;     ///< successive observations of one landmark further apart are not a pair
 };
 
 /// Residuals of one quantity: robust spread (1.4826 MAD about the median), mean and RMS.
@@ -94,12 +95,27 @@ struct NoiseFit {
     int beacons = 0, of = 0;
   };
   std::optional<RangeBias> beacon_bias;
+  /// How alike successive landmark observations' errors are: the correlation of the residuals of
+  /// two successive observations of one landmark (at most `max_pair_gap_s` apart), range and
+  /// bearing. An error that persists from one observation to the next (the landmark's place in
+  /// the map, a range error that depends on the distance) tells the filter no more the second
+  /// time: `factor` = (1 + rho) / (1 - rho) of the larger rho (an AR(1) sequence's observations
+  /// per independent one; rho <= 0 gives 1, rho is taken at most 0.98), the filter's
+  /// landmarks.correlation_factor. At least 30 pairs.
+  struct Correlation {
+    double range_rho = 0.0, bearing_rho = 0.0, factor = 1.0;
+    int64_t pairs = 0;
+  };
+  std::optional<Correlation> landmark_correlation;
   std::vector<std::string> notes;  ///< what could not be fitted and why
 };
 
 /// Fits what the recording allows (a measurement kind needs rows of known identity inside the
 /// truth's span; the bearing and the odometry's heading need a truth heading).
 NoiseFit fitAgainstTruth(const Recording& r, const FitOptions& opt = {});
+
+/// Pearson's correlation of the pairs (a_i, b_i); 0 when either has no spread.
+double correlation(const std::vector<double>& a, const std::vector<double>& b);
 
 /// The growth of a variance over windows of travel: a per unit of s and b per unit of r (a, b >= 0)
 /// such that the errors e_i (e2_i = e_i^2) are most likely as zero-mean Gaussian with variance
