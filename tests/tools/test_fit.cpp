@@ -1,6 +1,7 @@
 // lcmloc-fit-noise: noise fitted against the truth recovers the noise a recording was made with.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <random>
@@ -366,4 +367,71 @@ TEST(FitNoise, TheLagOfTheTruthsMotionBehindTheOdometryIsFitted) {
   ASSERT_TRUE(none.odometry_lag);
   EXPECT_FALSE(none.odometry_lag->significant()) << none.odometry_lag->seconds;
   EXPECT_LT(std::abs(none.odometry_lag->seconds), 0.011);
+}
+
+namespace {
+
+/// A car driving a circle of radius 30 m at 5 m/s for 200 s: odometry at 50 Hz (distance and
+/// heading increments), GPS at 5 Hz whose error is white (white_std per axis) plus a wander
+/// (a random walk of wander_rw per axis per sqrt(s), kept within 3 m by a slow pull back).
+fit::Recording gpsDrive(double white_std, double wander_rw, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  fit::Recording r;
+  const double v = 5.0, w = v / 30.0, dt = 0.02;
+  double wx = 0, wy = 0;
+  for (int64_t k = 1; k <= 10000; ++k) {
+    const double t = k * dt, th = w * t;
+    const int64_t utime = 1000000 + k * 20000;
+    core::OdometryInput o;
+    o.utime = utime;
+    o.has_steering = false;
+    o.delta_s = v * dt;
+    o.delta_theta = w * dt;
+    r.odometry.push_back(o);
+    wx += wander_rw * std::sqrt(dt) * n(rng) - 0.01 * dt * wx;
+    wy += wander_rw * std::sqrt(dt) * n(rng) - 0.01 * dt * wy;
+    if (k % 10 == 0) {
+      core::GpsInput g;
+      g.utime = utime;
+      g.x = 30.0 * std::sin(th) + wx + white_std * n(rng);
+      g.y = 30.0 - 30.0 * std::cos(th) + wy + white_std * n(rng);
+      r.gps.push_back(g);
+    }
+  }
+  return r;
+}
+
+core::EngineConfig gnssEngine(const std::string& type, double position_rw, double gps_std) {
+  core::EngineConfig e;
+  e.filter.type = type;
+  e.filter.initial_pose = core::Vec3(0.0, 0.0, 0.0);
+  e.filter.p0_diag = core::Vec3(1.0, 1.0, 0.01);
+  e.filter.gnss.use_magnetometer = false;
+  e.filter.gnss.position_rw = position_rw;
+  e.filter.gnss.gps_std = gps_std;
+  return e;
+}
+
+}  // namespace
+
+// Fixes whose error wanders (0.5 m per sqrt(s)) beside a filter whose position process noise
+// says the car follows its odometry to 0.05 m per sqrt(s): the filter lags the fixes, and the
+// fit raises position_rw until it predicts them best. Fixes with a white error only keep the
+// process noise low.
+TEST(FitInnovations, ThePositionProcessNoiseOfAGnssFilterIsFittedToTheFixesPredictionError) {
+  for (const std::string type : {"tvekf", "ukf_gps"}) {
+    SCOPED_TRACE(type);
+    const auto wander = gpsDrive(0.2, 0.5, 31);
+    const auto f = fit::fitByInnovations(wander, gnssEngine(type, 0.05, 0.5));
+    EXPECT_GE(f.filter.gnss.position_rw, 0.05 * 4.0);
+    EXPECT_LT(f.rw_error.second, 0.8 * f.rw_error.first);
+    EXPECT_NE(std::find(f.fitted.begin(), f.fitted.end(), "gnss.position_rw"), f.fitted.end());
+    EXPECT_NE(fit::configFragment(f).find("position_rw: "), std::string::npos);
+    const auto white = fit::fitByInnovations(gpsDrive(0.2, 0.0, 32), gnssEngine(type, 0.05, 0.5));
+    EXPECT_LT(white.filter.gnss.position_rw, f.filter.gnss.position_rw / 2.0);
+    fit::InnovationFitOptions off;
+    off.position_rw = false;
+    EXPECT_DOUBLE_EQ(fit::fitByInnovations(wander, gnssEngine(type, 0.05, 0.5), off).filter.gnss.position_rw, 0.05);
+  }
 }

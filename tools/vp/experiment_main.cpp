@@ -41,6 +41,10 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(lcmloc::app::nonNegative());
   app.add_flag("--no-gps-init", no_init, "start from fusion.filter.initial_pose instead of the first fixes");
+  bool no_fit = false;
+  app.add_flag("--no-fit", no_fit,
+               "replay with the config's noise as given (default: each filter's noise fitted to the innovations of the "
+               "fixes it is given, never the held-out ones)");
 
   return app::runProcess(app, argc, argv, opts, "lcmloc-vp-experiment", [&]() -> int {
     const auto cfg = app::loadSystemConfig(opts.config);
@@ -50,14 +54,15 @@ int main(int argc, char** argv) {
     io.gps_csv = dir + "/vp_gps.csv";
     io.stop = [] { return app::stopRequested(); };
     eo.init_from_gps = !no_init;
+    eo.fit_noise = !no_fit;
     const auto r = vp::runExperiment(cfg, io, eo);
-    std::printf("%-16s %8s %8s %10s %10s %10s %10s %8s %8s %8s\n", "filter", "poses", "scored", "rmse[m]",
-                "median[m]", "p95[m]", "max[m]", "gps_rej", "lockout", "reloc");
+    std::printf("%-16s %8s %8s %10s %10s %10s %10s %8s %10s %8s %8s\n", "filter", "poses", "scored", "rmse[m]",
+                "median[m]", "p95[m]", "max[m]", "gps_rej", "rej_run[s]", "lockout", "reloc");
     for (const auto& s : r.scores)
-      std::printf("%-16s %8lld %8lld %10.2f %10.2f %10.2f %10.2f %8lld %8lld %8lld\n", s.filter.c_str(),
+      std::printf("%-16s %8lld %8lld %10.2f %10.2f %10.2f %10.2f %8lld %10.1f %8lld %8lld\n", s.filter.c_str(),
                   static_cast<long long>(s.poses), static_cast<long long>(s.scored), s.rmse_m, s.median_m, s.p95_m,
-                  s.max_m, static_cast<long long>(s.gps_rejected), static_cast<long long>(s.lockouts),
-                  static_cast<long long>(s.relocalized));
+                  s.max_m, static_cast<long long>(s.gps_rejected), s.longest_rejection_s,
+                  static_cast<long long>(s.lockouts), static_cast<long long>(s.relocalized));
     std::printf("report: %s/report.json, figures drive.png, error.png (%.1f s)\n", eo.out_dir.c_str(), r.seconds);
     return app::kExitOk;
   });

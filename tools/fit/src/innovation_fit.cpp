@@ -42,6 +42,7 @@ std::vector<SensorNis> runNis(const Recording& r, const core::EngineConfig& cfg,
     int dof = 0;
     int64_t accepted = 0;
     std::vector<double> nis;
+    double sum_norm = 0;
   };
   std::vector<std::string> order;
   std::map<std::string, Acc> acc;
@@ -52,6 +53,7 @@ std::vector<SensorNis> runNis(const Recording& r, const core::EngineConfig& cfg,
     if (added) order.push_back(d.sensor);
     it->second.dof = std::max(it->second.dof, static_cast<int>(d.innovation.size()));
     it->second.nis.push_back(d.mahalanobis);
+    it->second.sum_norm += d.innovation.norm();
     if (d.accepted) ++it->second.accepted;
   };
   core::EngineConfig c = cfg;
@@ -72,6 +74,7 @@ std::vector<SensorNis> runNis(const Recording& r, const core::EngineConfig& cfg,
     for (double v : a.nis) sum += v;
     n.mean = sum / static_cast<double>(n.decided);
     n.median = median(a.nis);
+    n.mean_innovation = a.sum_norm / static_cast<double>(n.decided);
     n.expected_median = core::chi2Quantile(0.5, n.dof);
     // The mean of N NIS of dof each: chi-square of N dof degrees of freedom, divided by N.
     const double nd = static_cast<double>(n.decided) * n.dof;
@@ -143,6 +146,44 @@ InnovationFit fitByInnovations(const Recording& r, core::EngineConfig cfg, const
 
   f.before = runNis(r, cfg, opt.channels);
   std::vector<SensorNis> now = f.before;
+  // The GNSS filters' position process noise: the one that predicts the fixes best.
+  const Key& gps_key = keys.back();
+  if (opt.position_rw && (fc.type == "tvekf" || fc.type == "ukf_gps") && gps_key.active && !gps_key.sensors.empty() &&
+      fc.gnss.position_rw > 0) {
+    auto prediction_error = [&](const std::vector<SensorNis>& nis, int64_t& n) {
+      double sum = 0;
+      n = 0;
+      for (const auto& sensor : gps_key.sensors)
+        if (const SensorNis* x = find(nis, sensor)) {
+          sum += x->mean_innovation * static_cast<double>(x->decided);
+          n += x->decided;
+        }
+      return n > 0 ? sum / static_cast<double>(n) : 0.0;
+    };
+    int64_t n = 0;
+    const double start = fc.gnss.position_rw, err0 = prediction_error(f.before, n);
+    if (n >= opt.min_decisions) {
+      double best = start, best_err = err0;
+      int best_k = 0;
+      for (int k = -4; k <= 12; ++k) {
+        if (k == 0) continue;
+        fc.gnss.position_rw = start * std::pow(2.0, 0.5 * k);
+        const double e = prediction_error(runNis(r, cfg, opt.channels), n);
+        if (e < best_err) {
+          best = fc.gnss.position_rw;
+          best_err = e;
+          best_k = k;
+        }
+      }
+      fc.gnss.position_rw = best;
+      f.rw_error = {err0, best_err};
+      if (best_k != 0) f.fitted.push_back("gnss.position_rw");
+      if (best_k == -4 || best_k == 12)
+        f.notes.push_back(fmt::format("gnss.position_rw: the best of the grid is at its edge ({:.4g}, {:+.1f} octaves)",
+                                      best, 0.5 * best_k));
+      if (best_k != 0) now = runNis(r, cfg, opt.channels);
+    }
+  }
   for (auto& k : keys)
     for (double* s : k.sigmas) k.start.push_back(*s);
   for (f.iterations = 0; f.iterations < opt.max_iterations; ++f.iterations) {
@@ -206,7 +247,12 @@ std::string configFragment(const InnovationFit& f) {
     y << fmt::format("      range_std: {:.6g}\n      bearing_std: {:.6g}\n", f.filter.landmarks.range_std,
                      f.filter.landmarks.bearing_std);
   if (bc) y << fmt::format("      beacon_std: {:.6g}\n", f.filter.landmarks.beacon_std);
-  if (has("gnss.gps_std")) y << fmt::format("    gnss:\n      gps_std: {:.6g}\n", f.filter.gnss.gps_std);
+  const bool gs = has("gnss.gps_std"), rw = has("gnss.position_rw");
+  if (gs || rw) y << "    gnss:\n";
+  if (gs) y << fmt::format("      gps_std: {:.6g}\n", f.filter.gnss.gps_std);
+  if (rw)
+    y << fmt::format("      position_rw: {:.6g}   # mean GPS prediction error {:.3g} m (was {:.3g} m)\n",
+                     f.filter.gnss.position_rw, f.rw_error.second, f.rw_error.first);
   return y.str();
 }
 

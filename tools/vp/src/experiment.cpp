@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <optional>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -20,6 +21,8 @@
 #include "lcmloc/replay/replay.hpp"
 #include "lcmloc/vp/vp.hpp"
 #include "lcmloc/eval/report.hpp"
+#include "lcmloc/fit/fit_log.hpp"
+#include "lcmloc/fit/innovation_fit.hpp"
 
 namespace lcmloc::vp {
 
@@ -101,6 +104,17 @@ ExperimentResult runExperiment(const app::SystemConfig& cfg0, ImportOptions imp,
     cfg.fusion.filter = app::parseFilterConfig(n, cfg0.fusion.filter, "--filters", "fusion.filter");
     cfg.fusion.filter.initial_pose = init;
     cfg.fusion.shadow.clear();
+    if (opt.fit_noise && type != "dead_reckoning") {
+      const auto read = fit::readRecording(res.log_path, cfg);
+      fit::InnovationFitOptions fo;
+      fo.channels = {cfg.channels.odometry, cfg.channels.landmarks, cfg.channels.beacons, cfg.channels.gps};
+      const auto fitted = fit::fitByInnovations(read.recording, app::engineConfig(cfg), fo);
+      cfg.fusion.filter = fitted.filter;
+      spdlog::info("{}: noise fitted to the innovations of the fixes it is given: position_rw {:.4g} m/sqrt(s) (mean "
+                   "prediction error {:.3g} m, {:.3g} m as configured), gps_std {:.4g} m{}",
+                   type, cfg.fusion.filter.gnss.position_rw, fitted.rw_error.second, fitted.rw_error.first,
+                   cfg.fusion.filter.gnss.gps_std, fitted.notes.empty() ? "" : "; " + fmt::format("{}", fmt::join(fitted.notes, "; ")));
+    }
     replay::ReplayOptions ro;
     ro.input = res.log_path;
     ro.output = opt.out_dir + "/" + type + ".lcmlog";
@@ -111,6 +125,9 @@ ExperimentResult runExperiment(const app::SystemConfig& cfg0, ImportOptions imp,
                  rr.rejected, rr.written, rr.seconds);
     Score s;
     s.filter = type;
+    s.position_rw = cfg.fusion.filter.gnss.position_rw;
+    s.gps_std = cfg.fusion.filter.gnss.gps_std;
+    std::optional<int64_t> refused_since;  // the first refused fix of the current run
     logio::scanLog(ro.output, [&](const logio::RawEvent& e) {
       if (*e.channel == cfg.channels.pose) {
         lcmloc::pose_t p;
@@ -122,8 +139,14 @@ ExperimentResult runExperiment(const app::SystemConfig& cfg0, ImportOptions imp,
         }
       } else if (*e.channel == cfg.channels.gate) {
         lcmloc::gate_decision_t g;
-        if (logio::decodeEvent(e, g) && g.sensor == cfg.channels.gps && g.reason != "no_fix")
+        if (logio::decodeEvent(e, g) && g.sensor == cfg.channels.gps && g.reason != "no_fix") {
           (g.accepted ? s.gps_accepted : s.gps_rejected)++;
+          if (!g.accepted && !refused_since) refused_since = g.utime;
+          if (g.accepted && refused_since) {
+            s.longest_rejection_s = std::max(s.longest_rejection_s, 1e-6 * static_cast<double>(g.utime - *refused_since));
+            refused_since.reset();
+          }
+        }
       } else if (*e.channel == cfg.channels.status) {
         lcmloc::fusion_status_t st;
         if (logio::decodeEvent(e, st)) {
@@ -169,7 +192,10 @@ ExperimentResult runExperiment(const app::SystemConfig& cfg0, ImportOptions imp,
     j["filters"][s.filter] = {{"poses", s.poses}, {"heldout_scored", s.scored}, {"rmse_m", s.rmse_m},
                               {"median_m", s.median_m}, {"p95_m", s.p95_m}, {"max_m", s.max_m},
                               {"gps_accepted", s.gps_accepted}, {"gps_rejected", s.gps_rejected},
-                              {"lockouts", s.lockouts}, {"relocalized", s.relocalized}};
+                              {"lockouts", s.lockouts}, {"relocalized", s.relocalized},
+                              {"longest_rejection_s", s.longest_rejection_s}, {"position_rw", s.position_rw},
+                              {"gps_std", s.gps_std}};
+  j["noise_fitted"] = opt.fit_noise;
   eval::writeJson(j, opt.out_dir + "/report.json");
 
   // figures

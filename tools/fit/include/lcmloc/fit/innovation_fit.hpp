@@ -12,6 +12,7 @@
 // already gives NIS above the median the noise cannot be fitted this way: the process noise is
 // too small, and the fit says so rather than shrinking R to nothing.
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "lcmloc/core/engine_config.hpp"
@@ -27,6 +28,7 @@ struct SensorNis {
   double mean = 0, median = 0;  ///< of the NIS
   double band_lo = 0, band_hi = 0;  ///< 95 % band of the mean NIS of `decided` samples
   double expected_median = 0;   ///< the chi-square median for dof
+  double mean_innovation = 0;   ///< mean norm of the innovations (the prediction error)
   bool consistent() const { return decided > 0 && mean >= band_lo && mean <= band_hi; }
 };
 
@@ -45,6 +47,10 @@ struct InnovationFitOptions {
   int max_iterations = 12;
   double tolerance = 0.05;      ///< stop when every scale is within 1 +- this
   int min_decisions = 20;       ///< fewer decisions of a sensor: its noise is not fitted
+  /// The GNSS filters (tvekf, ukf_gps): gnss.position_rw by the prediction error of the fixes
+  /// first (the configured value x 2^(k/2), k = -4 .. 12, that gives the smallest mean innovation
+  /// norm over every GPS decision), then the sigmas.
+  bool position_rw = true;
   RecordingChannels channels;
 };
 
@@ -52,12 +58,15 @@ struct InnovationFit {
   core::FilterConfig filter;        ///< cfg's filter with the fitted sigmas
   std::vector<SensorNis> before, after;
   int iterations = 0;
+  std::pair<double, double> rw_error{0.0, 0.0};  ///< mean GPS prediction error before and after position_rw [m]
   std::vector<std::string> fitted;  ///< keys changed, e.g. "landmarks.beacon_std"
   std::vector<std::string> notes;   ///< what could not be fitted and why
 };
 
 /// Fits landmarks.range_std and bearing_std (one scale), landmarks.beacon_std and gnss.gps_std
-/// to the recording's innovations. Recordings whose rows carry their own sigma keep them: the
+/// to the recording's innovations; for the GNSS filters gnss.position_rw first, to the fixes'
+/// prediction error (the process noise with which the filter best predicts each next fix: a GPS
+/// whose error wanders with time needs more than the vehicle's own motion noise). Recordings whose rows carry their own sigma keep them: the
 /// config's default is then not what the filter used, and the fit says so.
 InnovationFit fitByInnovations(const Recording& r, core::EngineConfig cfg, const InnovationFitOptions& opt = {});
 

@@ -95,6 +95,10 @@ struct ExperimentOptions {
   /// configured fusion.filter.initial_pose.
   bool init_from_gps = true;
   double init_course_m = 10.0;
+  /// Fit each filter's noise to the innovations of the fixes it is given (fit::fitByInnovations:
+  /// gnss.position_rw to the fixes' prediction error, the sigmas to the NIS) before its replay;
+  /// the held-out fixes are never seen by the fit.
+  bool fit_noise = true;
 };
 
 struct Score {
@@ -103,6 +107,8 @@ struct Score {
   int64_t scored = 0;                 ///< held-out fixes inside the estimate's time span
   double rmse_m = 0, median_m = 0, p95_m = 0, max_m = 0;
   int64_t gps_accepted = 0, gps_rejected = 0, lockouts = 0, relocalized = 0;
+  double longest_rejection_s = 0;     ///< longest run of refused fixes: first refused to the next accepted [s]
+  double position_rw = 0, gps_std = 0;  ///< the filter's, as replayed (fitted or configured)
   std::vector<double> t, err;         ///< per scored held-out fix: time since start [s], error [m]
   std::vector<std::array<double, 3>> track;  ///< t [s], x, y (every pose)
 };
