@@ -18,7 +18,8 @@ using namespace lcmloc;
 int main(int argc, char** argv) {
   CLI::App app{"lcmloc-fit-noise: fits the filters' noise to a log: against its ground truth when it has one "
                "(residuals of each sensor; odometry error growth per distance and turn), else to the filter's "
-               "innovations (each sensor's sigma scaled until its median NIS is the chi-square median); prints "
+               "innovations (tvekf and ukf_gps: gnss.position_rw to the fixes' prediction error; then each sensor's "
+               "sigma scaled until its median NIS is the chi-square median); prints "
                "each sensor's NIS against its 95 % band"};
   app::CommonOptions opts;
   app::addOfflineOptions(app, opts, "system config of the log (channels, datum, map, wheelbase, filter), e.g. the "
