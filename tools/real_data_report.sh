@@ -3,7 +3,8 @@
 # fitted against the recording's truth) and no hand edits: lcmloc-convert, lcmloc-import, then
 # lcmloc-evaluate replaying the config's filter through the daemon's intake and engine. Prints
 # each recording's scores (position error, NEES, gate decisions, observations without identity
-# accepted) and writes every report under OUT.
+# accepted) and writes every report under OUT. Victoria Park (no truth) is scored by
+# lcmloc-vp-experiment at held-out GPS fixes.
 #
 # usage: tools/real_data_report.sh [BUILD_DIR=build] [DATA_DIR=../shared/data] [OUT_DIR=out/real_data]
 set -euo pipefail
@@ -11,7 +12,7 @@ BUILD=${1:-build}
 DATA=${2:-../shared/data}
 OUT=${3:-out/real_data}
 BIN=$BUILD/bin
-for exe in lcmloc-convert lcmloc-import lcmloc-evaluate; do
+for exe in lcmloc-convert lcmloc-import lcmloc-evaluate lcmloc-vp-experiment; do
   [[ -x $BIN/$exe ]] || { echo "missing $BIN/$exe: build first" >&2; exit 2; }
 done
 mkdir -p "$OUT"
@@ -44,4 +45,11 @@ if [[ -f $DATA/uwb_indoor/Indoor_UWB_Input.txt ]]; then
   run uwb_indoor uwb-labyrinth --dir "$DATA/uwb_indoor"
   found=1
 fi
-((found)) || { echo "no recording found under $DATA (mrclam_ds6, uwb_indoor)" >&2; exit 2; }
+if [[ -f $DATA/victoria_park/vp_odometry.csv ]]; then
+  # Every 5th fix held out and scored; each filter's noise fitted to the fixes it is given.
+  echo "== victoria_park"
+  "$BIN/lcmloc-vp-experiment" --dir "$DATA/victoria_park" --filters tvekf,ukf_gps -o "$OUT/victoria_park" --overwrite \
+    --log-level warn | grep -E "^filter|^tvekf|^ukf_gps|^report"
+  found=1
+fi
+((found)) || { echo "no recording found under $DATA (mrclam_ds6, uwb_indoor, victoria_park)" >&2; exit 2; }
