@@ -85,7 +85,7 @@ void validate(const FilterConfig& c) {
     require(std::isfinite(mean), std::string("calibration.") + name + " must be finite");
   // A filter with calibration states of its own refuses a switch for a state it does not have
   // (the switch would be ignored, the user believing the bias estimated).
-  const bool landmarks = c.type == "ukf_landmarks", gnss = c.type == "tvekf" || c.type == "ukf_gps";
+  const bool landmarks = c.type == "ukf_landmarks", gnss = isGnssFilter(c.type);
   for (const auto& [on, name, ok] :
        {std::tuple{k.beacon_bias != FilterConfig::Calibration::BeaconBias::Off, "beacon_bias", landmarks},
         {k.yaw_rate_scale, "yaw_rate_scale", landmarks}, {k.yaw_rate_bias, "yaw_rate_bias", landmarks},
@@ -177,6 +177,8 @@ GateDecision Filter::update(const RulerDetection& det) {
   d.reason = "ignored";
   return d;
 }
+
+bool isGnssFilter(const std::string& type) { return type == "tvekf" || type == "ukf_gps"; }
 
 std::vector<std::string> filterTypes() {
   return {"dead_reckoning", "ukf", "ukf_gated", "ukf_calib", "tvekf", "ukf_gps", "ukf_landmarks", "odo_ins",

@@ -282,7 +282,7 @@ void validateGnss(const FilterConfig& c) {
 }  // namespace
 
 std::unique_ptr<Filter> detail::makeGnssFilter(const FilterConfig& cfg) {
-  if (cfg.type != "tvekf" && cfg.type != "ukf_gps") return nullptr;
+  if (!isGnssFilter(cfg.type)) return nullptr;
   validateGnss(cfg);
   if (cfg.type == "tvekf") return gnss_filter::makeTvEkf(cfg);
   return gnss_filter::makeGpsUkf(cfg);

@@ -144,11 +144,16 @@ InnovationFit fitByInnovations(const Recording& r, core::EngineConfig cfg, const
     f.notes.push_back(fmt::format("{} fixes carry their own sigma: gnss.gps_std not fitted", rows_with_sigma));
   }
 
-  f.before = runNis(r, cfg, opt.channels);
+  // Every run of the filter over the recording, counted.
+  auto run = [&] {
+    ++f.runs;
+    return runNis(r, cfg, opt.channels);
+  };
+  f.before = run();
   std::vector<SensorNis> now = f.before;
   // The GNSS filters' position process noise: the one that predicts the fixes best.
   const Key& gps_key = keys.back();
-  if (opt.position_rw && (fc.type == "tvekf" || fc.type == "ukf_gps") && gps_key.active && !gps_key.sensors.empty() &&
+  if (opt.position_rw && core::isGnssFilter(fc.type) && gps_key.active && !gps_key.sensors.empty() &&
       fc.gnss.position_rw > 0) {
     auto prediction_error = [&](const std::vector<SensorNis>& nis, int64_t& n) {
       double sum = 0;
@@ -168,7 +173,7 @@ InnovationFit fitByInnovations(const Recording& r, core::EngineConfig cfg, const
       for (int k = -4; k <= 12; ++k) {
         if (k == 0) continue;
         fc.gnss.position_rw = start * std::pow(2.0, 0.5 * k);
-        const double e = prediction_error(runNis(r, cfg, opt.channels), n);
+        const double e = prediction_error(run(), n);
         if (e < best_err) {
           best = fc.gnss.position_rw;
           best_err = e;
@@ -181,7 +186,7 @@ InnovationFit fitByInnovations(const Recording& r, core::EngineConfig cfg, const
       if (best_k == -4 || best_k == 12)
         f.notes.push_back(fmt::format("gnss.position_rw: the best of the grid is at its edge ({:.4g}, {:+.1f} octaves)",
                                       best, 0.5 * best_k));
-      if (best_k != 0) now = runNis(r, cfg, opt.channels);
+      if (best_k != 0) now = run();
     }
   }
   for (auto& k : keys)
@@ -212,7 +217,7 @@ InnovationFit fitByInnovations(const Recording& r, core::EngineConfig cfg, const
       changed = true;
     }
     if (!changed) break;
-    now = runNis(r, cfg, opt.channels);
+    now = run();
   }
   for (const auto& k : keys) {
     if (k.sensors.empty() || (!k.active && !k.floor)) continue;

@@ -87,7 +87,7 @@ std::string innovationFitReport(const LogRead& read, const app::SystemConfig& cf
   if (f.rw_error.first > 0)
     std::printf("gnss.position_rw %.4g m/sqrt(s): mean GPS prediction error %.4g m (%.4g m with the config as given)\n",
                 f.filter.gnss.position_rw, f.rw_error.second, f.rw_error.first);
-  std::printf("%d run(s) of the filter\n", f.iterations + 1);
+  std::printf("%d run(s) of the filter\n", f.runs);
   printNis("NIS with the fit", f.after);
   for (const auto& n : f.notes) std::printf("note: %s\n", n.c_str());
   return configFragment(f);

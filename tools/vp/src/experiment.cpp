@@ -96,6 +96,7 @@ ExperimentResult runExperiment(const app::SystemConfig& cfg0, ImportOptions imp,
     spdlog::info("initial pose from GPS: x {:.2f} m, y {:.2f} m, heading {:.3f} rad", init[0], init[1], init[2]);
   }
 
+  std::optional<fit::Recording> recording;  // the imported log as the noise fit reads it
   for (const auto& type : opt.filters) {
     if (imp.stop && imp.stop()) break;
     app::SystemConfig cfg = cfg0;
@@ -105,10 +106,10 @@ ExperimentResult runExperiment(const app::SystemConfig& cfg0, ImportOptions imp,
     cfg.fusion.filter.initial_pose = init;
     cfg.fusion.shadow.clear();
     if (opt.fit_noise && type != "dead_reckoning") {
-      const auto read = fit::readRecording(res.log_path, cfg);
+      if (!recording) recording = fit::readRecording(res.log_path, cfg).recording;  // the same log for every filter
       fit::InnovationFitOptions fo;
       fo.channels = {cfg.channels.odometry, cfg.channels.landmarks, cfg.channels.beacons, cfg.channels.gps};
-      const auto fitted = fit::fitByInnovations(read.recording, app::engineConfig(cfg), fo);
+      const auto fitted = fit::fitByInnovations(*recording, app::engineConfig(cfg), fo);
       cfg.fusion.filter = fitted.filter;
       spdlog::info("{}: noise fitted to the innovations of the fixes it is given: position_rw {:.4g} m/sqrt(s) (mean "
                    "prediction error {:.3g} m, {:.3g} m as configured), gps_std {:.4g} m{}",

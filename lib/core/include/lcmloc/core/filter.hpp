@@ -348,6 +348,8 @@ std::string calibrationSummary(const FilterState& s);
 
 /// Names accepted by makeFilter.
 std::vector<std::string> filterTypes();
+/// The GNSS filters ("tvekf", "ukf_gps"): the ones that read fusion.filter.gnss.
+bool isGnssFilter(const std::string& type);
 /// filterTypes() as "a, b, c" (help texts, error messages).
 std::string filterTypeList();
 

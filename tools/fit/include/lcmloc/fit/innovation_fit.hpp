@@ -58,6 +58,7 @@ struct InnovationFit {
   core::FilterConfig filter;        ///< cfg's filter with the fitted sigmas
   std::vector<SensorNis> before, after;
   int iterations = 0;
+  int runs = 0;                     ///< runs of the filter over the recording, all told
   std::pair<double, double> rw_error{0.0, 0.0};  ///< mean GPS prediction error before and after position_rw [m]
   std::vector<std::string> fitted;  ///< keys changed, e.g. "landmarks.beacon_std"
   std::vector<std::string> notes;   ///< what could not be fitted and why
@@ -66,8 +67,9 @@ struct InnovationFit {
 /// Fits landmarks.range_std and bearing_std (one scale), landmarks.beacon_std and gnss.gps_std
 /// to the recording's innovations; for the GNSS filters gnss.position_rw first, to the fixes'
 /// prediction error (the process noise with which the filter best predicts each next fix: a GPS
-/// whose error wanders with time needs more than the vehicle's own motion noise). Recordings whose rows carry their own sigma keep them: the
-/// config's default is then not what the filter used, and the fit says so.
+/// whose error wanders with time needs more than the vehicle's own motion noise). Recordings
+/// whose rows carry their own sigma keep them: the config's default is then not what the filter
+/// used, and the fit says so.
 InnovationFit fitByInnovations(const Recording& r, core::EngineConfig cfg, const InnovationFitOptions& opt = {});
 
 /// The fit as a YAML fragment of `fusion.filter` keys (only the fitted ones).
