@@ -78,11 +78,15 @@ void signalChild(const Child& c, int sig) {
   if (::kill(-c.pid, sig) != 0) ::kill(c.pid, sig);
 }
 
-/// SIGTERM, then SIGCONT: a child stopped by SIGSTOP (or a debugger) handles the SIGTERM and
-/// ends in order (the logger closes its file) instead of waiting for the SIGKILL.
+/// SIGCONT, then SIGTERM: a child stopped by SIGSTOP (or a debugger) goes on, handles the
+/// SIGTERM and ends in order (the logger closes its file) instead of waiting for the SIGKILL.
+/// Never the other way round: a SIGCONT discards every stop signal still pending, and a child
+/// that reacted to the SIGTERM before the SIGCONT came could by then be stopping itself on
+/// purpose (LeakSanitizer's check at exit attaches with ptrace, whose SIGSTOP the late SIGCONT
+/// discarded: the check then waited for a stop that never came, until the SIGKILL).
 void terminateChild(const Child& c) {
-  signalChild(c, SIGTERM);
   signalChild(c, SIGCONT);
+  signalChild(c, SIGTERM);
 }
 
 /// Ended by the SIGTERM of a stop (before it had set up its own handling of it): stopped.

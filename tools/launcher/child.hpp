@@ -50,8 +50,8 @@ pid_t spawn(const Child& c, const std::string& scenario, const std::string& url,
 /// alone while it has no group yet.
 void signalChild(const Child& c, int sig);
 
-/// SIGTERM, then SIGCONT: a child stopped by SIGSTOP (or a debugger) handles the SIGTERM and
-/// ends in order (the logger closes its file) instead of waiting for the SIGKILL.
+/// SIGCONT, then SIGTERM: a child stopped by SIGSTOP (or a debugger) goes on, handles the
+/// SIGTERM and ends in order (the logger closes its file) instead of waiting for the SIGKILL.
 void terminateChild(const Child& c);
 
 /// Ended by the SIGTERM of a stop (before it had set up its own handling of it): stopped.

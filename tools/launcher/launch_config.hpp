@@ -41,7 +41,7 @@ struct LaunchConfig {
   /// checkpoint): "" = a new one under the temporary directory for each run, removed at its end.
   std::string run_dir;
   /// [s] a child whose HEARTBEAT (one per second) has been missing this long is hung: stopped
-  /// (SIGTERM + SIGCONT, SIGKILL after stop_timeout) and treated as crashed. 0 = off; else at
+  /// (SIGCONT + SIGTERM, SIGKILL after stop_timeout) and treated as crashed. 0 = off; else at
   /// least kMinHeartbeatTimeout. Watched from the child's first heartbeat on.
   double heartbeat_timeout = 3.0;
   /// [bytes] recv_buf_size added to a udpm:// URL that has none, for the children and the

@@ -260,7 +260,7 @@ class Launcher {
   }
 
   /// The liveness of a running child: silent for heartbeat_timeout after a heartbeat, it is
-  /// hung and stopped (SIGTERM and SIGCONT now, SIGKILL after stop_timeout); its end is then
+  /// hung and stopped (SIGCONT and SIGTERM now, SIGKILL after stop_timeout); its end is then
   /// taken as a crash by the loop. A child that never sent a heartbeat (not an lcmloc process)
   /// is not watched (the start-up said so).
   void watch(Child& c) {
@@ -328,7 +328,7 @@ class Launcher {
     return true;
   }
 
-  /// SIGTERM (and SIGCONT) in reverse start order, each waited for (bounded) before the next,
+  /// SIGTERM (after a SIGCONT) in reverse start order, each waited for (bounded) before the next,
   /// then SIGKILL.
   void stopAll() {
     for (auto it = children_.rbegin(); it != children_.rend(); ++it) {
