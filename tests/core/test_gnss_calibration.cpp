@@ -1,5 +1,5 @@
 // Self-calibration states of the GNSS filters (fusion.filter.calibration: odometer scale,
-// steering bias, magnetometer bias; docs/tvekf.md "Self-calibration"): each estimated from the
+// steering bias, magnetometer bias, accelerometer bias; docs/tvekf.md "Self-calibration"): each estimated from the
 // measurement that observes it, with an honest sigma, and carried through a hand-over.
 #include <gtest/gtest.h>
 
@@ -36,14 +36,17 @@ const CalibrationValue* find(const std::vector<CalibrationValue>& v, const std::
 
 /// Drives straight east at 8 m/s (odometry and IMU at 100 Hz, GPS at 1 Hz from the truth): the
 /// encoder reports (1 + enc_error) times the travel, the steering reads steering_bias when the
-/// wheels are straight, the magnetometer reads the heading plus mag_bias.
+/// wheels are straight, the magnetometer reads the heading plus mag_bias, the accelerometer
+/// reads accel_bias forward (the speed is constant).
 struct Drive {
   int64_t t = 1'000'000;
   double x = 0;
-  void run(Filter& f, double seconds, double enc_error, double steering_bias, double mag_bias);
+  void run(Filter& f, double seconds, double enc_error, double steering_bias, double mag_bias,
+           double accel_bias = 0.0);
 };
 
-void Drive::run(Filter& f, double seconds, double enc_error, double steering_bias, double mag_bias) {
+void Drive::run(Filter& f, double seconds, double enc_error, double steering_bias, double mag_bias,
+                double accel_bias) {
   const double v = 8.0;
   for (int k = 0; k < static_cast<int>(std::lround(seconds * 100)); ++k) {
     t += 10'000;
@@ -56,7 +59,7 @@ void Drive::run(Filter& f, double seconds, double enc_error, double steering_bia
     f.predict(o);
     ImuInput m;
     m.utime = t;
-    m.accel = Vec3(0.0, 0.0, 9.81);
+    m.accel = Vec3(accel_bias, 0.0, 9.81);
     m.mag = gnss::earthFieldBody(mag_bias, 0.0, 0.2, -0.4);
     f.update(m);
     if ((t / 10'000) % 100 == 0) {
@@ -77,17 +80,21 @@ TEST(GnssCalibration, StatesAreAppendedOnlyWhenSwitchedOn) {
     FilterConfig c = config(type);
     EXPECT_EQ(makeFilter(c, {})->state().x.size(), 5) << type;
     EXPECT_TRUE(calibrationValues(makeFilter(c, {})->state()).empty()) << type;
-    c.calibration.odo_scale = c.calibration.steering_bias = c.calibration.mag_bias = true;
+    c.calibration.odo_scale = c.calibration.steering_bias = c.calibration.mag_bias = c.calibration.accel_bias = true;
     c.calibration.steering_bias_mean = 0.003;
     c.calibration.steering_bias_std = 0.02;
+    c.calibration.accel_bias_std = 0.04;
     const FilterState s = makeFilter(c, {})->state();
-    ASSERT_EQ(s.x.size(), 8) << type;
+    ASSERT_EQ(s.x.size(), 9) << type;
     EXPECT_EQ(s.names[5], "cal_odo_scale");
     EXPECT_EQ(s.names[6], "cal_steering_bias");
     EXPECT_EQ(s.names[7], "cal_mag_bias");
+    EXPECT_EQ(s.names[8], "cal_accel_bias");
     EXPECT_DOUBLE_EQ(s.x[6], 0.003);
     EXPECT_DOUBLE_EQ(s.P(6, 6), 0.02 * 0.02);
     EXPECT_DOUBLE_EQ(s.P(7, 7), c.calibration.mag_bias_std * c.calibration.mag_bias_std);
+    EXPECT_DOUBLE_EQ(s.x[8], 0.0);
+    EXPECT_DOUBLE_EQ(s.P(8, 8), 0.04 * 0.04);
   }
 }
 
@@ -145,20 +152,50 @@ TEST(GnssCalibration, MagnetometerBiasTakesAPersistentOffsetWithinItsSigma) {
   }
 }
 
+// The forward accelerometer reads 0.05 m/s^2 while the speed is constant: the encoder's distance
+// shows the speed does not grow, so the bias state takes the reading, and the speed stays the
+// encoder's. Without the state the kinematic filter of §2.1 follows the accelerometer between
+// encoder corrections and its speed runs ahead.
+TEST(GnssCalibration, AccelerometerBiasIsEstimatedFromTheEncoder) {
+  for (const auto& type : kGnssTypes) {
+    FilterConfig c = config(type);
+    c.gnss.accel_std = 0.01;  // an accelerometer trusted between encoder corrections
+    c.gnss.encoder_std = 0.05;
+    c.calibration.accel_bias = true;
+    auto f = makeFilter(c, {});
+    Drive().run(*f, 120.0, 0.0, 0.0, 0.0, 0.05);
+    const auto values = calibrationValues(f->state());
+    const auto* b = find(values, "accel_bias");
+    ASSERT_NE(b, nullptr) << type;
+    EXPECT_NEAR(b->value, 0.05, std::max(3.0 * b->sigma, 0.002)) << type;
+    EXPECT_LT(b->sigma, 0.01) << type;   // from 0.02: the encoder saw it
+    EXPECT_GT(b->sigma, 1e-5) << type;
+    const double with_state = std::abs(f->state().x[3] - 8.0);
+    FilterConfig off = config(type);
+    off.gnss.accel_std = 0.01;
+    off.gnss.encoder_std = 0.05;
+    auto g = makeFilter(off, {});
+    Drive().run(*g, 120.0, 0.0, 0.0, 0.0, 0.05);
+    const double without = std::abs(g->state().x[3] - 8.0);
+    EXPECT_LT(with_state, 0.02) << type;
+    EXPECT_GT(without, 2.0 * with_state) << type;
+  }
+}
+
 TEST(GnssCalibration, StatesSurviveAHandOver) {
   for (const auto& type : kGnssTypes) {
     FilterConfig c = config(type);
-    c.calibration.odo_scale = c.calibration.steering_bias = c.calibration.mag_bias = true;
+    c.calibration.odo_scale = c.calibration.steering_bias = c.calibration.mag_bias = c.calibration.accel_bias = true;
     auto a = makeFilter(c, {});
-    Drive().run(*a, 20.0, 0.01, 0.005, 0.01);
+    Drive().run(*a, 20.0, 0.01, 0.005, 0.01, 0.03);
     const FilterState s = a->state();
     auto b = makeFilter(c, {});
     b->initialize(s);
     const FilterState t = b->state();
     ASSERT_EQ(t.x.size(), s.x.size()) << type;
-    for (int i = 5; i < 8; ++i) {
+    for (int i = 5; i < 9; ++i) {
       EXPECT_EQ(t.x[i], s.x[i]) << type << " " << s.names[i];
-      for (int j = 0; j < 8; ++j) EXPECT_EQ(t.P(i, j), s.P(i, j)) << type << " " << i << "," << j;
+      for (int j = 0; j < 9; ++j) EXPECT_EQ(t.P(i, j), s.P(i, j)) << type << " " << i << "," << j;
     }
     // A filter without the states takes the pose and the speed, and drops the rest.
     FilterConfig plain = config(type);

@@ -154,6 +154,17 @@ TEST(LandmarkCalibration, AStateTheFilterDoesNotHaveIsRefusedNamingItsStates) {
   EXPECT_THROW(makeFilter(g, kBeacons), std::invalid_argument);
   g.type = "dead_reckoning";
   EXPECT_NO_THROW(makeFilter(g, kBeacons));
+  // The accelerometer bias is a state of the GNSS filters only.
+  FilterConfig a = baseConfig();
+  a.calibration.accel_bias = true;
+  EXPECT_THROW(makeFilter(a, kBeacons), std::invalid_argument);
+  a.type = "ukf_gps";
+  EXPECT_NO_THROW(makeFilter(a, kBeacons));
+  a.calibration.accel_bias_std = 0.0;
+  EXPECT_THROW(makeFilter(a, kBeacons), std::invalid_argument);
+  a.calibration.accel_bias_std = 0.02;
+  a.calibration.accel_bias_rw = -1e-3;
+  EXPECT_THROW(makeFilter(a, kBeacons), std::invalid_argument);
 }
 
 // A beacon that reads 3 m long: with its bias state on, the bias is found within 0.2 m (and

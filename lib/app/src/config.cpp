@@ -247,6 +247,9 @@ static void parseCalibration(KeyReader& r, core::FilterConfig::Calibration& k) {
   n.get("mag_bias", k.mag_bias);
   n.get("mag_bias_std", k.mag_bias_std, 1e-9, 3.2);
   n.get("mag_bias_tau", k.mag_bias_tau, 1e-3, 1e6);
+  n.get("accel_bias", k.accel_bias);
+  n.get("accel_bias_std", k.accel_bias_std, 1e-9, 100.0);
+  n.get("accel_bias_rw", k.accel_bias_rw, 0.0, 10.0);
   n.finish();
 }
 

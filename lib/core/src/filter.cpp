@@ -73,11 +73,11 @@ void validate(const FilterConfig& c) {
   for (const auto& [std0, name] : {std::pair{k.beacon_bias_std, "beacon_bias_std"}, {k.odo_scale_std, "odo_scale_std"},
                                    {k.yaw_rate_scale_std, "yaw_rate_scale_std"}, {k.yaw_rate_bias_std, "yaw_rate_bias_std"},
                                    {k.steering_bias_std, "steering_bias_std"}, {k.mag_bias_std, "mag_bias_std"},
-                                   {k.mag_bias_tau, "mag_bias_tau"}})
+                                   {k.mag_bias_tau, "mag_bias_tau"}, {k.accel_bias_std, "accel_bias_std"}})
     require(std::isfinite(std0) && std0 > 0, std::string("calibration.") + name + " must be > 0");
   for (const auto& [rw, name] : {std::pair{k.beacon_bias_rw, "beacon_bias_rw"}, {k.odo_scale_rw, "odo_scale_rw"},
                                  {k.yaw_rate_scale_rw, "yaw_rate_scale_rw"}, {k.yaw_rate_bias_rw, "yaw_rate_bias_rw"},
-                                 {k.steering_bias_rw, "steering_bias_rw"}})
+                                 {k.steering_bias_rw, "steering_bias_rw"}, {k.accel_bias_rw, "accel_bias_rw"}})
     require(std::isfinite(rw) && rw >= 0, std::string("calibration.") + name + " must be >= 0");
   for (const auto& [mean, name] : {std::pair{k.beacon_bias_mean, "beacon_bias_mean"}, {k.odo_scale_mean, "odo_scale_mean"},
                                    {k.yaw_rate_scale_mean, "yaw_rate_scale_mean"}, {k.yaw_rate_bias_mean, "yaw_rate_bias_mean"},
@@ -89,11 +89,12 @@ void validate(const FilterConfig& c) {
   for (const auto& [on, name, ok] :
        {std::tuple{k.beacon_bias != FilterConfig::Calibration::BeaconBias::Off, "beacon_bias", landmarks},
         {k.yaw_rate_scale, "yaw_rate_scale", landmarks}, {k.yaw_rate_bias, "yaw_rate_bias", landmarks},
-        {k.steering_bias, "steering_bias", gnss}, {k.mag_bias, "mag_bias", gnss}})
+        {k.steering_bias, "steering_bias", gnss}, {k.mag_bias, "mag_bias", gnss},
+        {k.accel_bias, "accel_bias", gnss}})
     require(!on || ok || !(landmarks || gnss),
             std::string("calibration.") + name + " is not a state of " + c.type + " (its states: " +
                 (landmarks ? "beacon_bias, odo_scale, yaw_rate_scale, yaw_rate_bias"
-                           : "odo_scale, steering_bias, mag_bias") +
+                           : "odo_scale, steering_bias, mag_bias, accel_bias") +
                 ")");
 }
 

@@ -26,9 +26,10 @@ enum : int { kX = 0, kY = 1, kTheta = 2, kSpeed = 3, kDistance = 4, kN = 5 };
 /// after the five states in this order: odometer scale k (the encoder's distance and speed, in
 /// the encoder's units, times 1 + k are the true ones), steering bias s (the true steering is
 /// the measured one minus s) and magnetometer heading bias m (a first-order Markov process: the
-/// magnetometer heading is theta + m). -1: switched off.
+/// magnetometer heading is theta + m) and the forward accelerometer's bias b_a (it reads the
+/// acceleration plus b_a; a random walk). -1: switched off.
 struct GnssCalibration {
-  int odo_scale = -1, steering_bias = -1, mag_bias = -1;
+  int odo_scale = -1, steering_bias = -1, mag_bias = -1, accel_bias = -1;
   std::vector<std::string> names;  ///< x, y, theta, speed, distance, then "cal_..." of each on
   Eigen::VectorXd x0, p0;          ///< prior means and variances of every state (the first five: 0)
   FilterConfig::Calibration cfg;
@@ -41,6 +42,8 @@ struct GnssCalibration {
   double steeringBias(const V& s) const { return steering_bias >= 0 ? s[steering_bias] : 0.0; }
   template <class V>
   double magBias(const V& s) const { return mag_bias >= 0 ? s[mag_bias] : 0.0; }
+  template <class V>
+  double accelBias(const V& s) const { return accel_bias >= 0 ? s[accel_bias] : 0.0; }
   /// Markov factor of m over T seconds.
   double magDecay(double T) const { return std::exp(-T / cfg.mag_bias_tau); }
   /// Process-noise variances of the calibration states over a step of T seconds and ds metres
@@ -49,6 +52,7 @@ struct GnssCalibration {
   void addProcessNoise(double T, double ds, D& q) const {
     if (odo_scale >= 0) q(odo_scale, odo_scale) += cfg.odo_scale_rw * cfg.odo_scale_rw * std::abs(ds);
     if (steering_bias >= 0) q(steering_bias, steering_bias) += cfg.steering_bias_rw * cfg.steering_bias_rw * T;
+    if (accel_bias >= 0) q(accel_bias, accel_bias) += cfg.accel_bias_rw * cfg.accel_bias_rw * T;
     if (mag_bias >= 0) {
       const double phi = magDecay(T);
       q(mag_bias, mag_bias) += cfg.mag_bias_std * cfg.mag_bias_std * (1.0 - phi * phi);
@@ -134,6 +138,7 @@ struct Step {
   double T = 0;          ///< [s]
   double a = 0;          ///< forward acceleration over the interval [m/s^2]
   double a_std = 0;      ///< its 1 sigma [m/s^2]
+  bool has_accel = true;  ///< a is the accelerometer's (false: no sample in the interval, a = 0)
   bool has_steering = true;
   double psi = 0;        ///< steering [rad]
   double delta_theta = 0;  ///< heading increment when !has_steering [rad]

@@ -34,6 +34,7 @@ GnssCalibration GnssCalibration::of(const FilterConfig& c) {
   if (k.odo_scale) l.odo_scale = add("cal_odo_scale", k.odo_scale_mean, k.odo_scale_std);
   if (k.steering_bias) l.steering_bias = add("cal_steering_bias", k.steering_bias_mean, k.steering_bias_std);
   if (k.mag_bias) l.mag_bias = add("cal_mag_bias", 0.0, k.mag_bias_std);
+  if (k.accel_bias) l.accel_bias = add("cal_accel_bias", 0.0, k.accel_bias_std);
   l.x0 = Eigen::Map<const Eigen::VectorXd>(x0.data(), static_cast<Eigen::Index>(x0.size()));
   l.p0 = Eigen::Map<const Eigen::VectorXd>(p0.data(), static_cast<Eigen::Index>(p0.size()));
   return l;
@@ -99,6 +100,7 @@ void GnssFilterBase::predict(const OdometryInput& odo) {
   } else {
     st.a = 0.0;
     st.a_std = g_.accel_unknown_std;
+    st.has_accel = false;
   }
   acc_sum_ = 0;
   acc_n_ = 0;

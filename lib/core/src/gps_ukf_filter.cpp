@@ -3,6 +3,8 @@
 #include <cmath>
 #include <initializer_list>
 #include <memory>
+#include <stdexcept>
+#include <string>
 
 #include "gnss_filter_base.hpp"
 #include "lcmloc/core/angles.hpp"
@@ -17,7 +19,7 @@ namespace {
 /// The encoder distance is an ungated 1-D update (a gate on an accumulated distance would
 /// reject every later sample after one slip); magnetometer heading and GPS are gated.
 /// N = 5 + the self-calibration states switched on (GnssCalibration): odometer scale, steering
-/// bias and magnetometer bias in the process and magnetometer models.
+/// bias, magnetometer bias and accelerometer bias in the process and magnetometer models.
 template <int N>
 class GpsUkf final : public GnssFilterBase {
   using U = Ukf<N>;
@@ -55,9 +57,10 @@ class GpsUkf final : public GnssFilterBase {
       o.template head<2>() = gnss::positionStep(s.template head<2>(), v, s[kTheta], st.T);
       o[kTheta] = wrapAngle(s[kTheta] + (st.has_steering ? st.T * gnss::headingRate(v, st.psi - cal.steeringBias(s), L)
                                                          : st.delta_theta));
-      // The forward acceleration drives the encoder-unit speed as it is: an accelerometer's bias
-      // (a fraction of a percent of g) is no reference for a percent of scale.
-      const Vec2 sv = gnss::kinematicStep(Vec2(s[kDistance], s[kSpeed]), st.a, st.T);
+      // The forward acceleration (less its bias b_a when that is a state) drives the encoder-unit
+      // speed as it is: an accelerometer's bias (a fraction of a percent of g) is no reference
+      // for a percent of scale.
+      const Vec2 sv = gnss::kinematicStep(Vec2(s[kDistance], s[kSpeed]), st.has_accel ? st.a - cal.accelBias(s) : st.a, st.T);
       o[kDistance] = sv[0];
       o[kSpeed] = sv[1];
       if (cal.mag_bias >= 0) o[cal.mag_bias] = decay * s[cal.mag_bias];
@@ -143,11 +146,14 @@ class GpsUkf final : public GnssFilterBase {
 }  // namespace
 
 std::unique_ptr<Filter> makeGpsUkf(const FilterConfig& cfg) {
-  switch (GnssCalibration::of(cfg).size()) {
+  switch (const int n = GnssCalibration::of(cfg).size()) {
+    case kN: return std::make_unique<GpsUkf<kN>>(cfg);
     case kN + 1: return std::make_unique<GpsUkf<kN + 1>>(cfg);
     case kN + 2: return std::make_unique<GpsUkf<kN + 2>>(cfg);
     case kN + 3: return std::make_unique<GpsUkf<kN + 3>>(cfg);
-    default: return std::make_unique<GpsUkf<kN>>(cfg);
+    case kN + 4: return std::make_unique<GpsUkf<kN + 4>>(cfg);
+    default:  // (a state added to GnssCalibration without its size here: never a smaller filter)
+      throw std::logic_error("ukf_gps: no filter of " + std::to_string(n) + " states");
   }
 }
 

@@ -24,7 +24,8 @@ namespace {
 /// them: the odometer scale k the position block (GPS sees it through the travelled distance),
 /// the steering bias s and the magnetometer bias m the heading block [theta, s, m] (the
 /// magnetometer measures theta + m; a bias of the steering shows as a heading rate the
-/// magnetometer does not follow). Without them the blocks are the paper's, computed as before.
+/// magnetometer does not follow), the accelerometer bias b_a the kinematic block [s, v, b_a]
+/// (the encoder distance sees it). Without them the blocks are the paper's, computed as before.
 class TvEkf final : public GnssFilterBase {
  public:
   explicit TvEkf(const FilterConfig& c) : GnssFilterBase(c) {
@@ -51,6 +52,12 @@ class TvEkf final : public GnssFilterBase {
     P(kSpeed, kSpeed) = Psv_(1, 1);
     P(kDistance, kDistance) = Psv_(0, 0);
     P(kSpeed, kDistance) = P(kDistance, kSpeed) = Psv_(0, 1);
+    if (const int b = cal_.accel_bias; b >= 0) {
+      x[b] = ba_;
+      P(b, b) = Pbb_;
+      P(b, kDistance) = P(kDistance, b) = Psb_[0];
+      P(b, kSpeed) = P(kSpeed, b) = Psb_[1];
+    }
     if (const int k = cal_.odo_scale; k >= 0) {
       x[k] = k_;
       P(k, k) = Pkk_;
@@ -74,6 +81,11 @@ class TvEkf final : public GnssFilterBase {
     Pth_ = P(kTheta, kTheta);
     sv_ << x[kDistance], x[kSpeed];
     Psv_ << P(kDistance, kDistance), P(kDistance, kSpeed), P(kSpeed, kDistance), P(kSpeed, kSpeed);
+    if (const int b = cal_.accel_bias; b >= 0) {
+      ba_ = x[b];
+      Pbb_ = P(b, b);
+      Psb_ << P(kDistance, b), P(kSpeed, b);
+    }
     if (const int k = cal_.odo_scale; k >= 0) {
       k_ = x[k];
       Pkk_ = P(k, k);
@@ -127,12 +139,28 @@ class TvEkf final : public GnssFilterBase {
     // §2.1, eq. 6: a priori [s, v]; process noise of the acceleration through B.
     const Mat2 A = gnss::kinematicA(T);
     const Vec2 B = gnss::kinematicB(T);
-    sv_ = gnss::kinematicStep(sv_, st.a, T);
-    Psv_ = A * Psv_ * A.transpose() + B * B.transpose() * (st.a_std * st.a_std);
+    const bool biased = cal_.accel_bias >= 0;
+    sv_ = gnss::kinematicStep(sv_, biased && st.has_accel ? st.a - ba_ : st.a, T);
+    if (biased) {  // [s, v, b_a]: d[s, v]/d b_a = -B (0 without an accelerometer reading); b_a a random walk
+      const Vec2 Bb = st.has_accel ? B : Vec2::Zero();
+      Psv_ = A * Psv_ * A.transpose() - A * Psb_ * Bb.transpose() - Bb * Psb_.transpose() * A.transpose() +
+             Pbb_ * Bb * Bb.transpose() + B * B.transpose() * (st.a_std * st.a_std);
+      Psb_ = A * Psb_ - Pbb_ * Bb;
+      Pbb_ += cal_.cfg.accel_bias_rw * cal_.cfg.accel_bias_rw * T;
+    } else {
+      Psv_ = A * Psv_ * A.transpose() + B * B.transpose() * (st.a_std * st.a_std);
+    }
     // eq. 7: correction by the encoder distance s(k+1) = C x + noise; F = P C' (C P C' + R)^-1.
     const double S = Psv_(0, 0) + g_.encoder_std * g_.encoder_std;
     const Vec2 F = Psv_.col(0) / S;
-    sv_ += F * (enc_sum_ - sv_[0]);
+    const double innovation = enc_sum_ - sv_[0];
+    if (biased) {
+      const double Fb = Psb_[0] / S;
+      ba_ += Fb * innovation;
+      Pbb_ -= Fb * Psb_[0];
+      Psb_ -= F * Psb_[0];
+    }
+    sv_ += F * innovation;
     Psv_ -= F * Psv_.row(0);
     Psv_ = 0.5 * (Psv_ + Psv_.transpose()).eval();
   }
@@ -254,6 +282,8 @@ class TvEkf final : public GnssFilterBase {
   double th_ = 0, Pth_ = 0;
   Vec2 sv_;   ///< [s, v]
   Mat2 Psv_;
+  double ba_ = 0, Pbb_ = 0;       ///< accelerometer bias (GnssCalibration) and its variance
+  Vec2 Psb_ = Vec2::Zero();       ///< its covariance with [s, v]
 };
 
 }  // namespace

@@ -185,8 +185,12 @@ struct FilterConfig {
     bool mag_bias = false;            ///< GNSS filters only (ukf_landmarks refuses it)
     double mag_bias_std = 0.025;      ///< steady 1 sigma of m (Markov) [rad]
     double mag_bias_tau = 10.0;       ///< correlation time of m [s]
+    bool accel_bias = false;          ///< GNSS filters only: the forward accelerometer's bias b_a
+    double accel_bias_std = 0.02;     ///< prior 1 sigma of b_a (mean 0) [m/s^2]
+    double accel_bias_rw = 1e-3;      ///< random walk of b_a [m/s^2/sqrt(s)]
     bool any() const {
-      return beacon_bias != BeaconBias::Off || odo_scale || yaw_rate_scale || yaw_rate_bias || steering_bias || mag_bias;
+      return beacon_bias != BeaconBias::Off || odo_scale || yaw_rate_scale || yaw_rate_bias || steering_bias ||
+             mag_bias || accel_bias;
     }
   } calibration;
   /// "odo_ins" and "odo_ins_uncal" only (they also use initial_pose for the start heading).
