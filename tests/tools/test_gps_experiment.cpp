@@ -1,6 +1,7 @@
 // §3 scenario of seeds/002 (small version of lcmloc-gps-experiment): bounds measured with
-// config/gps_paper.yaml, seed 1 (tvekf: converged at 0.0 s, steady RMSE 1.57 m vs raw GPS
-// 3.97 m; ukf_gps 1.40 m; without the self-calibration states and with the paper's noise
+// config/gps_paper.yaml, seed 1 (tvekf: converged at 0.0 s, steady RMSE 1.02 m vs raw GPS
+// 3.97 m; ukf_gps 1.06 m; with the simulator's magnetic disturbance and the magnetometer bias
+// state 1.57 m and 1.40 m; without the self-calibration states and with the paper's noise
 // defaults 2.07 m and 1.75 m).
 #include <gtest/gtest.h>
 
@@ -33,7 +34,7 @@ TEST(GpsExperiment, ConvergesFromOriginAndBeatsRawGps) {
   for (const auto& s : r.filters) {
     EXPECT_GE(s.convergence_s, 0.0) << s.filter;
     EXPECT_LE(s.convergence_s, 1.0) << s.filter;        // the paper: within about 1 s
-    EXPECT_LT(s.steady_rmse_m, 2.0) << s.filter;        // measured 1.57 / 1.40
+    EXPECT_LT(s.steady_rmse_m, 1.4) << s.filter;        // measured 1.02 / 1.06
     EXPECT_LT(s.steady_rmse_m, 0.7 * s.gps_rmse_m) << s.filter;
     EXPECT_LT(s.steady_max_m, 5.0) << s.filter;         // measured 3.81
     EXPECT_EQ(s.gps_rejected, 0) << s.filter;
@@ -76,7 +77,7 @@ TEST(GpsExperiment, ExtendedPathRepeatsTheSegmentsUntilTheDriveIsLongEnough) {
   EXPECT_EQ(gps_experiment::extendedPath(sc, 0.0).segments.size(), sc.path.segments.size());
 }
 
-// A small version of the steady-state Monte Carlo (the command runs 100 seeds over 240 s).
+// A small version of the steady-state Monte Carlo (the command runs 100 seeds over 20 minutes).
 TEST(GpsExperiment, MonteCarloScoresEverySeedAtEveryRateAfterSettling) {
   auto cfg = simconfig::loadSimSystemConfig(LCMLOC_GPS_PAPER_YAML);
   std::vector<core::FilterConfig> filters;
@@ -135,49 +136,102 @@ TEST(GpsExperiment, MonteCarloScoresEverySeedAtEveryRateAfterSettling) {
   std::filesystem::remove_all(dir);
 }
 
-// The steady state of the Monte Carlo, small: 4 seeds at 1 Hz over 240 s with config/gps_paper.yaml
-// (its self-calibration states on). Measured: tvekf RMSE 1.12-1.44 m per seed (median 1.37 m),
-// ukf_gps 0.82-1.26 m (median 1.04 m), mean NEES 1.2-3.8; 100 seeds: docs/tvekf.md. Without the
-// states (and the paper's noise defaults) the medians were 3.70 m and 3.05 m with mean NEES
-// 58 and 45, which these bounds refuse.
-TEST(GpsExperiment, SteadyStateWithSelfCalibrationAtOneHertz) {
-  auto cfg = simconfig::loadSimSystemConfig(LCMLOC_GPS_PAPER_YAML);
-  ASSERT_TRUE(cfg.fusion.filter.calibration.odo_scale);
-  ASSERT_TRUE(cfg.fusion.filter.calibration.steering_bias);
-  ASSERT_TRUE(cfg.fusion.filter.calibration.mag_bias);
+namespace {
+
+std::vector<core::FilterConfig> tvekfAndUkf(const core::FilterConfig& base) {
   std::vector<core::FilterConfig> filters;
   for (const char* t : {"tvekf", "ukf_gps"}) {
-    core::FilterConfig f = cfg.fusion.filter;
+    core::FilterConfig f = base;
     f.type = t;
     filters.push_back(f);
   }
+  return filters;
+}
+
+/// What every run of a steady-state group must show: settled, no lock-out, below 5 m by the
+/// second fix, the odometer scale and steering bias found (the simulator's odometer measures
+/// 1.01 of the truth, so true = (1 + k) measured with k = 1/1.01 - 1; its steering reads 0.5 deg
+/// too much).
+void expectSettledAndCalibrated(const gps_experiment::McGroup& g, const sim::ScenarioConfig& sc, int runs) {
+  EXPECT_EQ(g.converged, runs) << g.filter;
+  EXPECT_EQ(g.with_lockout, 0) << g.filter;
+  const double k_true = 1.0 / (1.0 + sc.odometry.scale_error) - 1.0;
+  for (const auto& r : g.runs) {
+    EXPECT_GE(r.second_fix_error_m, 0.0) << g.filter << " seed " << r.seed;
+    EXPECT_LT(r.second_fix_error_m, 5.0) << g.filter << " seed " << r.seed;
+    for (const auto& c : r.calibration) {
+      if (c.name == "odo_scale") {
+        EXPECT_NEAR(c.value, k_true, std::max(3.0 * c.sigma, 0.002)) << g.filter << " seed " << r.seed;
+      } else if (c.name == "steering_bias") {
+        EXPECT_NEAR(c.value, sc.odometry.steering_bias, std::max(3.0 * c.sigma, 3e-4)) << g.filter << " seed " << r.seed;
+      }
+    }
+  }
+}
+
+}  // namespace
+
+// The steady state of the Monte Carlo, small: 4 seeds at 1 Hz over the default 20-minute drive
+// with config/gps_paper.yaml (the paper's white-noise magnetometer; odometer scale, steering
+// bias and accelerometer bias states on). Measured: tvekf 0.32-0.46 m per seed (median 0.42 m),
+// ukf_gps 0.28-0.43 m (median 0.41 m), mean NEES 1.8-3.3; 100 seeds: docs/tvekf.md.
+TEST(GpsExperiment, SteadyStateAtOneHertzOverTwentyMinutes) {
+  auto cfg = simconfig::loadSimSystemConfig(LCMLOC_GPS_PAPER_YAML);
+  ASSERT_EQ(cfg.scenario.imu.mag_disturbance_std, 0.0);
+  ASSERT_TRUE(cfg.fusion.filter.calibration.odo_scale);
+  ASSERT_TRUE(cfg.fusion.filter.calibration.steering_bias);
   gps_experiment::MonteCarloOptions opt;
   opt.runs = 4;
   opt.rates_hz = {1.0};
-  const auto m = gps_experiment::monteCarlo(cfg.scenario, filters, opt);
+  ASSERT_GE(opt.min_drive_s, 1200.0);
+  const auto m = gps_experiment::monteCarlo(cfg.scenario, tvekfAndUkf(cfg.fusion.filter), opt);
   ASSERT_EQ(m.groups.size(), 2u);
-  // The simulator's odometer: measured = 1.01 true, so true = (1 + k) measured with k = 1/1.01 - 1;
-  // its steering reads 0.008727 rad (0.5 deg) too much.
-  const double k_true = 1.0 / (1.0 + cfg.scenario.odometry.scale_error) - 1.0;
-  const double s_true = cfg.scenario.odometry.steering_bias;
+  EXPECT_GE(m.drive_s, 1200.0);
   for (const auto& g : m.groups) {
-    EXPECT_EQ(g.converged, 4) << g.filter;
-    EXPECT_EQ(g.with_lockout, 0) << g.filter;
+    expectSettledAndCalibrated(g, cfg.scenario, 4);
+    const bool tvekf = g.filter == "tvekf";
+    EXPECT_LE(g.rmse_median, tvekf ? 0.6 : 0.5) << g.filter;  // the bounds of the 100-seed median
+    EXPECT_LE(g.nees_mean, 3.0) << g.filter;
+    for (const auto& r : g.runs) {
+      EXPECT_LT(r.rmse_m, tvekf ? 0.75 : 0.65) << g.filter << " seed " << r.seed;
+      EXPECT_LT(r.nees_mean, 4.5) << g.filter << " seed " << r.seed;
+      ASSERT_EQ(r.calibration.size(), 3u) << g.filter;  // odometer scale, steering and accelerometer bias
+    }
+  }
+}
+
+// A disturbed magnetometer (the simulator's 0.005 G over 0.2 G, correlated over 10 s; not in
+// the paper's model) with the magnetometer bias state on: 4 seeds at 1 Hz over 240 s. Measured:
+// tvekf 1.12-1.44 m per seed (median 1.38 m), ukf_gps 0.82-1.26 m (median 1.04 m), mean NEES
+// 1.2-3.9. The heading it leaves (about 0.012 rad)
+// holds the 1 Hz error near 1 m at any drive length (docs/tvekf.md "A disturbed magnetometer").
+// Without the bias state (and with the paper's noise defaults) the medians were 3.70 m and
+// 3.05 m with mean NEES 58 and 45, which these bounds refuse.
+TEST(GpsExperiment, DisturbedMagnetometerWithTheBiasState) {
+  auto cfg = simconfig::loadSimSystemConfig(LCMLOC_GPS_PAPER_YAML);
+  cfg.scenario.imu.mag_disturbance_std = 0.005;
+  cfg.scenario.imu.mag_disturbance_tau = 10.0;
+  auto& cal = cfg.fusion.filter.calibration;
+  cal.mag_bias = true;
+  cal.mag_bias_std = 0.025;
+  cal.mag_bias_tau = 10.0;
+  gps_experiment::MonteCarloOptions opt;
+  opt.runs = 4;
+  opt.rates_hz = {1.0};
+  opt.min_drive_s = 240.0;
+  const auto m = gps_experiment::monteCarlo(cfg.scenario, tvekfAndUkf(cfg.fusion.filter), opt);
+  ASSERT_EQ(m.groups.size(), 2u);
+  for (const auto& g : m.groups) {
+    expectSettledAndCalibrated(g, cfg.scenario, 4);
     EXPECT_LT(g.rmse_median, g.filter == "tvekf" ? 1.7 : 1.35) << g.filter;
     EXPECT_LT(g.nees_mean, 3.5) << g.filter;  // consistent: 3 for (x, y, theta)
     for (const auto& r : g.runs) {
       EXPECT_LT(r.rmse_m, g.filter == "tvekf" ? 2.0 : 1.6) << g.filter << " seed " << r.seed;
       EXPECT_LT(r.nees_mean, 6.0) << g.filter << " seed " << r.seed;
-      EXPECT_GE(r.second_fix_error_m, 0.0) << g.filter << " seed " << r.seed;
-      EXPECT_LT(r.second_fix_error_m, 5.0) << g.filter << " seed " << r.seed;  // below 5 m by the second fix
-      ASSERT_EQ(r.calibration.size(), 3u) << g.filter;
+      ASSERT_EQ(r.calibration.size(), 4u) << g.filter;
       for (const auto& c : r.calibration) {
-        if (c.name == "odo_scale") {
-          EXPECT_NEAR(c.value, k_true, std::max(3.0 * c.sigma, 0.002)) << g.filter << " seed " << r.seed;
-        } else if (c.name == "steering_bias") {
-          EXPECT_NEAR(c.value, s_true, std::max(3.0 * c.sigma, 3e-4)) << g.filter << " seed " << r.seed;
-        } else if (c.name == "mag_bias") {
-          EXPECT_LT(c.sigma, cfg.fusion.filter.calibration.mag_bias_std) << g.filter;
+        if (c.name == "mag_bias") {
+          EXPECT_LT(c.sigma, cal.mag_bias_std) << g.filter;
         }
       }
     }
