@@ -12,6 +12,7 @@
 
 #include "lcmloc/app/config.hpp"
 #include "lcmloc/gps_experiment/monte_carlo.hpp"
+#include "lcmloc/gps_experiment/printing.hpp"
 #include "lcmloc/simconfig/sim_config.hpp"
 
 using namespace lcmloc;
@@ -139,13 +140,7 @@ TEST(GpsExperiment, MonteCarloScoresEverySeedAtEveryRateAfterSettling) {
 namespace {
 
 std::vector<core::FilterConfig> tvekfAndUkf(const core::FilterConfig& base) {
-  std::vector<core::FilterConfig> filters;
-  for (const char* t : {"tvekf", "ukf_gps"}) {
-    core::FilterConfig f = base;
-    f.type = t;
-    filters.push_back(f);
-  }
-  return filters;
+  return gps_experiment::filterConfigs({"tvekf", "ukf_gps"}, base);  // as the command's --filters
 }
 
 /// What every run of a steady-state group must show: settled, no lock-out, below 5 m by the

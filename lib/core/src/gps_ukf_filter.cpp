@@ -60,7 +60,8 @@ class GpsUkf final : public GnssFilterBase {
       // The forward acceleration (less its bias b_a when that is a state) drives the encoder-unit
       // speed as it is: an accelerometer's bias (a fraction of a percent of g) is no reference
       // for a percent of scale.
-      const Vec2 sv = gnss::kinematicStep(Vec2(s[kDistance], s[kSpeed]), st.has_accel ? st.a - cal.accelBias(s) : st.a, st.T);
+      const double a = st.has_accel ? st.a - cal.accelBias(s) : st.a;
+      const Vec2 sv = gnss::kinematicStep(Vec2(s[kDistance], s[kSpeed]), a, st.T);
       o[kDistance] = sv[0];
       o[kSpeed] = sv[1];
       if (cal.mag_bias >= 0) o[cal.mag_bias] = decay * s[cal.mag_bias];

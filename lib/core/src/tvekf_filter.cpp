@@ -141,14 +141,13 @@ class TvEkf final : public GnssFilterBase {
     const Vec2 B = gnss::kinematicB(T);
     const bool biased = cal_.accel_bias >= 0;
     sv_ = gnss::kinematicStep(sv_, biased && st.has_accel ? st.a - ba_ : st.a, T);
+    Psv_ = A * Psv_ * A.transpose() + B * B.transpose() * (st.a_std * st.a_std);
     if (biased) {  // [s, v, b_a]: d[s, v]/d b_a = -B (0 without an accelerometer reading); b_a a random walk
       const Vec2 Bb = st.has_accel ? B : Vec2::Zero();
-      Psv_ = A * Psv_ * A.transpose() - A * Psb_ * Bb.transpose() - Bb * Psb_.transpose() * A.transpose() +
-             Pbb_ * Bb * Bb.transpose() + B * B.transpose() * (st.a_std * st.a_std);
-      Psb_ = A * Psb_ - Pbb_ * Bb;
+      const Vec2 APsb = A * Psb_;
+      Psv_ += Pbb_ * Bb * Bb.transpose() - APsb * Bb.transpose() - Bb * APsb.transpose();
+      Psb_ = APsb - Pbb_ * Bb;
       Pbb_ += cal_.cfg.accel_bias_rw * cal_.cfg.accel_bias_rw * T;
-    } else {
-      Psv_ = A * Psv_ * A.transpose() + B * B.transpose() * (st.a_std * st.a_std);
     }
     // eq. 7: correction by the encoder distance s(k+1) = C x + noise; F = P C' (C P C' + R)^-1.
     const double S = Psv_(0, 0) + g_.encoder_std * g_.encoder_std;
